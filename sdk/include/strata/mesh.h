@@ -1,0 +1,38 @@
+//! \file mesh.h
+//! The flat triangle mesh the numeric core works on. OpenMesh stays behind the I/O adapter
+//! (mesh_io.h); everything else sees plain arrays.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+namespace strata {
+
+using Vec3 = Eigen::Vector3d;
+using Face = std::array<int, 3>;
+
+//! An indexed triangle mesh. Faces are counter-clockwise seen from outside (normals point out).
+struct TriMesh {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+
+  int num_vertices() const { return static_cast<int>(vertices.size()); }
+  int num_faces() const { return static_cast<int>(faces.size()); }
+};
+
+//! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points).
+double bbox_diagonal(const std::vector<Vec3>& points);
+
+//! Unnormalized normal of triangle (a, b, c): twice its area times its unit normal.
+inline Vec3 triangle_area_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+
+//! Unit vertex normals, each the angle-weighted average of the incident face normals.
+//! A vertex with no incident face (or only degenerate ones) gets the zero vector.
+std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+
+//! Sum of the signed volumes of the tetrahedra (origin, a, b, c) over all faces: the enclosed
+//! volume for a closed, outward-oriented mesh.
+double signed_volume(const TriMesh& mesh);
+
+}  // namespace strata

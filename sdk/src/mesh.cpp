@@ -1,0 +1,44 @@
+#include "strata/mesh.h"
+
+#include <cmath>
+
+namespace strata {
+
+double bbox_diagonal(const std::vector<Vec3>& points) {
+  if (points.empty()) return 0.0;
+  Vec3 lo = points.front(), hi = points.front();
+  for (const Vec3& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return (hi - lo).norm();
+}
+
+std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  std::vector<Vec3> normals(vertices.size(), Vec3::Zero());
+  for (const Face& f : faces) {
+    const Vec3 n = triangle_area_normal(vertices[f[0]], vertices[f[1]], vertices[f[2]]);
+    const double len = n.norm();
+    if (!(len > 0.0)) continue;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3 e1 = vertices[f[(c + 1) % 3]] - vertices[f[c]];
+      const Vec3 e2 = vertices[f[(c + 2) % 3]] - vertices[f[c]];
+      const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+      normals[f[c]] += angle * (n / len);
+    }
+  }
+  for (Vec3& n : normals) {
+    const double len = n.norm();
+    n = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+  }
+  return normals;
+}
+
+double signed_volume(const TriMesh& mesh) {
+  double v = 0.0;
+  for (const Face& f : mesh.faces)
+    v += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]]));
+  return v / 6.0;
+}
+
+}  // namespace strata

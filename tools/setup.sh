@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs Strata's build and test dependencies from Debian 12 packages.
+# Idempotent: skips apt-get when every package is already installed.
+set -euo pipefail
+PKGS=(cmake g++ make pkg-config libopenmesh-dev libosd-dev libeigen3-dev libglm-dev
+      libglfw3-dev libgl-dev libegl-dev libgl1-mesa-dri libimgui-dev libstb-dev libgtest-dev
+      nlohmann-json3-dev libcli11-dev libtbb-dev libcgal-dev libgmp-dev libmpfr-dev
+      xvfb xauth)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
