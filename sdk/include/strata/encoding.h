@@ -1,0 +1,105 @@
+//! \file encoding.h
+//! Detail encoding over a triangle-mesh base (paper, section 3): base points, target prism
+//! volumes, displacement lengths and regularization weights.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata {
+
+//! A point on a base triangle mesh: a face and barycentric coordinates (summing to 1). Because
+//! it refers to the base's connectivity, the same base point exists on every edited base with
+//! that connectivity (the paper's mutual parameterization, section 4).
+struct BasePoint {
+  int face = -1;
+  Vec3 bary = Vec3(1.0, 0.0, 0.0);
+};
+
+//! Options of encode_detail(), with their defaults.
+struct EncodeOptions {
+  //! Rings of base faces around the closest face that are searched for the normal projection.
+  int search_rings = 3;
+  //! Barycentric coordinates down to -tolerance still count as inside a face (then clamped).
+  double barycentric_tolerance = 1e-7;
+  //! A normal projection farther than this multiple of the closest-point distance is rejected as
+  //! ambiguous (it belongs to another part of the surface), and the closest point is used.
+  double max_distance_ratio = 3.0;
+};
+
+//! What encode_detail() found, for reports.
+struct EncodeReport {
+  int num_vertices = 0;
+  int num_projected = 0;  //!< base point found by the normal projection (p - q parallel to n(q))
+  int num_fallback = 0;   //!< no valid normal projection: the closest point on the base is used
+  int num_ambiguous = 0;  //!< several normal projections: the nearest one was taken
+  double max_tangential_offset = 0.0;  //!< largest |tangential part of p - q| (fallbacks only)
+  double seconds = 0.0;
+};
+
+//! The detail of a mesh S~ over a base S, everything the reconstruction needs (no positions of S).
+struct DetailEncoding {
+  // The detail mesh's connectivity and its original positions (for the multigrid hierarchy's
+  // coarse-level targets and weights).
+  std::vector<Face> detail_faces;
+  std::vector<Vec3> detail_rest;
+  // The base's connectivity: an edited base must have the same.
+  int base_num_vertices = 0;
+  std::vector<Face> base_faces;
+
+  std::vector<BasePoint> base_points;  //!< q_i, one per detail vertex
+  std::vector<Vec3> base_rest_points;  //!< q_i's positions on the original base S
+  //! Signed displacement length f_i = (p_i - q_i) . n(q_i) along the unit interpolated normal.
+  std::vector<double> normal_offsets;
+  //! Tangential part of p_i - q_i in the base point's local frame (zero for normal projections;
+  //! the fallbacks keep theirs so that nothing is lost).
+  std::vector<Eigen::Vector2d> tangential_offsets;
+  //! Target prism volume V*_j for each detail face.
+  std::vector<double> target_volumes;
+  //! Regularization weights from the original detail mesh (normalized clamped cotangent weights),
+  //! in compressed rows: the neighbours of vertex i are weight_neighbors[weight_offsets[i] ..
+  //! weight_offsets[i+1]).
+  std::vector<int> weight_offsets;
+  std::vector<int> weight_neighbors;
+  std::vector<double> weights;
+
+  EncodeReport report;
+
+  int num_detail_vertices() const { return static_cast<int>(base_points.size()); }
+};
+
+//! Finds for each detail vertex p_i a base point q_i on \p base such that p_i - q_i is parallel
+//! to the base's interpolated (Phong) vertex normal at q_i, then stores the target volumes, the
+//! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
+//! have any connectivity. Where no such point exists near the closest point, the closest point
+//! is used and counted in the report.
+//! \pre detail and base are valid triangle meshes (see validate_mesh()).
+//! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates.
+DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
+
+//! Positions, unit interpolated normals and local frames of the base points on a base with the
+//! encoding's base connectivity.
+struct BaseFrames {
+  std::vector<Vec3> points;    //!< q'_i
+  std::vector<Vec3> normals;   //!< unit interpolated vertex normal at q'_i
+  std::vector<Vec3> tangents;  //!< unit first tangent: the face's first edge, orthogonalized to the normal
+};
+
+//! Evaluates the base points of \p encoding on the base positions \p base_vertices.
+//! \throw InvalidInput if base_vertices does not match the encoding's base vertex count or holds
+//! non-finite coordinates.
+BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
+
+//! The normal-displacement baseline (the paper's "displacement vectors"): each detail vertex is
+//! rebuilt as q'_i + f_i n'(q'_i) plus its stored tangential offset in the rotated local frame.
+//! Over the original base it returns the original detail positions.
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
+
+//! Same, from already evaluated base frames.
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames);
+
+}  // namespace strata

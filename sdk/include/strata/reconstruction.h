@@ -1,0 +1,141 @@
+//! \file reconstruction.h
+//! Volumetric detail reconstruction (paper, section 4): finds detail positions over an edited base
+//! so that every prism regains its target volume.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "strata/encoding.h"
+#include "strata/mesh.h"
+
+namespace strata {
+
+//! Reports progress: a phase name and the fraction done in [0,1].
+using ProgressCallback = std::function<void(const std::string& phase, double fraction)>;
+
+//! User options of the reconstruction (the paper's k, g, n, m, lambdas and tolerances). The
+//! defaults reach a max relative prism volume error of 1e-4 on the paper's 90-degree bends.
+struct ReconstructOptions {
+  //! k: the target volumes are scaled by h_s = (s+1)/k, s = 0..k-1, starting from the clean
+  //! configuration p' = q' (section 4.1). The paper uses 5 to 8.
+  int volume_scales = 5;
+  //! g: multigrid levels at most, the finest included (section 4.3).
+  int max_levels = 10;
+  //! Decimation stops when a level would have fewer vertices than this.
+  int coarsest_vertices = 200;
+  //! Vertex count of a level relative to the next finer one.
+  double coarsening_ratio = 0.25;
+  //! n: volume-preservation sweeps per cycle.
+  int volume_iterations = 10;
+  //! m: regularization sweeps per cycle.
+  int regularization_iterations = 2;
+  //! Cycles (n volume sweeps, then m regularization sweeps) per level and volume scale at most.
+  int max_cycles = 20;
+  //! Damping of the tangential Laplacian of the displacements (section 4.2).
+  double tangential_lambda = 0.5;
+  //! Damping of the displacement-length filter d -> d + lambda f Laplacian(d / f) (section 4.2).
+  double length_lambda = 0.5;
+  //! The regularization weights are multiplied by this after every cycle, so the volume terms
+  //! gain weight as the solve goes on (as in augmented Lagrangian methods, section 4.2).
+  double regularization_decay = 0.8;
+  //! Relaxation factor of the per-vertex volume update (the paper damps it slightly).
+  double damping = 0.9;
+  //! Levenberg term of the per-vertex 3x3 least-squares system, relative to its trace; keeps
+  //! nearly parallel volume gradients from causing large tangential jumps.
+  double levenberg = 1e-4;
+  //! Max relative volume error (|V - h V*| / mean |h V*|) at which a coarse level, or the finest
+  //! level of an intermediate volume scale, counts as converged.
+  double level_tolerance = 1e-2;
+  //! Max relative volume error required on the finest level at full scale.
+  double tolerance = 1e-4;
+  //! Volume-only sweeps at most on the finest level at full scale after the cycles, to reach
+  //! `tolerance`.
+  int max_final_sweeps = 400;
+  //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
+  //! filter's ratio d_i / f_i, which is undefined at f = 0.
+  double min_length_fraction = 0.05;
+  //! The cycles on a level stop once a regularization round moves no vertex farther than this
+  //! fraction of the mean displacement length.
+  double fixed_point_tolerance = 1e-3;
+  //! Relative residual at which the conjugate-gradient solve of a Gauss-Newton step stops.
+  double cg_tolerance = 1e-3;
+  //! Conjugate-gradient iterations per Gauss-Newton step at most.
+  int cg_max_iterations = 200;
+  //! Optional progress reports (phase, fraction).
+  ProgressCallback progress;
+};
+
+//! Iteration counts and timings of one reconstruction.
+struct ReconstructStats {
+  int levels = 0;                    //!< multigrid levels used, finest included
+  std::vector<int> level_vertices;   //!< vertex count per level, coarsest first
+  std::vector<int> level_faces;      //!< prism count per level, coarsest first
+  int volume_sweeps = 0;             //!< volume-preservation sweeps over all levels and scales
+  int regularization_sweeps = 0;     //!< regularization sweeps over all levels and scales
+  int cycles = 0;                    //!< multigrid cycles (n + m sweeps) over all levels and scales
+  int final_sweeps = 0;              //!< volume-only polish sweeps on the finest level
+  std::vector<int> finest_cycles_per_scale;
+  double max_relative_error = 0.0;   //!< on the finest level at the end
+  double rms_relative_error = 0.0;
+  bool converged = false;            //!< max_relative_error <= tolerance
+  double seconds_frames = 0.0;       //!< evaluating the base points on the edited base
+  double seconds_solve = 0.0;        //!< the multigrid solve
+  long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
+  long long constraint_updates = 0;  //!< prism constraints visited by volume sweeps (for throughput)
+};
+
+//! Reconstructed detail positions and the statistics of the solve.
+struct ReconstructResult {
+  std::vector<Vec3> positions;
+  ReconstructStats stats;
+};
+
+//! How a warm-started solve runs (interactive editing, paper section 5).
+struct WarmStartOptions {
+  //! Solve the volumes on the coarse levels only, and derive the finest level by regularization
+  //! and prolongation (section 5). The exact solve uses false.
+  bool coarse_levels_only = false;
+  //! Max relative volume error to stop at on the finest level (when it is solved).
+  double tolerance = 1e-4;
+};
+
+//! The volumetric reconstruction operator for one encoding. Construction builds the multigrid
+//! hierarchy (decimation of the detail connectivity, per-level targets and weights) once; every
+//! reconstruct() call over an edited base reuses it.
+class VolumeReconstructor {
+ public:
+  //! \throw InvalidInput if the encoding is inconsistent or options are out of range.
+  VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options = {});
+  ~VolumeReconstructor();
+  VolumeReconstructor(VolumeReconstructor&&) noexcept;
+  VolumeReconstructor& operator=(VolumeReconstructor&&) noexcept;
+
+  //! Rebuilds the detail over the edited base: volume scaling from the clean start p' = q',
+  //! multigrid cycles from the coarsest level to the finest on each scale (Listing 1).
+  //! \pre edited_base has the encoding's base connectivity (same vertex count).
+  //! \throw InvalidInput on a vertex-count mismatch or non-finite coordinates; SolverError if the
+  //! iteration produces non-finite positions.
+  ReconstructResult reconstruct(const std::vector<Vec3>& edited_base) const;
+
+  //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
+  //! the interactive mode of section 5.
+  //! \throw InvalidInput if start does not have one position per detail vertex.
+  ReconstructResult reconstruct_from(const std::vector<Vec3>& edited_base, const std::vector<Vec3>& start,
+                                     const WarmStartOptions& warm = {}) const;
+
+  const DetailEncoding& encoding() const;
+  const ReconstructOptions& options() const;
+  //! Seconds spent building the hierarchy in the constructor.
+  double setup_seconds() const;
+  //! Vertex counts of the hierarchy's levels, coarsest first.
+  std::vector<int> level_vertex_counts() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace strata

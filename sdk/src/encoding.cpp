@@ -1,0 +1,275 @@
+#include "strata/encoding.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "internal/closest_point.h"
+#include "internal/topology.h"
+#include "strata/exceptions.h"
+#include "strata/prism.h"
+
+namespace strata {
+namespace {
+
+double det3(const Vec3& a, const Vec3& b, const Vec3& c) { return a.dot(b.cross(c)); }
+
+// Real roots of c0 + c1 t + c2 t^2 + c3 t^3 in [-T, T], found by splitting the interval at the
+// critical points (so each piece is monotone) and bisecting the pieces with a sign change. Robust
+// against vanishing leading coefficients, which are common (parallel normals make the cubic a
+// line).
+int cubic_roots_in(const double c[4], double T, double roots[3]) {
+  auto f = [&](double t) { return c[0] + t * (c[1] + t * (c[2] + t * c[3])); };
+  double cuts[4];
+  int nc = 0;
+  cuts[nc++] = -T;
+  // f'(t) = c1 + 2 c2 t + 3 c3 t^2.
+  const double A = 3 * c[3], B = 2 * c[2], C = c[1];
+  double crit[2];
+  int ncrit = 0;
+  if (std::abs(A) > 1e-300) {
+    const double disc = B * B - 4 * A * C;
+    if (disc > 0) {
+      const double s = std::sqrt(disc);
+      const double q = -0.5 * (B + (B >= 0 ? s : -s));
+      crit[ncrit++] = q / A;
+      if (q != 0) crit[ncrit++] = C / q;
+    }
+  } else if (std::abs(B) > 1e-300) {
+    crit[ncrit++] = -C / B;
+  }
+  std::sort(crit, crit + ncrit);
+  for (int i = 0; i < ncrit; ++i)
+    if (crit[i] > -T && crit[i] < T) cuts[nc++] = crit[i];
+  cuts[nc++] = T;
+  int nr = 0;
+  for (int i = 0; i + 1 < nc; ++i) {
+    double lo = cuts[i], hi = cuts[i + 1];
+    double flo = f(lo), fhi = f(hi);
+    if (flo == 0.0) {
+      if (nr == 0 || roots[nr - 1] != lo) roots[nr++] = lo;
+      continue;
+    }
+    if (fhi == 0.0) {
+      if (i + 2 == nc) roots[nr++] = hi;
+      continue;
+    }
+    if ((flo < 0) == (fhi < 0)) continue;
+    for (int it = 0; it < 200 && hi - lo > 1e-15 * T; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      const double fm = f(mid);
+      if (fm == 0.0) lo = hi = mid;
+      else if ((fm < 0) == (flo < 0)) lo = mid, flo = fm;
+      else hi = mid;
+    }
+    roots[nr++] = 0.5 * (lo + hi);
+  }
+  return nr;
+}
+
+Vec3 barycentric(const Vec3& p, const Vec3& y0, const Vec3& y1, const Vec3& y2) {
+  const Vec3 v0 = y1 - y0, v1 = y2 - y0, v2 = p - y0;
+  const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0), d21 = v2.dot(v1);
+  const double den = d00 * d11 - d01 * d01;
+  if (!(std::abs(den) > 0.0)) return Vec3(-1, -1, -1);  // degenerate: never inside
+  const double b1 = (d11 * d20 - d01 * d21) / den, b2 = (d00 * d21 - d01 * d20) / den;
+  return Vec3(1.0 - b1 - b2, b1, b2);
+}
+
+void check_mesh(const TriMesh& m, const char* what) {
+  if (m.faces.empty()) throw InvalidInput(std::string(what) + " mesh has no faces");
+  for (const Vec3& v : m.vertices)
+    if (!v.allFinite()) throw InvalidInput(std::string(what) + " mesh has a non-finite coordinate");
+  for (const Face& f : m.faces)
+    for (int v : f)
+      if (v < 0 || v >= m.num_vertices()) throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
+}
+
+// Working state of one encode_detail() call.
+class Encoder {
+ public:
+  Encoder(const TriMesh& base, const EncodeOptions& o)
+      : base_(base),
+        opt_(o),
+        normals_(vertex_normals(base.vertices, base.faces)),
+        adj_(internal::build_adjacency(base.num_vertices(), base.faces)),
+        tree_(base.vertices, base.faces),
+        mark_(base.faces.size(), -1) {}
+
+  // Base point of detail vertex p (index i, for the ring-search marks).
+  BasePoint project(int i, const Vec3& p, EncodeReport& report) {
+    const auto hit = tree_.closest(p);
+    const double dc = std::sqrt(hit.distance_sq);
+    const double T = opt_.max_distance_ratio * dc + 1e-12;
+    collect_rings(i, hit.face);
+    int found = 0;
+    double best = INFINITY;
+    BasePoint bp;
+    Vec3 best_q = Vec3::Zero();
+    for (int f : ring_) {
+      const Face& F = base_.faces[f];
+      const Vec3 &x0 = base_.vertices[F[0]], &n0 = normals_[F[0]];
+      const Vec3 a1 = base_.vertices[F[1]] - x0, b1 = normals_[F[1]] - n0;
+      const Vec3 a2 = base_.vertices[F[2]] - x0, b2 = normals_[F[2]] - n0;
+      const Vec3 a3 = p - x0, b3 = -n0;
+      const double c[4] = {det3(a1, a2, a3), det3(b1, a2, a3) + det3(a1, b2, a3) + det3(a1, a2, b3),
+                           det3(b1, b2, a3) + det3(b1, a2, b3) + det3(a1, b2, b3), det3(b1, b2, b3)};
+      double roots[3];
+      const int nr = cubic_roots_in(c, T, roots);
+      for (int r = 0; r < nr; ++r) {
+        const double t = roots[r];
+        const Vec3 y0 = x0 + t * n0, y1 = base_.vertices[F[1]] + t * normals_[F[1]],
+                   y2 = base_.vertices[F[2]] + t * normals_[F[2]];
+        Vec3 b = barycentric(p, y0, y1, y2);
+        if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
+        b = b.cwiseMax(0.0);
+        b /= b.sum();
+        const Vec3 q = b[0] * x0 + b[1] * base_.vertices[F[1]] + b[2] * base_.vertices[F[2]];
+        const double d = (p - q).norm();
+        if (d > T) continue;
+        // The same point found through two faces sharing an edge is not an ambiguity.
+        if (found == 0 || (q - best_q).norm() > 1e-9 * (1.0 + d)) ++found;
+        if (d < best) {
+          best = d;
+          best_q = q;
+          bp.face = f;
+          bp.bary = b;
+        }
+      }
+    }
+    if (found == 0) {
+      ++report.num_fallback;
+      bp.face = hit.face;
+      bp.bary = hit.bary;
+    } else {
+      ++report.num_projected;
+      if (found > 1) ++report.num_ambiguous;
+    }
+    return bp;
+  }
+
+ private:
+  // Faces within opt_.search_rings vertex-rings of `seed`, into ring_.
+  void collect_rings(int stamp, int seed) {
+    ring_.clear();
+    ring_.push_back(seed);
+    mark_[seed] = stamp;
+    std::size_t begin = 0;
+    for (int r = 0; r < opt_.search_rings; ++r) {
+      const std::size_t end = ring_.size();
+      for (std::size_t k = begin; k < end; ++k)
+        for (int v : base_.faces[ring_[k]])
+          for (int s = adj_.face_offsets[v]; s < adj_.face_offsets[v + 1]; ++s) {
+            const int g = adj_.faces[s];
+            if (mark_[g] != stamp) {
+              mark_[g] = stamp;
+              ring_.push_back(g);
+            }
+          }
+      begin = end;
+    }
+  }
+
+  const TriMesh& base_;
+  const EncodeOptions& opt_;
+  std::vector<Vec3> normals_;
+  internal::Adjacency adj_;
+  internal::TriangleTree tree_;
+  std::vector<int> mark_;
+  std::vector<int> ring_;
+};
+
+}  // namespace
+
+DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
+  check_mesh(base, "base");
+  DetailEncoding e;
+  e.detail_faces = detail.faces;
+  e.detail_rest = detail.vertices;
+  e.base_num_vertices = base.num_vertices();
+  e.base_faces = base.faces;
+  const int n = detail.num_vertices();
+  e.report.num_vertices = n;
+  e.base_points.resize(n);
+  {
+    Encoder enc(base, options);
+    for (int i = 0; i < n; ++i) e.base_points[i] = enc.project(i, detail.vertices[i], e.report);
+  }
+  const BaseFrames frames = evaluate_base_frames(e, base.vertices);
+  e.base_rest_points = frames.points;
+  e.normal_offsets.resize(n);
+  e.tangential_offsets.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = detail.vertices[i] - frames.points[i];
+    const Vec3& nrm = frames.normals[i];
+    const Vec3& t = frames.tangents[i];
+    e.normal_offsets[i] = d.dot(nrm);
+    const Vec3 tang = d - e.normal_offsets[i] * nrm;
+    // Normal projections are parallel up to round-off: keep exact zeros for them, so the
+    // regularizer's rest state is exactly the paper's.
+    const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
+    e.tangential_offsets[i] = projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
+    if (!projected) e.report.max_tangential_offset = std::max(e.report.max_tangential_offset, tang.norm());
+  }
+  e.target_volumes.resize(detail.faces.size());
+  for (std::size_t j = 0; j < detail.faces.size(); ++j) {
+    const Face& f = detail.faces[j];
+    e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
+                                       frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
+  }
+  const internal::Adjacency adj = internal::build_adjacency(n, detail.faces);
+  e.weight_offsets = adj.neighbor_offsets;
+  e.weight_neighbors = adj.neighbors;
+  e.weights = internal::normalized_cotan_weights(detail.vertices, detail.faces, adj);
+  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>& x) {
+  if (static_cast<int>(x.size()) != e.base_num_vertices)
+    throw InvalidInput("edited base has " + std::to_string(x.size()) + " vertices, the encoding's base has " +
+                       std::to_string(e.base_num_vertices));
+  for (const Vec3& v : x)
+    if (!v.allFinite()) throw InvalidInput("edited base has a non-finite coordinate");
+  const std::vector<Vec3> vn = vertex_normals(x, e.base_faces);
+  const int n = e.num_detail_vertices();
+  BaseFrames fr;
+  fr.points.resize(n);
+  fr.normals.resize(n);
+  fr.tangents.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const BasePoint& bp = e.base_points[i];
+    const Face& F = e.base_faces[bp.face];
+    const Vec3 &x0 = x[F[0]], &x1 = x[F[1]], &x2 = x[F[2]];
+    fr.points[i] = bp.bary[0] * x0 + bp.bary[1] * x1 + bp.bary[2] * x2;
+    Vec3 nrm = bp.bary[0] * vn[F[0]] + bp.bary[1] * vn[F[1]] + bp.bary[2] * vn[F[2]];
+    if (!(nrm.norm() > 1e-12)) nrm = triangle_area_normal(x0, x1, x2);
+    nrm.normalize();
+    Vec3 t = (x1 - x0) - (x1 - x0).dot(nrm) * nrm;
+    if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
+    fr.normals[i] = nrm;
+    fr.tangents[i] = t.normalized();
+  }
+  return fr;
+}
+
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr) {
+  const int n = e.num_detail_vertices();
+  std::vector<Vec3> p(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3& nrm = fr.normals[i];
+    const Vec3& t = fr.tangents[i];
+    const Eigen::Vector2d& o = e.tangential_offsets[i];
+    p[i] = fr.points[i] + e.normal_offsets[i] * nrm + o[0] * t + o[1] * nrm.cross(t);
+  }
+  return p;
+}
+
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const std::vector<Vec3>& base_vertices) {
+  return reconstruct_vectors(e, evaluate_base_frames(e, base_vertices));
+}
+
+}  // namespace strata

@@ -1,0 +1,37 @@
+// Internal: the multigrid hierarchy of a detail mesh, built by decimation (paper, section 4.3).
+#pragma once
+
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata::internal {
+
+//! Nested levels of a triangle mesh built by half-edge collapses: every level's vertices are a
+//! subset of the next finer level's, so coarse solutions carry over by injection.
+struct Hierarchy {
+  struct Level {
+    std::vector<int> vertices;  //!< original vertex ids
+    std::vector<Face> faces;    //!< original vertex ids
+    //! Vertices that the prolongation from the next coarser level inserts, in insertion order
+    //! (the reverse of their removal), each with the ring of neighbours it had when it was
+    //! removed: ring_vertices[ring_offsets[k] .. ring_offsets[k+1]). Empty on the coarsest level.
+    std::vector<int> inserted;
+    std::vector<int> ring_offsets;
+    std::vector<int> ring_vertices;
+  };
+  std::vector<Level> levels;  //!< coarsest first; the last level is the input mesh
+};
+
+struct HierarchyOptions {
+  int max_levels = 10;
+  int coarsest_vertices = 200;
+  double ratio = 0.25;
+};
+
+//! Decimates (positions, faces) by shortest-edge-first half-edge collapses that keep the mesh
+//! manifold, boundaries in place and face normals from flipping.
+Hierarchy build_hierarchy(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
+                          const HierarchyOptions& options);
+
+}  // namespace strata::internal

@@ -1,0 +1,34 @@
+// Internal: flat compressed adjacency of an indexed triangle mesh. Not part of the public API.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata::internal {
+
+//! Vertex -> incident faces (with the vertex's corner in the face) and vertex -> neighbours,
+//! both in compressed sparse row form.
+struct Adjacency {
+  std::vector<int> face_offsets;     //!< size nv+1
+  std::vector<int> faces;            //!< incident face ids
+  std::vector<std::uint8_t> corners; //!< corner (0..2) of the vertex in that face
+  std::vector<int> neighbor_offsets; //!< size nv+1
+  std::vector<int> neighbors;        //!< distinct neighbour vertices, sorted
+
+  int num_vertices() const { return static_cast<int>(face_offsets.size()) - 1; }
+};
+
+Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces);
+
+//! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary).
+std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vector<Face>& faces);
+
+//! Cotangent weights of each vertex's neighbours on the mesh (positions, faces), clamped to be
+//! non-negative and normalized to sum to 1 per vertex (uniform where all clamp to zero). Aligned
+//! with Adjacency::neighbors.
+std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
+                                             const Adjacency& adj);
+
+}  // namespace strata::internal

@@ -1,0 +1,48 @@
+#include "strata/metrics.h"
+
+#include <cmath>
+#include <string>
+
+#include "strata/exceptions.h"
+#include "strata/prism.h"
+
+namespace strata {
+
+std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vector<Vec3>& p,
+                                  const std::vector<Vec3>& q) {
+  std::vector<double> v(faces.size());
+  for (std::size_t j = 0; j < faces.size(); ++j) {
+    const Face& f = faces[j];
+    v[j] = prism_volume(p[f[0]], p[f[1]], p[f[2]], q[f[0]], q[f[1]], q[f[2]]);
+  }
+  return v;
+}
+
+VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, const std::vector<Vec3>& p) {
+  const std::size_t n = e.base_points.size();
+  if (p.size() != n || frames.points.size() != n)
+    throw InvalidInput("volume_metrics: expected " + std::to_string(n) + " detail positions and base points, got " +
+                       std::to_string(p.size()) + " and " + std::to_string(frames.points.size()));
+  const std::vector<double> v = prism_volumes(e.detail_faces, p, frames.points);
+  VolumeMetrics m;
+  double sq = 0.0, mx = 0.0, abs_sum = 0.0;
+  for (std::size_t j = 0; j < v.size(); ++j) {
+    const double err = std::abs(v[j] - e.target_volumes[j]);
+    mx = std::max(mx, err);
+    sq += err * err;
+    abs_sum += std::abs(e.target_volumes[j]);
+    m.total_target += e.target_volumes[j];
+    m.total_volume += v[j];
+  }
+  if (!v.empty()) {
+    m.mean_abs_target = abs_sum / v.size();
+    if (m.mean_abs_target > 0) {
+      m.max_relative_error = mx / m.mean_abs_target;
+      m.rms_relative_error = std::sqrt(sq / v.size()) / m.mean_abs_target;
+    }
+  }
+  if (m.total_target != 0.0) m.total_volume_change = (m.total_volume - m.total_target) / std::abs(m.total_target);
+  return m;
+}
+
+}  // namespace strata

@@ -1,0 +1,575 @@
+#include "strata/reconstruction.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+
+#include "internal/hierarchy.h"
+#include "internal/topology.h"
+#include "strata/exceptions.h"
+#include "strata/prism.h"
+
+namespace strata {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// One multigrid level: its prisms (in original vertex ids, so all levels share the position
+// arrays), per-level targets, adjacency and regularization weights (in level-local ids).
+struct Level {
+  std::vector<int> verts;
+  std::vector<Face> faces;
+  std::vector<double> targets;
+  double mean_abs_target = 0.0;
+  std::vector<int> vf_offsets, vf_faces;
+  std::vector<std::uint8_t> vf_corners;
+  std::vector<int> nb_offsets, nb;  // level-local neighbour ids
+  std::vector<double> weights;
+  std::vector<int> inserted, ring_offsets, ring_vertices;
+  int max_valence = 0;
+  // Pattern of J J^T (prisms sharing a vertex), kept for every Gauss-Newton step: row j holds
+  // (prism k, corner of the shared vertex in j, corner in k), one entry per shared vertex; a
+  // pair sharing an edge appears twice. Sorted by k within a row.
+  std::vector<int> jj_offsets;
+  std::vector<int> jj_prism;
+  std::vector<std::uint8_t> jj_corner_j, jj_corner_k;
+};
+
+// Scratch of one Gauss-Newton step, reused across steps.
+struct GnScratch {
+  std::vector<std::array<Vec3, 3>> grad;
+  std::vector<double> r, y, z, p, Ap, diag, values;
+};
+
+// The per-reconstruction working arrays, indexed by original vertex id.
+struct State {
+  std::vector<Vec3> P;       // current detail positions
+  std::vector<Vec3> Q;       // base points on the edited base
+  std::vector<Vec3> N;       // unit normals at the base points
+  std::vector<Vec3> R;       // rest tangential offset, rotated into the edited base's frame
+  std::vector<Vec3> P0;      // positions at the start of the current multigrid pass
+  std::vector<double> dRho;  // prolongated change of d/f
+  std::vector<Vec3> dT;      // prolongated change of the tangential displacement
+};
+
+}  // namespace
+
+class VolumeReconstructor::Impl {
+ public:
+  Impl(DetailEncoding e, ReconstructOptions o) : enc_(std::move(e)), opt_(std::move(o)) {
+    const auto t0 = Clock::now();
+    validate();
+    const int n = enc_.num_detail_vertices();
+    double mean_f = 0.0;
+    for (double f : enc_.normal_offsets) mean_f += std::abs(f);
+    mean_f = n > 0 ? mean_f / n : 0.0;
+    mean_abs_f_ = mean_f;
+    guarded_f_.resize(n);
+    const double fmin = std::max(opt_.min_length_fraction * mean_f, 1e-300);
+    for (int i = 0; i < n; ++i) {
+      const double f = enc_.normal_offsets[i];
+      guarded_f_[i] = std::abs(f) >= fmin ? f : (f < 0 ? -fmin : fmin);
+    }
+    internal::HierarchyOptions ho;
+    ho.max_levels = opt_.max_levels;
+    ho.coarsest_vertices = opt_.coarsest_vertices;
+    ho.ratio = opt_.coarsening_ratio;
+    internal::Hierarchy h = internal::build_hierarchy(enc_.detail_rest, enc_.detail_faces, ho);
+    const int nl = static_cast<int>(h.levels.size());
+    levels_.resize(nl);
+    for (int l = 0; l < nl; ++l) make_level(h.levels[l], l == nl - 1, levels_[l]);
+    setup_seconds_ = seconds_since(t0);
+  }
+
+  ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start, const WarmStartOptions* warm) const {
+    ReconstructResult res;
+    ReconstructStats& st = res.stats;
+    auto t0 = Clock::now();
+    State s;
+    init_state(base, s);
+    st.seconds_frames = seconds_since(t0);
+    t0 = Clock::now();
+    const int nl = static_cast<int>(levels_.size());
+    st.levels = nl;
+    for (const Level& L : levels_) {
+      st.level_vertices.push_back(static_cast<int>(L.verts.size()));
+      st.level_faces.push_back(static_cast<int>(L.faces.size()));
+    }
+    std::vector<double> V;
+    if (!start) {
+      // Section 4.1: the clean configuration p' = q', then growing volume scales.
+      s.P = s.Q;
+      const int k = std::max(1, opt_.volume_scales);
+      for (int sc = 0; sc < k; ++sc) {
+        const double h = static_cast<double>(sc + 1) / k;
+        multigrid_pass(s, h, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
+        report("reconstruct", static_cast<double>(sc + 1) / k);
+      }
+    } else {
+      if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
+        throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
+                           std::to_string(enc_.num_detail_vertices()) + " vertices");
+      s.P = *start;
+      multigrid_pass(s, 1.0, warm->tolerance, warm->coarse_levels_only, st, V);
+    }
+    // Final accuracy on the finest level.
+    const Level& F = levels_.back();
+    compute_volumes(F, s, V);
+    st.max_relative_error = relative_error(F, 1.0, V, &st.rms_relative_error);
+    st.converged = st.max_relative_error <= (start ? warm->tolerance : opt_.tolerance);
+    for (const Vec3& p : s.P)
+      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
+    st.seconds_solve = seconds_since(t0);
+    res.positions = std::move(s.P);
+    return res;
+  }
+
+  const DetailEncoding& encoding() const { return enc_; }
+  const ReconstructOptions& options() const { return opt_; }
+  double setup_seconds() const { return setup_seconds_; }
+  std::vector<int> level_vertex_counts() const {
+    std::vector<int> out;
+    for (const Level& L : levels_) out.push_back(static_cast<int>(L.verts.size()));
+    return out;
+  }
+
+ private:
+  void validate() const {
+    const int n = enc_.num_detail_vertices();
+    const std::size_t nf = enc_.detail_faces.size();
+    if (n == 0 || nf == 0) throw InvalidInput("encoding has no detail vertices or faces");
+    if (static_cast<int>(enc_.detail_rest.size()) != n || static_cast<int>(enc_.normal_offsets.size()) != n ||
+        static_cast<int>(enc_.tangential_offsets.size()) != n ||
+        static_cast<int>(enc_.base_rest_points.size()) != n || enc_.target_volumes.size() != nf ||
+        static_cast<int>(enc_.weight_offsets.size()) != n + 1)
+      throw InvalidInput("encoding arrays have inconsistent sizes");
+    for (const Face& f : enc_.detail_faces)
+      for (int v : f)
+        if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
+    for (const BasePoint& b : enc_.base_points)
+      if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
+        throw InvalidInput("encoding has a base point on a missing base face");
+    if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
+        opt_.regularization_iterations < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
+        !(opt_.damping > 0 && opt_.damping <= 1.5) || !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) ||
+        opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
+      throw InvalidInput("reconstruction options out of range");
+  }
+
+  void make_level(internal::Hierarchy::Level& hl, bool finest, Level& L) {
+    L.verts = std::move(hl.vertices);
+    L.faces = std::move(hl.faces);
+    L.inserted = std::move(hl.inserted);
+    L.ring_offsets = std::move(hl.ring_offsets);
+    L.ring_vertices = std::move(hl.ring_vertices);
+    const int n = enc_.num_detail_vertices();
+    const int nv = static_cast<int>(L.verts.size());
+    std::vector<int> local(n, -1);
+    for (int k = 0; k < nv; ++k) local[L.verts[k]] = k;
+    std::vector<Face> lf(L.faces.size());
+    std::vector<Vec3> lx(nv);
+    for (int k = 0; k < nv; ++k) lx[k] = enc_.detail_rest[L.verts[k]];
+    for (std::size_t j = 0; j < L.faces.size(); ++j)
+      for (int c = 0; c < 3; ++c) lf[j][c] = local[L.faces[j][c]];
+    const internal::Adjacency adj = internal::build_adjacency(nv, lf);
+    L.vf_offsets = adj.face_offsets;
+    L.vf_faces = adj.faces;
+    L.vf_corners = adj.corners;
+    for (int k = 0; k < nv; ++k) L.max_valence = std::max(L.max_valence, adj.face_offsets[k + 1] - adj.face_offsets[k]);
+    build_jj_pattern(lf, adj, L);
+    if (finest) {
+      // The encoding's own weights (the finest level's vertex ids are the original ones).
+      L.nb_offsets = enc_.weight_offsets;
+      L.nb = enc_.weight_neighbors;
+      L.weights = enc_.weights;
+      L.targets = enc_.target_volumes;
+    } else {
+      L.nb_offsets = adj.neighbor_offsets;
+      L.nb = adj.neighbors;
+      L.weights = internal::normalized_cotan_weights(lx, lf, adj);
+      // Coarse prisms get their own targets from the original detail over the original base.
+      const std::vector<Vec3>& p = enc_.detail_rest;
+      const std::vector<Vec3>& q = enc_.base_rest_points;
+      L.targets.resize(L.faces.size());
+      for (std::size_t j = 0; j < L.faces.size(); ++j) {
+        const Face& f = L.faces[j];
+        L.targets[j] = prism_volume(p[f[0]], p[f[1]], p[f[2]], q[f[0]], q[f[1]], q[f[2]]);
+      }
+    }
+    double sum = 0.0;
+    for (double v : L.targets) sum += std::abs(v);
+    L.mean_abs_target = L.targets.empty() ? 0.0 : sum / L.targets.size();
+  }
+
+  static void build_jj_pattern(const std::vector<Face>& lf, const internal::Adjacency& adj, Level& L) {
+    const std::size_t m = lf.size();
+    L.jj_offsets.assign(m + 1, 0);
+    struct E {
+      int k;
+      std::uint8_t cj, ck;
+    };
+    std::vector<E> row;
+    for (std::size_t j = 0; j < m; ++j) {
+      row.clear();
+      for (int cj = 0; cj < 3; ++cj) {
+        const int v = lf[j][cj];
+        for (int t = adj.face_offsets[v]; t < adj.face_offsets[v + 1]; ++t)
+          row.push_back(E{adj.faces[t], static_cast<std::uint8_t>(cj), adj.corners[t]});
+      }
+      std::sort(row.begin(), row.end(), [](const E& a, const E& b) { return a.k < b.k; });
+      for (const E& e : row) {
+        L.jj_prism.push_back(e.k);
+        L.jj_corner_j.push_back(e.cj);
+        L.jj_corner_k.push_back(e.ck);
+      }
+      L.jj_offsets[j + 1] = static_cast<int>(L.jj_prism.size());
+    }
+  }
+
+  void init_state(const std::vector<Vec3>& base, State& s) const {
+    const BaseFrames fr = evaluate_base_frames(enc_, base);
+    const int n = enc_.num_detail_vertices();
+    s.Q = fr.points;
+    s.N = fr.normals;
+    s.R.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d& o = enc_.tangential_offsets[i];
+      s.R[i] = o[0] * fr.tangents[i] + o[1] * fr.normals[i].cross(fr.tangents[i]);
+    }
+    s.dRho.assign(n, 0.0);
+    s.dT.assign(n, Vec3::Zero());
+  }
+
+  void report(const char* phase, double f) const {
+    if (opt_.progress) opt_.progress(phase, f);
+  }
+
+  // Listing 1 for one volume scale h: every level from the coarsest to the finest, each solved by
+  // cycles of n volume sweeps and m regularization sweeps, then prolongated to the next level.
+  void multigrid_pass(State& s, double h, double final_tol, bool coarse_only, ReconstructStats& st,
+                      std::vector<double>& V) const {
+    s.P0 = s.P;
+    const int nl = static_cast<int>(levels_.size());
+    for (int l = 0; l < nl; ++l) {
+      const Level& L = levels_[l];
+      if (l > 0) prolongate(L, levels_[l - 1], s);
+      const bool finest = l + 1 == nl;
+      if (finest && coarse_only && nl > 1) {
+        // Section 5: the finest level follows by regularization only.
+        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
+        st.regularization_sweeps += opt_.regularization_iterations;
+        continue;
+      }
+      const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, st, V);
+      if (finest) {
+        st.finest_cycles_per_scale.push_back(cycles);
+        if (h == 1.0) polish(L, s, final_tol, st, V);
+      }
+    }
+  }
+
+  // "Do until convergence" of Listing 1: volume steps until the prisms hold their (scaled)
+  // volumes, then regularization; repeated until the regularization stops moving the solution
+  // (a fixed point of smoothing and projection) or max_cycles. Ends on volume steps.
+  int solve_level(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+    double lambda = 1.0;
+    int c = 0;
+    for (;; ++c) {
+      project(L, s, h, tol, st, V);
+      ++st.cycles;
+      if (c + 1 >= opt_.max_cycles || opt_.regularization_iterations == 0) break;
+      before_ = s.P;
+      for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, lambda);
+      st.regularization_sweeps += opt_.regularization_iterations;
+      lambda *= opt_.regularization_decay;
+      double moved = 0.0;
+      for (int i : L.verts) moved = std::max(moved, (s.P[i] - before_[i]).norm());
+      if (moved <= opt_.fixed_point_tolerance * mean_abs_f_) {
+        project(L, s, h, tol, st, V);
+        break;
+      }
+    }
+    return c + 1;
+  }
+
+  // Volume steps (at most volume_iterations) until the max relative error is at most tol.
+  void project(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+    compute_volumes(L, s, V);
+    double err = relative_error(L, h, V, nullptr);
+    for (int it = 0; it < opt_.volume_iterations && err > tol; ++it) {
+      volume_sweep(L, s, h, V, st);
+      ++st.volume_sweeps;
+      err = relative_error(L, h, V, nullptr);
+    }
+  }
+
+  // Volume-only sweeps until the tolerance holds (the volume terms' weight grows to all).
+  void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
+    compute_volumes(L, s, V);
+    double err = relative_error(L, 1.0, V, nullptr);
+    int sweeps = 0;
+    while (err > tol && sweeps < opt_.max_final_sweeps) {
+      for (int it = 0; it < 5; ++it) volume_sweep(L, s, 1.0, V, st);
+      sweeps += 5;
+      compute_volumes(L, s, V);
+      err = relative_error(L, 1.0, V, nullptr);
+    }
+    st.final_sweeps += sweeps;
+    st.volume_sweeps += sweeps;
+  }
+
+  void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
+    V.resize(L.faces.size());
+    for (std::size_t j = 0; j < L.faces.size(); ++j) {
+      const Face& f = L.faces[j];
+      V[j] = prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+    }
+  }
+
+  // max_j |h V*_j - V_j| / mean_j |h V*_j|, and optionally the RMS of the same ratio.
+  static double relative_error(const Level& L, double h, const std::vector<double>& V, double* rms) {
+    const double scale = h * L.mean_abs_target;
+    if (!(scale > 0)) return 0.0;
+    double mx = 0.0, sq = 0.0;
+    for (std::size_t j = 0; j < V.size(); ++j) {
+      const double e = std::abs(h * L.targets[j] - V[j]);
+      mx = std::max(mx, e);
+      sq += e * e;
+    }
+    if (rms) *rms = std::sqrt(sq / V.size()) / scale;
+    return mx / scale;
+  }
+
+  // Section 4.1, as a nonlinear Gauss-Seidel: each vertex moves to the damped least-squares
+  // point of the planes on which its prisms have their target volumes. The volume is affine in a
+  // single vertex, so the planes are exact and the volumes are updated incrementally.
+  void volume_sweep(const Level& L, State& s, double h, std::vector<double>& V, ReconstructStats& st) const {
+    if (opt_.levenberg < -1.5) {
+      gauss_newton_step(L, s, h, st);
+      compute_volumes(L, s, V);
+      return;
+    }
+    if (opt_.levenberg < 0) {
+      prism_sweep(L, s, h, st);
+      return;
+    }
+    Vec3 grads[64];
+    std::vector<Vec3> big;
+    const int nv = static_cast<int>(L.verts.size());
+    for (int k = 0; k < nv; ++k) {
+      const int b = L.vf_offsets[k], e = L.vf_offsets[k + 1];
+      if (b == e) continue;
+      Vec3* g = grads;
+      if (e - b > 64) {
+        big.resize(e - b);
+        g = big.data();
+      }
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Vec3 rhs = Vec3::Zero();
+      for (int t = b; t < e; ++t) {
+        const int j = L.vf_faces[t], c = L.vf_corners[t];
+        const Face& f = L.faces[j];
+        const int ia = f[c], ib = f[(c + 1) % 3], ic = f[(c + 2) % 3];
+        const Vec3 gv = prism_vertex_gradient(s.P[ia], s.P[ib], s.P[ic], s.Q[ia], s.Q[ib], s.Q[ic]);
+        g[t - b] = gv;
+        A.selfadjointView<Eigen::Lower>().rankUpdate(gv);
+        rhs += (h * L.targets[j] - V[j]) * gv;
+      }
+      A = A.selfadjointView<Eigen::Lower>();
+      const double mu = opt_.levenberg * A.trace() + 1e-300;
+      A.diagonal().array() += mu;
+      const Vec3 delta = opt_.damping * A.ldlt().solve(rhs);
+      if (!delta.allFinite()) continue;
+      s.P[L.verts[k]] += delta;
+      for (int t = b; t < e; ++t) V[L.vf_faces[t]] += g[t - b].dot(delta);
+    }
+    st.constraint_updates += static_cast<long long>(L.vf_faces.size());
+  }
+
+  // One Gauss-Newton step towards the volume constraints: the minimum-norm correction
+  // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
+  // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
+  // the projection of the current positions onto the linearized constraint set.
+  void gauss_newton_step(const Level& L, State& s, double h, ReconstructStats& st) const {
+    GnScratch& w = gn_;
+    const std::size_t m = L.faces.size();
+    w.grad.resize(m);
+    w.r.resize(m);
+    w.diag.resize(m);
+    double rr = 0.0;
+    for (std::size_t j = 0; j < m; ++j) {
+      const Face& f = L.faces[j];
+      const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+      w.grad[j] = {g.grad[0], g.grad[1], g.grad[2]};
+      w.r[j] = h * L.targets[j] - g.volume;
+      rr += w.r[j] * w.r[j];
+    }
+    // J J^T's values on the kept pattern; then each CG product is a plain sparse row sweep.
+    w.values.resize(L.jj_prism.size());
+    for (std::size_t j = 0; j < m; ++j) {
+      double d = 0.0;
+      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t) {
+        const int k = L.jj_prism[t];
+        w.values[t] = w.grad[j][L.jj_corner_j[t]].dot(w.grad[k][L.jj_corner_k[t]]);
+        if (k == static_cast<int>(j)) d += w.values[t];
+      }
+      w.diag[j] = d > 0 ? 1.0 / d : 0.0;
+    }
+    auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
+      out.resize(m);
+      for (std::size_t j = 0; j < m; ++j) {
+        double acc = 0.0;
+        for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t) acc += w.values[t] * x[L.jj_prism[t]];
+        out[j] = acc;
+      }
+    };
+    // Preconditioned CG from y = 0.
+    w.y.assign(m, 0.0);
+    w.z.resize(m);
+    std::vector<double>& res = w.r;  // r becomes the CG residual
+    for (std::size_t j = 0; j < m; ++j) w.z[j] = w.diag[j] * res[j];
+    w.p = w.z;
+    double rz = 0.0;
+    for (std::size_t j = 0; j < m; ++j) rz += res[j] * w.z[j];
+    const double stop = opt_.cg_tolerance * opt_.cg_tolerance * rr;
+    int it = 0;
+    for (; it < opt_.cg_max_iterations && rr > stop; ++it) {
+      apply(w.p, w.Ap);
+      double pAp = 0.0;
+      for (std::size_t j = 0; j < m; ++j) pAp += w.p[j] * w.Ap[j];
+      if (!(pAp > 0)) break;
+      const double alpha = rz / pAp;
+      rr = 0.0;
+      double rz_new = 0.0;
+      for (std::size_t j = 0; j < m; ++j) {
+        w.y[j] += alpha * w.p[j];
+        res[j] -= alpha * w.Ap[j];
+        w.z[j] = w.diag[j] * res[j];
+        rr += res[j] * res[j];
+        rz_new += res[j] * w.z[j];
+      }
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (std::size_t j = 0; j < m; ++j) w.p[j] = w.z[j] + beta * w.p[j];
+    }
+    st.cg_iterations += it;
+    for (std::size_t j = 0; j < m; ++j) {
+      const Face& f = L.faces[j];
+      for (int c = 0; c < 3; ++c) s.P[f[c]] += w.y[j] * w.grad[j][c];
+    }
+    st.constraint_updates += static_cast<long long>(m);
+  }
+
+  // Minimum-norm projection per prism (Kaczmarz; Gauss-Seidel on J J^T): the prism's three top
+  // vertices move along their volume gradients just enough to restore its volume.
+  void prism_sweep(const Level& L, State& s, double h, ReconstructStats& st) const {
+    for (std::size_t j = 0; j < L.faces.size(); ++j) {
+      const Face& f = L.faces[j];
+      const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+      const double gg = g.grad[0].squaredNorm() + g.grad[1].squaredNorm() + g.grad[2].squaredNorm();
+      if (!(gg > 0)) continue;
+      const double step = opt_.damping * (h * L.targets[j] - g.volume) / gg;
+      for (int c = 0; c < 3; ++c) s.P[f[c]] += step * g.grad[c];
+    }
+    st.constraint_updates += static_cast<long long>(L.faces.size());
+  }
+
+  // Section 4.2 on the displacements d_i = p_i - q_i (Jacobi sweep): the length filter
+  // d -> d + lambda f Laplacian(d/f) and the tangential Laplacian of the tangential displacement
+  // (relative to its rest offset), both with the original's weights.
+  void regularize(const Level& L, State& s, double lambda_scale) const {
+    const int nv = static_cast<int>(L.verts.size());
+    rho_.resize(nv);
+    tdev_.resize(nv);
+    for (int k = 0; k < nv; ++k) {
+      const int i = L.verts[k];
+      const Vec3 d = s.P[i] - s.Q[i];
+      const double hgt = d.dot(s.N[i]);
+      rho_[k] = hgt / guarded_f_[i];
+      tdev_[k] = d - hgt * s.N[i] - s.R[i];
+    }
+    const double ll = opt_.length_lambda * lambda_scale, lt = opt_.tangential_lambda * lambda_scale;
+    for (int k = 0; k < nv; ++k) {
+      const int b = L.nb_offsets[k], e = L.nb_offsets[k + 1];
+      if (b == e) continue;
+      double avg_rho = 0.0;
+      Vec3 avg_t = Vec3::Zero();
+      for (int t = b; t < e; ++t) {
+        avg_rho += L.weights[t] * rho_[L.nb[t]];
+        avg_t += L.weights[t] * tdev_[L.nb[t]];
+      }
+      const int i = L.verts[k];
+      const Vec3& n = s.N[i];
+      const double hgt = (rho_[k] + ll * (avg_rho - rho_[k])) * guarded_f_[i];
+      Vec3 lap = avg_t - tdev_[k];
+      lap -= lap.dot(n) * n;
+      s.P[i] = s.Q[i] + hgt * n + s.R[i] + tdev_[k] + lt * lap;
+    }
+  }
+
+  // Carries the coarse level's change since the pass started to the vertices the finer level
+  // adds, in reverse removal order: each takes the mean change of its removal ring, as a change
+  // of d/f along its own normal and of the tangential displacement in its own tangent plane.
+  void prolongate(const Level& fine, const Level& coarse, State& s) const {
+    for (int i : coarse.verts) {
+      const Vec3 d = s.P[i] - s.P0[i];
+      const double dn = d.dot(s.N[i]);
+      s.dRho[i] = dn / guarded_f_[i];
+      s.dT[i] = d - dn * s.N[i];
+    }
+    for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
+      const int i = fine.inserted[k];
+      const int b = fine.ring_offsets[k], e = fine.ring_offsets[k + 1];
+      double rho = 0.0;
+      Vec3 t = Vec3::Zero();
+      for (int r = b; r < e; ++r) {
+        rho += s.dRho[fine.ring_vertices[r]];
+        t += s.dT[fine.ring_vertices[r]];
+      }
+      if (e > b) {
+        rho /= (e - b);
+        t /= (e - b);
+      }
+      t -= t.dot(s.N[i]) * s.N[i];
+      s.dRho[i] = rho;
+      s.dT[i] = t;
+      s.P[i] = s.P0[i] + rho * guarded_f_[i] * s.N[i] + t;
+    }
+  }
+
+  DetailEncoding enc_;
+  ReconstructOptions opt_;
+  std::vector<double> guarded_f_;
+  double mean_abs_f_ = 0.0;
+  std::vector<Level> levels_;
+  double setup_seconds_ = 0.0;
+  // Scratch of the regularization sweep (reused between calls; not thread-safe across calls).
+  mutable std::vector<double> rho_;
+  mutable std::vector<Vec3> tdev_;
+  mutable GnScratch gn_;
+  mutable std::vector<Vec3> before_;
+};
+
+VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)
+    : impl_(std::make_unique<Impl>(std::move(encoding), std::move(options))) {}
+VolumeReconstructor::~VolumeReconstructor() = default;
+VolumeReconstructor::VolumeReconstructor(VolumeReconstructor&&) noexcept = default;
+VolumeReconstructor& VolumeReconstructor::operator=(VolumeReconstructor&&) noexcept = default;
+
+ReconstructResult VolumeReconstructor::reconstruct(const std::vector<Vec3>& edited_base) const {
+  return impl_->run(edited_base, nullptr, nullptr);
+}
+ReconstructResult VolumeReconstructor::reconstruct_from(const std::vector<Vec3>& edited_base,
+                                                        const std::vector<Vec3>& start,
+                                                        const WarmStartOptions& warm) const {
+  return impl_->run(edited_base, &start, &warm);
+}
+const DetailEncoding& VolumeReconstructor::encoding() const { return impl_->encoding(); }
+const ReconstructOptions& VolumeReconstructor::options() const { return impl_->options(); }
+double VolumeReconstructor::setup_seconds() const { return impl_->setup_seconds(); }
+std::vector<int> VolumeReconstructor::level_vertex_counts() const { return impl_->level_vertex_counts(); }
+
+}  // namespace strata

@@ -1,0 +1,138 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "strata/prism.h"
+
+using strata::Vec3;
+
+namespace {
+
+struct Prism {
+  Vec3 p[3], q[3];
+};
+
+double volume(const Prism& s) { return strata::prism_volume(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]); }
+
+Vec3 random_vec(std::mt19937& rng, double scale) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  return Vec3(u(rng), u(rng), u(rng)) * scale;
+}
+
+// Random prisms of three families: general, thin (height << base size), sheared (top shifted
+// tangentially by more than its size).
+std::vector<Prism> random_prisms(int count) {
+  std::mt19937 rng(1234);
+  std::vector<Prism> out;
+  for (int i = 0; i < count; ++i) {
+    const int family = i % 3;
+    Prism s;
+    const Vec3 q0 = random_vec(rng, 10.0);
+    s.q[0] = q0;
+    s.q[1] = q0 + Vec3(1, 0, 0) + random_vec(rng, 0.3);
+    s.q[2] = q0 + Vec3(0, 1, 0) + random_vec(rng, 0.3);
+    const double height = family == 1 ? 1e-3 : 0.7;
+    const Vec3 shear = family == 2 ? Vec3(1.5, -0.8, 0.0) : Vec3::Zero();
+    for (int k = 0; k < 3; ++k)
+      s.p[k] = s.q[k] + Vec3(0, 0, height) + shear + random_vec(rng, family == 1 ? 1e-4 : 0.4);
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Prism, UnitRightPrismHasExactVolume) {
+  // Planar faces: the split quads are planar, so the volume is the polyhedron's exactly.
+  Prism s{{Vec3(0, 0, 1), Vec3(1, 0, 1), Vec3(0, 1, 1)}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}};
+  EXPECT_NEAR(volume(s), 0.5, 1e-15);
+}
+
+TEST(Prism, ObliquePlanarPrismMatchesPolyhedronVolume) {
+  // A sheared prism with parallel top and bottom: volume = base area * height, whatever the shear.
+  const Vec3 shift(0.7, -0.3, 2.5);
+  Prism s{{Vec3(0, 0, 0) + shift, Vec3(2, 0, 0) + shift, Vec3(0, 3, 0) + shift},
+          {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 3, 0)}};
+  EXPECT_NEAR(volume(s), 3.0 * 2.5, 1e-13);
+}
+
+TEST(Prism, FrustumMatchesPolyhedronVolume) {
+  // Top triangle scaled by 1/2 about the apex axis: a truncated pyramid with planar trapezoid
+  // sides. Volume = h/3 (A1 + A2 + sqrt(A1 A2)).
+  const double h = 1.5, a1 = 0.5 * 4.0 * 4.0, a2 = 0.5 * 2.0 * 2.0;
+  Prism s{{Vec3(0, 0, h), Vec3(2, 0, h), Vec3(0, 2, h)}, {Vec3(0, 0, 0), Vec3(4, 0, 0), Vec3(0, 4, 0)}};
+  EXPECT_NEAR(volume(s), h / 3.0 * (a1 + a2 + std::sqrt(a1 * a2)), 1e-13);
+}
+
+TEST(Prism, GradientMatchesCentralDifferences) {
+  for (const Prism& s : random_prisms(60)) {
+    const auto g = strata::prism_volume_gradient(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]);
+    EXPECT_NEAR(g.volume, volume(s), 1e-12 * (1.0 + std::abs(g.volume)));
+    for (int k = 0; k < 3; ++k) {
+      // The volume is affine in each single vertex, so central differences are exact up to
+      // rounding; a moderate step keeps the rounding small.
+      const double h = 1e-4;
+      Vec3 fd;
+      for (int d = 0; d < 3; ++d) {
+        Prism a = s, b = s;
+        a.p[k][d] += h;
+        b.p[k][d] -= h;
+        fd[d] = (volume(a) - volume(b)) / (2 * h);
+      }
+      EXPECT_LE((g.grad[k] - fd).norm(), 1e-6 * fd.norm() + 1e-12) << "corner " << k;
+      const int a = k, b = (k + 1) % 3, c = (k + 2) % 3;
+      const Vec3 gv = strata::prism_vertex_gradient(s.p[a], s.p[b], s.p[c], s.q[a], s.q[b], s.q[c]);
+      EXPECT_LE((gv - g.grad[k]).norm(), 1e-12 * (1.0 + g.grad[k].norm()));
+    }
+  }
+}
+
+TEST(Prism, VolumeIsAffineInOneVertex) {
+  // The property the solver's incremental update relies on: V(p + d) = V(p) + grad . d exactly.
+  for (const Prism& s : random_prisms(30)) {
+    const auto g = strata::prism_volume_gradient(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]);
+    Prism moved = s;
+    const Vec3 d(0.3, -0.5, 0.9);
+    moved.p[1] += d;
+    EXPECT_NEAR(volume(moved), g.volume + g.grad[1].dot(d), 1e-11);
+  }
+}
+
+TEST(Prism, TranslationInvariant) {
+  for (const Prism& s : random_prisms(30)) {
+    Prism t = s;
+    const Vec3 shift(123.25, -77.5, 1000.125);
+    for (int k = 0; k < 3; ++k) {
+      t.p[k] += shift;
+      t.q[k] += shift;
+    }
+    EXPECT_NEAR(volume(t), volume(s), 1e-10 * (1.0 + std::abs(volume(s))));
+  }
+}
+
+TEST(Prism, SignFlipsBelowBase) {
+  for (const Prism& s : random_prisms(30)) {
+    // Mirror the detail through the base plane region: p -> 2q - p puts the top below the base.
+    Prism below = s;
+    for (int k = 0; k < 3; ++k) below.p[k] = 2.0 * s.q[k] - s.p[k];
+    const double v = volume(s), w = volume(below);
+    if (std::abs(v) > 1e-9) EXPECT_LT(v * w, 0.0);
+  }
+  Prism up{{Vec3(0, 0, 1), Vec3(1, 0, 1), Vec3(0, 1, 1)}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}};
+  Prism down{{Vec3(0, 0, -1), Vec3(1, 0, -1), Vec3(0, 1, -1)}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}};
+  EXPECT_NEAR(volume(up), 0.5, 1e-15);
+  EXPECT_NEAR(volume(down), -0.5, 1e-15);
+}
+
+TEST(Prism, NeighbouringPrismsTileTheLayer) {
+  // Two prisms sharing an edge use the same split of their common quad, so their volumes add up
+  // to the volume of the union: a unit square slab split into two triangles, with a non-planar top.
+  const Vec3 q[4] = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)};
+  const Vec3 p[4] = {Vec3(0, 0, 1), Vec3(1, 0, 1.3), Vec3(1, 1, 0.8), Vec3(0, 1, 1.1)};
+  const double v1 = strata::prism_volume(p[0], p[1], p[2], q[0], q[1], q[2]);
+  const double v2 = strata::prism_volume(p[0], p[2], p[3], q[0], q[2], q[3]);
+  // The union is a box-like solid with a bilinear-free top made of the two triangles; its volume
+  // over the unit square is the integral of the piecewise-linear height.
+  const double h_tri1 = (1.0 + 1.3 + 0.8) / 3.0 * 0.5, h_tri2 = (1.0 + 0.8 + 1.1) / 3.0 * 0.5;
+  EXPECT_NEAR(v1 + v2, h_tri1 + h_tri2, 1e-14);
+}
