@@ -1,0 +1,80 @@
+//! \file intersections.h
+//! Self-intersection detection on a flat triangle mesh: counts the pairs of non-adjacent triangles
+//! that intersect, decided by exact predicates and pruned by a bounding-volume hierarchy.
+#pragma once
+
+#include "strata/mesh.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace strata {
+
+//! Options of find_self_intersections().
+struct IntersectionOptions {
+  //! Collect the intersecting pairs themselves (not just count them).
+  bool collect_pairs = false;
+  //! Stop counting after this many pairs (0 = no limit). Keeps a badly broken mesh from costing O(n^2).
+  std::size_t max_pairs = 0;
+  //! Run on the TBB thread pool; false runs on the calling thread only. The result is the same
+  //! either way, except which pairs are kept when max_pairs cuts the search short.
+  bool parallel = true;
+};
+
+//! What find_self_intersections() found.
+struct IntersectionResult {
+  //! Number of intersecting pairs of non-adjacent triangles (at most max_pairs if that was set).
+  std::size_t num_pairs = 0;
+  //! The pairs (i, j) of face indices, i < j, sorted; only if collect_pairs (then pairs.size() == num_pairs).
+  std::vector<std::pair<int, int>> pairs;
+  //! The sorted distinct faces occurring in `pairs`; only if collect_pairs.
+  std::vector<int> faces;
+  //! True iff the mesh has more than max_pairs intersecting pairs: the search stopped early, and
+  //! num_pairs == max_pairs is only a lower bound. Which pairs were kept is then unspecified.
+  bool truncated = false;
+  //! Number of faces of the mesh searched.
+  std::size_t num_faces = 0;
+  //! 64-bit fingerprint of the face list (indices and order), so that count_new_intersections()
+  //! can check that two results refer to the same connectivity.
+  std::uint64_t connectivity_hash = 0;
+};
+
+//! Counts the pairs of triangles that share no vertex and intersect, as closed sets (touching at a
+//! point or along an edge counts as intersecting; so does coplanar overlap).
+//!
+//! The triangle-pair test is exact (CGAL's filtered predicates on the double coordinates, no
+//! tolerance); a bounding-volume hierarchy over the faces prunes the candidate pairs, so a mesh
+//! with few intersections costs O(n log n).
+//!
+//! Adjacency is by vertex index: two faces sharing one vertex or an edge are never counted, even
+//! when they do cross (a sharp fold around a shared vertex is a real self-intersection that this
+//! function misses by design: like the paper, it counts non-adjacent pairs only). Conversely, faces
+//! that meet at coincident but distinct (unwelded) vertices do touch and are counted.
+//! Degenerate faces (zero area, decided exactly: collinear or repeated vertices) are skipped.
+//!
+//! Costs about 75 bytes per face of working memory at its peak; safe to call concurrently.
+//!
+//! \pre Every face index is in [0, vertices.size()); every vertex used by a face has finite coordinates.
+//! \throw InvalidInput if a face index is out of range, a used vertex has a non-finite coordinate,
+//!        or there are more faces than fit in an int.
+IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                           const IntersectionOptions& options = {});
+
+//! Number of pairs present in \p after but not in \p before: the "new" intersections caused by an
+//! edit of the vertex positions.
+//! \pre Both results list all their pairs (computed with collect_pairs, or with no pairs at all:
+//!      pairs.size() == num_pairs), neither is truncated, and both come from the same face list.
+//! \throw InvalidInput if a result does not list its pairs, is truncated, or the two results have
+//!        different connectivity (face count or fingerprint differ).
+std::size_t count_new_intersections(const IntersectionResult& before, const IntersectionResult& after);
+
+//! Whether the closed triangles \p a and \p b intersect (touching counts), decided exactly with
+//! the same predicate find_self_intersections() uses. No adjacency rule here: triangles sharing a
+//! vertex position do intersect. False if either triangle is degenerate (zero area, decided exactly).
+//! \throw InvalidInput if a coordinate is not finite.
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+
+}  // namespace strata

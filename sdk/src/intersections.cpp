@@ -1,0 +1,444 @@
+#include "strata/intersections.h"
+
+#include "strata/exceptions.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Intersections_3/Triangle_3_Triangle_3.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cfloat>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+
+namespace strata {
+namespace {
+
+// Epick's predicates are filtered: interval arithmetic first, exact arithmetic when it cannot decide.
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Triangle = Kernel::Triangle_3;
+using Pair = std::pair<int, int>;
+
+// Small leaves keep the leaf-against-leaf loops short; the per-triangle box test inside them is cheap.
+constexpr std::size_t kLeafSize = 4;
+// Subtrees with fewer triangles than this are built or traversed as a single task: below it the
+// task overhead outweighs the work.
+constexpr std::size_t kParallelGrain = 4096;
+
+Point to_point(const Vec3& p) { return Point(p.x(), p.y(), p.z()); }
+
+bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
+
+// Boxes are stored in float to halve the memory traffic of the traversal. They only prune (the
+// exact predicate decides), so they must never be smaller than the triangle: round outward.
+float round_down(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+float round_up(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+struct Box {
+  float lo[3];
+  float hi[3];
+};
+
+// Closed intervals: boxes that merely touch overlap, so touching triangles are not pruned.
+inline bool overlap(const Box& a, const Box& b) {
+  return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] &&
+         a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
+}
+
+Box merge(const Box& a, const Box& b) {
+  Box m;
+  for (int k = 0; k < 3; ++k) {
+    m.lo[k] = std::min(a.lo[k], b.lo[k]);
+    m.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  return m;
+}
+
+// One non-degenerate face with its box, stored in leaf order so that a leaf's triangles are contiguous.
+struct Prim {
+  Box box;
+  std::array<int, 3> v;
+  int face;  // index in the caller's face list
+};
+
+// A face as the build sees it: centroid and face index only (16 bytes), so that the median
+// selections move little memory. face == -1 marks a degenerate face before compaction.
+struct Item {
+  float c[3];
+  int face;
+};
+
+// Depth-first layout: an internal node (count == 0) has its left child right after it and its right
+// child at `index`; a leaf owns prims [index, index + count). A node over m triangles splits them
+// m/2 | m - m/2, so subtree sizes need not be stored.
+struct Node {
+  Box box;
+  int index;
+  int count;
+};
+
+inline bool share_vertex(const Prim& p, const Prim& q) {
+  for (int a : p.v)
+    if (a == q.v[0] || a == q.v[1] || a == q.v[2]) return true;
+  return false;
+}
+
+// Median-split BVH topology over the items, built top-down (in parallel for large subtrees). On
+// return the items are in leaf order; boxes are filled in afterwards by fit_boxes().
+class BvhBuilder {
+ public:
+  BvhBuilder(std::vector<Item>& items, std::vector<Node>& nodes) : items_(items), nodes_(nodes) {}
+
+  void build() {
+    if (items_.empty()) return;
+    nodes_.resize(count_nodes(items_.size()));
+    split(0, 0, items_.size());
+  }
+
+ private:
+  // Node count of a subtree over m triangles, memoized (only O(log n) distinct sizes occur) so the
+  // parallel build knows where each right subtree starts. Filled before the build, read-only during it.
+  std::size_t count_nodes(std::size_t m) {
+    if (m <= kLeafSize) return 1;
+    const auto it = memo_.find(m);
+    if (it != memo_.end()) return it->second;
+    const std::size_t c = 1 + count_nodes(m / 2) + count_nodes(m - m / 2);
+    memo_.emplace(m, c);
+    return c;
+  }
+  std::size_t nodes_of(std::size_t m) const { return m <= kLeafSize ? 1 : memo_.at(m); }
+
+  void split(std::size_t node, std::size_t b, std::size_t e) {
+    Node& nd = nodes_[node];
+    if (e - b <= kLeafSize) {
+      nd.index = static_cast<int>(b);
+      nd.count = static_cast<int>(e - b);
+      return;
+    }
+    // Split at the median centroid along the axis where the centroids spread most.
+    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    for (std::size_t i = b; i < e; ++i)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], items_[i].c[k]);
+        hi[k] = std::max(hi[k], items_[i].c[k]);
+      }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    const std::size_t mid = b + (e - b) / 2;
+    std::nth_element(items_.begin() + b, items_.begin() + mid, items_.begin() + e,
+                     [axis](const Item& p, const Item& q) { return p.c[axis] < q.c[axis]; });
+
+    const std::size_t left = node + 1, right = node + 1 + nodes_of(mid - b);
+    if (e - b > kParallelGrain)
+      tbb::parallel_invoke([&] { split(left, b, mid); }, [&] { split(right, mid, e); });
+    else {
+      split(left, b, mid);
+      split(right, mid, e);
+    }
+    nd.index = static_cast<int>(right);
+    nd.count = 0;
+  }
+
+  std::vector<Item>& items_;
+  std::vector<Node>& nodes_;
+  std::map<std::size_t, std::size_t> memo_;
+};
+
+// Bottom-up boxes: children come after their parent in the depth-first layout, so one backward
+// sweep sees every child before its parent.
+void fit_boxes(std::vector<Node>& nodes, const std::vector<Prim>& prims) {
+  for (std::size_t n = nodes.size(); n-- > 0;) {
+    Node& nd = nodes[n];
+    if (nd.count > 0) {
+      nd.box = prims[nd.index].box;
+      for (int i = nd.index + 1; i < nd.index + nd.count; ++i) nd.box = merge(nd.box, prims[i].box);
+    } else {
+      nd.box = merge(nodes[n + 1].box, nodes[nd.index].box);
+    }
+  }
+}
+
+// Traverses the tree against itself: each unordered pair of leaves whose boxes overlap is visited
+// once, and each pair of triangles in them is tested once.
+class SelfIntersectionSearch {
+ public:
+  SelfIntersectionSearch(const std::vector<Vec3>& vertices, const std::vector<Node>& nodes,
+                         const std::vector<Prim>& prims, const IntersectionOptions& options)
+      : vertices_(vertices), nodes_(nodes), prims_(prims), collect_(options.collect_pairs),
+        max_pairs_(options.max_pairs) {}
+
+  void run() {
+    if (!prims_.empty()) self(0, prims_.size());
+  }
+
+  std::size_t found() const { return found_.load(); }
+  bool truncated() const { return truncated_.load(); }
+
+  std::vector<Pair> take_pairs() {
+    std::vector<Pair> all;
+    for (const std::vector<Pair>& local : pairs_) all.insert(all.end(), local.begin(), local.end());
+    std::sort(all.begin(), all.end());
+    return all;
+  }
+
+ private:
+  bool stopped() const { return truncated_.load(std::memory_order_relaxed); }
+
+  template <class F, class G>
+  static void fork(bool parallel, const F& f, const G& g) {
+    if (parallel)
+      tbb::parallel_invoke(f, g);
+    else {
+      f();
+      g();
+    }
+  }
+
+  // All pairs within subtree `n` (over m triangles).
+  void self(int n, std::size_t m) {
+    if (stopped()) return;
+    const Node& nd = nodes_[n];
+    if (nd.count > 0) {
+      for (int i = nd.index, end = nd.index + nd.count; i < end; ++i)
+        for (int j = i + 1; j < end; ++j) test(prims_[i], prims_[j]);
+      return;
+    }
+    const int l = n + 1, r = nd.index;
+    const std::size_t ml = m / 2, mr = m - m / 2;
+    if (m > kParallelGrain)
+      tbb::parallel_invoke([&] { self(l, ml); }, [&] { self(r, mr); }, [&] { cross(l, ml, r, mr); });
+    else {
+      self(l, ml);
+      self(r, mr);
+      cross(l, ml, r, mr);
+    }
+  }
+
+  // All pairs with one triangle in subtree a (ma triangles) and the other in subtree b (mb).
+  void cross(int a, std::size_t ma, int b, std::size_t mb) {
+    if (stopped()) return;
+    const Node& na = nodes_[a];
+    const Node& nb = nodes_[b];
+    if (!overlap(na.box, nb.box)) return;
+    if (na.count > 0 && nb.count > 0) {
+      for (int i = na.index, ie = na.index + na.count; i < ie; ++i) {
+        const Prim& p = prims_[i];
+        if (!overlap(p.box, nb.box)) continue;
+        for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) test(p, prims_[j]);
+      }
+      return;
+    }
+    const bool parallel = ma + mb > kParallelGrain;
+    // Descend into the bigger subtree, so both sides shrink at the same pace.
+    if (nb.count > 0 || (na.count == 0 && ma >= mb)) {
+      const std::size_t m1 = ma / 2, m2 = ma - ma / 2;
+      fork(parallel, [&] { cross(a + 1, m1, b, mb); }, [&] { cross(na.index, m2, b, mb); });
+    } else {
+      const std::size_t m1 = mb / 2, m2 = mb - mb / 2;
+      fork(parallel, [&] { cross(a, ma, b + 1, m1); }, [&] { cross(a, ma, nb.index, m2); });
+    }
+  }
+
+  void test(const Prim& p, const Prim& q) {
+    if (!overlap(p.box, q.box) || share_vertex(p, q)) return;
+    const Triangle t(to_point(vertices_[p.v[0]]), to_point(vertices_[p.v[1]]), to_point(vertices_[p.v[2]]));
+    const Triangle u(to_point(vertices_[q.v[0]]), to_point(vertices_[q.v[1]]), to_point(vertices_[q.v[2]]));
+    if (CGAL::do_intersect(t, u)) report(p.face, q.face);
+  }
+
+  void report(int f, int g) {
+    const std::size_t before = found_.fetch_add(1, std::memory_order_relaxed);
+    // Finding pair max_pairs + 1 proves the mesh has more than the limit: stop everyone.
+    if (max_pairs_ > 0 && before >= max_pairs_) {
+      truncated_.store(true, std::memory_order_relaxed);
+      return;
+    }
+    if (collect_) pairs_.local().emplace_back(std::min(f, g), std::max(f, g));
+  }
+
+  const std::vector<Vec3>& vertices_;
+  const std::vector<Node>& nodes_;
+  const std::vector<Prim>& prims_;
+  const bool collect_;
+  const std::size_t max_pairs_;
+  std::atomic<std::size_t> found_{0};
+  std::atomic<bool> truncated_{false};
+  tbb::enumerable_thread_specific<std::vector<Pair>> pairs_;
+};
+
+void validate(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  if (faces.size() > static_cast<std::size_t>(INT_MAX))
+    throw InvalidInput("find_self_intersections: more faces than fit in an int");
+  const std::size_t nv = vertices.size();
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int v : faces[f]) {
+      if (v < 0 || static_cast<std::size_t>(v) >= nv)
+        throw InvalidInput("find_self_intersections: face " + std::to_string(f) + " has vertex index " +
+                           std::to_string(v) + " out of range [0, " + std::to_string(nv) + ")");
+      if (!is_finite(vertices[v]))
+        throw InvalidInput("find_self_intersections: vertex " + std::to_string(v) + " (used by face " +
+                           std::to_string(f) + ") has a non-finite coordinate");
+    }
+}
+
+// Order-sensitive 64-bit hash of the face list; a multiply-xorshift step per index.
+std::uint64_t fingerprint(const std::vector<Face>& faces) {
+  std::uint64_t h = 0x9E3779B97F4A7C15ull ^ faces.size();
+  for (const Face& f : faces)
+    for (int v : f) {
+      h = (h ^ static_cast<std::uint32_t>(v)) * 0xFF51AFD7ED558CCDull;
+      h ^= h >> 32;
+    }
+  return h;
+}
+
+// The non-degenerate faces, in face order.
+std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  std::vector<Item> items(faces.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces.size(), 1024), [&](const auto& range) {
+    for (std::size_t f = range.begin(); f < range.end(); ++f) {
+      const Vec3& a = vertices[faces[f][0]];
+      const Vec3& b = vertices[faces[f][1]];
+      const Vec3& c = vertices[faces[f][2]];
+      Item& item = items[f];
+      // Exact: zero-area triangles have no plane, and CGAL's triangle test requires one.
+      if (CGAL::collinear(to_point(a), to_point(b), to_point(c))) {
+        item.face = -1;
+        continue;
+      }
+      item.face = static_cast<int>(f);
+      // Divide first so that huge coordinates cannot overflow; the centroid only guides the split.
+      const Vec3 centroid = a / 3.0 + b / 3.0 + c / 3.0;
+      for (int k = 0; k < 3; ++k) item.c[k] = static_cast<float>(centroid[k]);
+    }
+  });
+  items.erase(std::remove_if(items.begin(), items.end(), [](const Item& i) { return i.face < 0; }), items.end());
+  return items;
+}
+
+// The faces of `items` (in leaf order) with their outward-rounded boxes.
+std::vector<Prim> make_prims(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                             const std::vector<Item>& items) {
+  std::vector<Prim> prims(items.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items.size(), 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      Prim& p = prims[i];
+      p.face = items[i].face;
+      p.v = faces[p.face];
+      const Vec3& a = vertices[p.v[0]];
+      const Vec3& b = vertices[p.v[1]];
+      const Vec3& c = vertices[p.v[2]];
+      for (int k = 0; k < 3; ++k) {
+        p.box.lo[k] = round_down(std::min({a[k], b[k], c[k]}));
+        p.box.hi[k] = round_up(std::max({a[k], b[k], c[k]}));
+      }
+    }
+  });
+  return prims;
+}
+
+bool lists_all_pairs(const IntersectionResult& r) { return r.pairs.size() == r.num_pairs; }
+
+}  // namespace
+
+IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                           const IntersectionOptions& options) {
+  validate(vertices, faces);
+  IntersectionResult result;
+  result.num_faces = faces.size();
+  result.connectivity_hash = fingerprint(faces);
+
+  auto work = [&] {
+    std::vector<Item> items = make_items(vertices, faces);
+    std::vector<Node> nodes;
+    BvhBuilder(items, nodes).build();
+    const std::vector<Prim> prims = make_prims(vertices, faces, items);
+    std::vector<Item>().swap(items);  // keep the peak memory down on big meshes
+    fit_boxes(nodes, prims);
+    SelfIntersectionSearch search(vertices, nodes, prims, options);
+    search.run();
+    const std::size_t found = search.found();
+    result.truncated = search.truncated();
+    result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;
+    if (options.collect_pairs) result.pairs = search.take_pairs();
+  };
+  if (options.parallel) {
+    work();
+  } else {
+    tbb::task_arena single(1);
+    single.execute(work);
+  }
+
+  if (options.collect_pairs) {
+    result.faces.reserve(2 * result.pairs.size());
+    for (const Pair& p : result.pairs) {
+      result.faces.push_back(p.first);
+      result.faces.push_back(p.second);
+    }
+    std::sort(result.faces.begin(), result.faces.end());
+    result.faces.erase(std::unique(result.faces.begin(), result.faces.end()), result.faces.end());
+  }
+  return result;
+}
+
+std::size_t count_new_intersections(const IntersectionResult& before, const IntersectionResult& after) {
+  for (const IntersectionResult* r : {&before, &after}) {
+    const char* name = r == &before ? "before" : "after";
+    if (r->truncated)
+      throw InvalidInput(std::string("count_new_intersections: '") + name +
+                         "' was truncated by max_pairs, its pair list is incomplete");
+    if (!lists_all_pairs(*r))
+      throw InvalidInput(std::string("count_new_intersections: '") + name +
+                         "' does not list its pairs (compute it with collect_pairs)");
+  }
+  if (before.num_faces != after.num_faces || before.connectivity_hash != after.connectivity_hash)
+    throw InvalidInput("count_new_intersections: the two results come from different face lists");
+
+  // Results from find_self_intersections() are sorted already; hand-made ones may not be.
+  std::vector<Pair> b_storage, a_storage;
+  auto sorted = [](const std::vector<Pair>& pairs, std::vector<Pair>& storage) -> const std::vector<Pair>& {
+    if (std::is_sorted(pairs.begin(), pairs.end())) return pairs;
+    storage = pairs;
+    std::sort(storage.begin(), storage.end());
+    return storage;
+  };
+  const std::vector<Pair>& b = sorted(before.pairs, b_storage);
+  const std::vector<Pair>& a = sorted(after.pairs, a_storage);
+  std::size_t fresh = 0;
+  auto it = b.begin();
+  for (const Pair& p : a) {
+    it = std::lower_bound(it, b.end(), p);
+    if (it == b.end() || *it != p) ++fresh;
+  }
+  return fresh;
+}
+
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  for (const auto* t : {&a, &b})
+    for (const Vec3& p : *t)
+      if (!is_finite(p)) throw InvalidInput("triangles_intersect: non-finite coordinate");
+  const Triangle t(to_point(a[0]), to_point(a[1]), to_point(a[2]));
+  const Triangle u(to_point(b[0]), to_point(b[1]), to_point(b[2]));
+  if (t.is_degenerate() || u.is_degenerate()) return false;
+  return CGAL::do_intersect(t, u);
+}
+
+}  // namespace strata

@@ -1,0 +1,480 @@
+#include "strata/intersections.h"
+
+#include "strata/exceptions.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <random>
+#include <utility>
+
+namespace strata {
+namespace {
+
+using Pair = std::pair<int, int>;
+using Tri = std::array<Vec3, 3>;
+
+// Two unconnected triangles (vertices 0-2 and 3-5).
+TriMesh two_triangles(const Tri& a, const Tri& b) {
+  TriMesh m;
+  m.vertices = {a[0], a[1], a[2], b[0], b[1], b[2]};
+  m.faces = {{0, 1, 2}, {3, 4, 5}};
+  return m;
+}
+
+constexpr double kPi = 3.14159265358979323846;
+
+const Tri kBase = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};  // in the plane z = 0
+
+IntersectionResult find(const TriMesh& m, bool parallel = true, std::size_t max_pairs = 0) {
+  IntersectionOptions o;
+  o.collect_pairs = true;
+  o.parallel = parallel;
+  o.max_pairs = max_pairs;
+  return find_self_intersections(m.vertices, m.faces, o);
+}
+
+std::size_t count(const TriMesh& m) { return find_self_intersections(m.vertices, m.faces).num_pairs; }
+
+// The O(n^2) reference: every pair of faces sharing no vertex index, through the same exact predicate.
+std::vector<Pair> brute_force_pairs(const TriMesh& m) {
+  std::vector<Pair> pairs;
+  auto tri = [&](const Face& f) { return Tri{m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]}; };
+  for (int i = 0; i < m.num_faces(); ++i)
+    for (int j = i + 1; j < m.num_faces(); ++j) {
+      const Face& f = m.faces[i];
+      const Face& g = m.faces[j];
+      bool adjacent = false;
+      for (int a : f) adjacent = adjacent || a == g[0] || a == g[1] || a == g[2];
+      if (!adjacent && triangles_intersect(tri(f), tri(g))) pairs.emplace_back(i, j);
+    }
+  return pairs;
+}
+
+TriMesh icosphere(int levels, double radius = 1.0, const Vec3& centre = Vec3::Zero()) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriMesh m;
+  m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+             {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (Vec3& p : m.vertices) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<Pair, int> midpoints;
+    auto midpoint = [&](int a, int b) {
+      const Pair key(std::min(a, b), std::max(a, b));
+      const auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
+      return midpoints[key] = m.num_vertices() - 1;
+    };
+    std::vector<Face> faces;
+    for (const Face& f : m.faces) {
+      const int ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      faces.insert(faces.end(), {{f[0], ab, ca}, {f[1], bc, ab}, {f[2], ca, bc}, {ab, bc, ca}});
+    }
+    m.faces = std::move(faces);
+  }
+  for (Vec3& p : m.vertices) p = centre + radius * p;
+  return m;
+}
+
+// Latitude-longitude sphere with 2 * slices * (stacks - 1) triangles (fans at the poles).
+TriMesh uv_sphere(int slices, int stacks) {
+  TriMesh m;
+  m.vertices.emplace_back(0, 0, 1);
+  for (int i = 1; i < stacks; ++i) {
+    const double theta = kPi * i / stacks;
+    for (int j = 0; j < slices; ++j) {
+      const double phi = 2.0 * kPi * j / slices;
+      m.vertices.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    }
+  }
+  m.vertices.emplace_back(0, 0, -1);
+  const int south = m.num_vertices() - 1;
+  auto ring = [&](int i, int j) { return 1 + (i - 1) * slices + (j % slices); };
+  for (int j = 0; j < slices; ++j) m.faces.push_back({0, ring(1, j), ring(1, j + 1)});
+  for (int i = 1; i + 1 < stacks; ++i)
+    for (int j = 0; j < slices; ++j) {
+      m.faces.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+      m.faces.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+    }
+  for (int j = 0; j < slices; ++j) m.faces.push_back({south, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
+  return m;
+}
+
+TriMesh concatenate(const TriMesh& a, const TriMesh& b) {
+  TriMesh m = a;
+  const int offset = a.num_vertices();
+  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Face f : b.faces) m.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  return m;
+}
+
+TriMesh translated(TriMesh m, const Vec3& d) {
+  for (Vec3& p : m.vertices) p += d;
+  return m;
+}
+
+// Small triangles scattered in the unit cube, each with its own vertices.
+TriMesh small_triangle_soup(int n, std::mt19937& rng) {
+  std::uniform_real_distribution<double> pos(0.0, 1.0), off(-0.15, 0.15);
+  TriMesh m;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c(pos(rng), pos(rng), pos(rng));
+    for (int k = 0; k < 3; ++k) m.vertices.push_back(c + Vec3(off(rng), off(rng), off(rng)));
+    m.faces.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+  }
+  return m;
+}
+
+// Large triangles over a shared pool of vertices: dense intersections and many adjacent pairs.
+TriMesh shared_vertex_soup(int n, int pool, std::mt19937& rng) {
+  std::uniform_real_distribution<double> pos(0.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, pool - 1);
+  TriMesh m;
+  for (int i = 0; i < pool; ++i) m.vertices.emplace_back(pos(rng), pos(rng), pos(rng));
+  while (m.num_faces() < n) {
+    const Face f = {pick(rng), pick(rng), pick(rng)};
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) m.faces.push_back(f);
+  }
+  return m;
+}
+
+// Vertices on an integer lattice: exact touching, coplanar overlaps, collinear (degenerate) faces
+// and coincident unwelded vertices all occur often, which is where inexact tests go wrong. Each
+// face spans at most `size` lattice steps inside a cube of `extent` steps.
+TriMesh lattice_soup(int n, int extent, int size, std::mt19937& rng) {
+  std::uniform_int_distribution<int> corner(0, extent - size), step(0, size), coin(0, 3);
+  TriMesh m;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c(corner(rng), corner(rng), corner(rng));
+    Face f;
+    for (int k = 0; k < 3; ++k) {
+      // Now and then reuse a recent vertex, so that adjacency also occurs.
+      if (m.num_vertices() > 0 && coin(rng) == 0) {
+        f[k] = std::uniform_int_distribution<int>(std::max(0, m.num_vertices() - 6), m.num_vertices() - 1)(rng);
+      } else {
+        m.vertices.push_back(c + Vec3(step(rng), step(rng), step(rng)));
+        f[k] = m.num_vertices() - 1;
+      }
+    }
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) m.faces.push_back(f);
+  }
+  return m;
+}
+
+void expect_matches_brute_force(const TriMesh& m) {
+  const std::vector<Pair> expected = brute_force_pairs(m);
+  for (bool parallel : {false, true}) {
+    const IntersectionResult r = find(m, parallel);
+    EXPECT_EQ(r.num_pairs, expected.size()) << "parallel=" << parallel;
+    EXPECT_EQ(r.pairs, expected) << "parallel=" << parallel;
+    EXPECT_FALSE(r.truncated);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Two-triangle cases
+
+TEST(IntersectPair, CrossingTrianglesCountOne) {
+  const TriMesh m = two_triangles(kBase, {Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1), Vec3(2, 2, 0)});
+  const IntersectionResult r = find(m);
+  EXPECT_EQ(r.num_pairs, 1u);
+  EXPECT_EQ(r.pairs, (std::vector<Pair>{{0, 1}}));
+  EXPECT_EQ(r.faces, (std::vector<int>{0, 1}));
+  EXPECT_EQ(count(m), 1u);  // without collect_pairs: count only
+  EXPECT_TRUE(find_self_intersections(m.vertices, m.faces).pairs.empty());
+}
+
+TEST(IntersectPair, DisjointTrianglesCountZero) {
+  Tri above = kBase;
+  for (Vec3& p : above) p.z() += 0.5;
+  EXPECT_EQ(count(two_triangles(kBase, above)), 0u);
+  // Coplanar but apart.
+  Tri beside = kBase;
+  for (Vec3& p : beside) p.x() += 1.5;
+  EXPECT_EQ(count(two_triangles(kBase, beside)), 0u);
+  // Boxes overlap, triangles do not: b passes over the hypotenuse of the base triangle.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.6, 0.6, -1), Vec3(0.6, 0.6, 1), Vec3(1, 1, 0)})), 0u);
+}
+
+TEST(IntersectPair, TouchingAtAPointCounts) {
+  // A vertex of b lies exactly inside the base triangle; the rest of b is above it.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.25, 0.25, 0), Vec3(0.25, 0.25, 1), Vec3(1, 1, 1)})), 1u);
+  // Vertex on vertex, at coincident positions but distinct (unwelded) indices.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(1, 0, 0), Vec3(2, 0, 1), Vec3(2, 1, 1)})), 1u);
+  // Vertex of b exactly on an edge of the base triangle.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.5, 0.5, 0), Vec3(1, 1, 1), Vec3(1, 1, -1)})), 1u);
+}
+
+TEST(IntersectPair, TouchingAlongAnEdgeCounts) {
+  // b stands on the base triangle's edge (0,0,0)-(1,0,0), with its own copies of those vertices.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0.5, 0, 1)})), 1u);
+  // b's edge lies inside the base triangle.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.1, 0.1, 0), Vec3(0.4, 0.1, 0), Vec3(0.2, 0.2, 1)})), 1u);
+}
+
+TEST(IntersectPair, CoplanarOverlapCounts) {
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.2, 0.2, 0), Vec3(1.2, 0.2, 0), Vec3(0.2, 1.2, 0)})), 1u);
+  // One inside the other.
+  EXPECT_EQ(count(two_triangles(kBase, {Vec3(0.1, 0.1, 0), Vec3(0.3, 0.1, 0), Vec3(0.1, 0.3, 0)})), 1u);
+}
+
+TEST(IntersectPair, AdjacentFacesAreNeverCounted) {
+  TriMesh m;
+  // Sharing an edge, folded by 90 degrees.
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.5, 0, 1)};
+  m.faces = {{0, 1, 2}, {1, 0, 3}};
+  EXPECT_EQ(count(m), 0u);
+  // Sharing an edge and folded flat onto each other (coplanar overlap): excluded too.
+  m.vertices[3] = Vec3(0.3, 0.3, 0);
+  EXPECT_EQ(count(m), 0u);
+  // Sharing one vertex only.
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)};
+  m.faces = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_EQ(count(m), 0u);
+}
+
+TEST(IntersectPair, FoldAroundASharedVertexIsIgnoredByDesign) {
+  // b shares vertex 0 with the base triangle and cuts through it: a real intersection that the
+  // predicate sees but the count excludes, as documented (only non-adjacent pairs are counted).
+  TriMesh m;
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.4, 0.4, -1), Vec3(0.4, 0.4, 1)};
+  m.faces = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_TRUE(triangles_intersect(kBase, {m.vertices[0], m.vertices[3], m.vertices[4]}));
+  EXPECT_EQ(count(m), 0u);
+}
+
+TEST(IntersectPair, DegenerateFacesAreSkipped) {
+  TriMesh m = two_triangles(kBase, {Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1), Vec3(0.25, 0.25, 0)});
+  EXPECT_EQ(count(m), 0u);  // collinear: zero area, though it pierces the base triangle
+  m.faces[1] = {3, 3, 4};   // repeated vertex
+  EXPECT_EQ(count(m), 0u);
+  EXPECT_FALSE(triangles_intersect(kBase, {Vec3(0.2, 0.2, -1), Vec3(0.2, 0.2, 1), Vec3(0.2, 0.2, 0)}));
+}
+
+TEST(IntersectPair, EmptyAndSingleFace) {
+  EXPECT_EQ(count(TriMesh{}), 0u);
+  TriMesh one;
+  one.vertices = {kBase[0], kBase[1], kBase[2]};
+  one.faces = {{0, 1, 2}};
+  const IntersectionResult r = find(one);
+  EXPECT_EQ(r.num_pairs, 0u);
+  EXPECT_EQ(r.num_faces, 1u);
+}
+
+TEST(IntersectPair, InvalidInputThrows) {
+  TriMesh m = two_triangles(kBase, kBase);
+  m.faces[1][2] = 6;
+  EXPECT_THROW(find_self_intersections(m.vertices, m.faces), InvalidInput);
+  m.faces[1][2] = -1;
+  EXPECT_THROW(find_self_intersections(m.vertices, m.faces), InvalidInput);
+  m.faces[1][2] = 5;
+  m.vertices[4].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(find_self_intersections(m.vertices, m.faces), InvalidInput);
+  m.vertices[4].y() = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(find_self_intersections(m.vertices, m.faces), InvalidInput);
+  EXPECT_THROW(triangles_intersect(kBase, {m.vertices[3], m.vertices[4], m.vertices[5]}), InvalidInput);
+  // An unused vertex may be anything.
+  m.faces.pop_back();
+  EXPECT_EQ(count(m), 0u);
+}
+
+TEST(IntersectPair, HugeCoordinatesStayExact) {
+  // Beyond the float range: the outward-rounded boxes must still not prune the touching pair.
+  const double s = 1e300;
+  Tri a = kBase, b = {Vec3(0.25, 0.25, 0), Vec3(0.25, 0.25, 1), Vec3(1, 1, 1)};
+  for (Vec3& p : a) p *= s;
+  for (Vec3& p : b) p *= s;
+  EXPECT_EQ(count(two_triangles(a, b)), 1u);
+  for (Vec3& p : b) p.z() += 1e290;
+  EXPECT_EQ(count(two_triangles(a, b)), 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Closed meshes and reference tests
+
+TEST(IntersectSphere, ClosedSpheresHaveNoIntersections) {
+  const TriMesh ico = icosphere(4);
+  ASSERT_EQ(ico.num_faces(), 5120);
+  EXPECT_EQ(count(ico), 0u);
+  const TriMesh uv = uv_sphere(64, 33);
+  ASSERT_EQ(uv.num_faces(), 2 * 64 * 32);
+  EXPECT_EQ(count(uv), 0u);
+}
+
+TEST(IntersectSphere, OverlappingCopiesMatchBruteForce) {
+  const TriMesh a = icosphere(3);
+  const TriMesh m = concatenate(a, translated(a, Vec3(0.7, 0.1, 0.05)));
+  const std::vector<Pair> expected = brute_force_pairs(m);
+  ASSERT_GT(expected.size(), 0u);
+  for (bool parallel : {false, true}) {
+    const IntersectionResult r = find(m, parallel);
+    EXPECT_GT(r.num_pairs, 0u);
+    EXPECT_EQ(r.num_pairs, expected.size());
+    EXPECT_EQ(r.pairs, expected);
+    // Every pair joins the two copies, and all faces of the pairs are listed.
+    for (const Pair& p : r.pairs) {
+      EXPECT_LT(p.first, a.num_faces());
+      EXPECT_GE(p.second, a.num_faces());
+      EXPECT_TRUE(std::binary_search(r.faces.begin(), r.faces.end(), p.first));
+      EXPECT_TRUE(std::binary_search(r.faces.begin(), r.faces.end(), p.second));
+    }
+    EXPECT_TRUE(std::is_sorted(r.faces.begin(), r.faces.end()));
+    EXPECT_EQ(std::adjacent_find(r.faces.begin(), r.faces.end()), r.faces.end());
+  }
+}
+
+TEST(IntersectReference, RandomSoupsMatchBruteForce) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    std::mt19937 rng(seed);
+    expect_matches_brute_force(small_triangle_soup(600, rng));
+    expect_matches_brute_force(shared_vertex_soup(300, 120, rng));
+    expect_matches_brute_force(lattice_soup(400, 3, 3, rng));    // dense
+    expect_matches_brute_force(lattice_soup(800, 12, 2, rng));   // sparse, so the hierarchy prunes
+  }
+}
+
+TEST(IntersectReference, FaceOrderDoesNotMatter) {
+  std::mt19937 rng(7);
+  TriMesh m = small_triangle_soup(500, rng);
+  const std::size_t n = find(m).num_pairs;
+  std::shuffle(m.faces.begin(), m.faces.end(), rng);
+  EXPECT_EQ(find(m).num_pairs, n);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Limits and new intersections
+
+TEST(IntersectLimit, MaxPairsStopsTheSearch) {
+  const TriMesh a = icosphere(2);
+  const TriMesh m = concatenate(a, translated(a, Vec3(0.5, 0.0, 0.0)));
+  const std::vector<Pair> all = brute_force_pairs(m);
+  ASSERT_GT(all.size(), 10u);
+  for (bool parallel : {false, true}) {
+    const IntersectionResult cut = find(m, parallel, 10);
+    EXPECT_EQ(cut.num_pairs, 10u);
+    EXPECT_TRUE(cut.truncated);
+    ASSERT_EQ(cut.pairs.size(), 10u);
+    for (const Pair& p : cut.pairs) EXPECT_TRUE(std::binary_search(all.begin(), all.end(), p));
+
+    const IntersectionResult exact = find(m, parallel, all.size());  // exactly at the limit: complete
+    EXPECT_EQ(exact.num_pairs, all.size());
+    EXPECT_FALSE(exact.truncated);
+    EXPECT_EQ(exact.pairs, all);
+  }
+}
+
+TEST(IntersectNew, CountsPairsCreatedByAnEdit) {
+  // Face 0 is the base triangle, face 1 crosses it, faces 2 and 3 are away from everything.
+  TriMesh m;
+  m.vertices = {kBase[0],         kBase[1],          kBase[2],         Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1),
+                Vec3(2, 2, 0),    Vec3(5, 0, 0),     Vec3(6, 0, 0),    Vec3(5, 1, 0),        Vec3(5, 0, 3),
+                Vec3(6, 0, 3),    Vec3(5, 1, 3)};
+  m.faces = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 10, 11}};
+  const IntersectionResult before = find(m);
+  ASSERT_EQ(before.pairs, (std::vector<Pair>{{0, 1}}));
+  EXPECT_EQ(count_new_intersections(before, before), 0u);
+
+  // The edit moves face 2 through the base triangle (in the plane y = 0.6, left of face 1) and
+  // face 3 across face 2 above the base: pairs (0,2) and (2,3) are new, (0,1) stays.
+  TriMesh edited = m;
+  edited.vertices[6] = Vec3(0.1, 0.6, -1);
+  edited.vertices[7] = Vec3(0.1, 0.6, 1);
+  edited.vertices[8] = Vec3(-1, 0.6, 0);
+  edited.vertices[9] = Vec3(-0.5, 0, 0.5);
+  edited.vertices[10] = Vec3(-0.5, 1.2, 0.5);
+  edited.vertices[11] = Vec3(-0.3, 0.6, 0.5);
+  const IntersectionResult after = find(edited);
+  ASSERT_EQ(after.pairs, (std::vector<Pair>{{0, 1}, {0, 2}, {2, 3}}));
+  EXPECT_EQ(count_new_intersections(before, after), 2u);
+  EXPECT_EQ(count_new_intersections(after, before), 0u);  // undoing it only removes pairs
+
+  // Also moving face 1 away removes (0,1): still two new ones, and undoing that edit adds (0,1) back.
+  for (int v : {3, 4, 5}) edited.vertices[v].x() += 10;
+  const IntersectionResult moved = find(edited);
+  ASSERT_EQ(moved.pairs, (std::vector<Pair>{{0, 2}, {2, 3}}));
+  EXPECT_EQ(count_new_intersections(before, moved), 2u);
+  EXPECT_EQ(count_new_intersections(moved, before), 1u);
+}
+
+TEST(IntersectNew, RejectsIncomparableResults) {
+  const TriMesh a = icosphere(1);
+  const TriMesh m = concatenate(a, translated(a, Vec3(0.5, 0, 0)));
+  const IntersectionResult r = find(m);
+  ASSERT_GT(r.num_pairs, 2u);
+
+  // Counted but not collected.
+  const IntersectionResult counted = find_self_intersections(m.vertices, m.faces);
+  EXPECT_THROW(count_new_intersections(r, counted), InvalidInput);
+  EXPECT_THROW(count_new_intersections(counted, r), InvalidInput);
+  // Truncated.
+  EXPECT_THROW(count_new_intersections(r, find(m, true, 2)), InvalidInput);
+  // Different connectivity: another face list of the same size, and another size.
+  TriMesh other = m;
+  std::swap(other.faces[0][1], other.faces[0][2]);
+  EXPECT_THROW(count_new_intersections(r, find(other)), InvalidInput);
+  EXPECT_THROW(count_new_intersections(r, find(a)), InvalidInput);
+  // A hand-made result with unsorted pairs is accepted.
+  IntersectionResult hand = r;
+  std::reverse(hand.pairs.begin(), hand.pairs.end());
+  EXPECT_EQ(count_new_intersections(hand, r), 0u);
+  hand.pairs.pop_back();
+  hand.num_pairs = hand.pairs.size();
+  EXPECT_EQ(count_new_intersections(hand, r), 1u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Measurements (printed, never asserted on time)
+
+double seconds_for(const TriMesh& m, bool parallel, std::size_t& pairs) {
+  IntersectionOptions o;
+  o.parallel = parallel;
+  double best = std::numeric_limits<double>::infinity();
+  for (int rep = 0; rep < 3; ++rep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    pairs = find_self_intersections(m.vertices, m.faces, o).num_pairs;
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
+}
+
+void measure(const char* name, const TriMesh& m) {
+  std::size_t serial_pairs = 0, parallel_pairs = 0;
+  const double serial = seconds_for(m, false, serial_pairs);
+  const double parallel = seconds_for(m, true, parallel_pairs);
+  std::printf("[ MEASURE  ] %s, %d triangles: %.3f s single thread, %.3f s TBB parallel (best of 3), %zu pairs\n",
+              name, m.num_faces(), serial, parallel, parallel_pairs);
+  EXPECT_EQ(serial_pairs, parallel_pairs);
+}
+
+TEST(IntersectBenchmark, Sphere100k) {
+  const TriMesh m = uv_sphere(250, 201);
+  ASSERT_EQ(m.num_faces(), 100000);
+  measure("UV sphere", m);
+  std::size_t pairs = 0;
+  seconds_for(m, true, pairs);
+  EXPECT_EQ(pairs, 0u);
+  const TriMesh ico = icosphere(6);
+  measure("icosphere level 6", ico);
+}
+
+// Run with --gtest_also_run_disabled_tests.
+TEST(IntersectBenchmark, DISABLED_Sphere1M) {
+  const TriMesh m = uv_sphere(1000, 501);
+  ASSERT_EQ(m.num_faces(), 1000000);
+  measure("UV sphere", m);
+  const TriMesh a = icosphere(6);
+  measure("two overlapping icospheres level 6", concatenate(a, translated(a, Vec3(0.5, 0.1, 0.05))));
+}
+
+}  // namespace
+}  // namespace strata
