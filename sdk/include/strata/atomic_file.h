@@ -1,0 +1,34 @@
+//! \file atomic_file.h
+//! Replace a file in one step: write a temporary file next to it, flush it to disk, then rename
+//! it over the target. Readers of the target see either the old or the new contents, never a
+//! half-written file, even if the writer fails or the process dies mid-write.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace strata {
+
+//! Calls \p writer(tmp_path) to write a temporary file in the same directory as \p path, then
+//! renames it over \p path (creating or replacing it).
+//!
+//! The temporary file already exists (empty) when \p writer is called; the writer opens it
+//! itself, writes it completely and closes it before returning. Its name is unique, so
+//! concurrent writes of the same target do not collide (the last rename wins). A file that
+//! already exists at \p path keeps its permission bits. A symbolic link at \p path is replaced
+//! by the new file, not followed.
+//!
+//! \pre The directory containing \p path exists and is writable.
+//! \throw IoError if the temporary file cannot be created or synced, or the rename fails; the
+//!        temporary file is removed and \p path is left untouched.
+//! \throw anything \p writer throws: the temporary file is removed, \p path is left untouched,
+//!        and the exception propagates unchanged.
+void write_file_atomically(const std::string& path,
+                           const std::function<void(const std::string& tmp_path)>& writer);
+
+//! Atomically replaces \p path with exactly the bytes of \p contents (no newline translation).
+//! \pre The directory containing \p path exists and is writable.
+//! \throw IoError if writing, syncing or renaming fails; \p path is then left untouched.
+void write_text_file_atomically(const std::string& path, const std::string& contents);
+
+}  // namespace strata

@@ -1,0 +1,80 @@
+//! \file mesh_io.h
+//! Reading, writing and validating triangle meshes in OBJ, OFF, PLY and STL files.
+//!
+//! The format is chosen by the file extension (case-insensitive). Readers are strict: anything
+//! that would otherwise be lost or silently changed (a truncated file, an index out of range, a
+//! face a lenient reader would drop) is an error, never a smaller mesh. Vertex and face order are
+//! preserved exactly, and coordinates are read and written at full double precision (ASCII
+//! numbers use the shortest text that reads back to the identical double), so for OBJ, OFF and
+//! PLY write_mesh followed by read_mesh gives back the identical mesh, bit for bit.
+//!
+//! STL is the exception: it stores each triangle's three corner positions (binary STL as
+//! float32) and no vertex list. Reading STL welds bitwise-equal positions into one vertex,
+//! numbered in order of first use; unreferenced vertices cannot be stored.
+//!
+//! Truncation is detected wherever the format allows: OFF and PLY element counts and binary STL's
+//! triangle count are checked against the data (too much data is an error too), ASCII STL must
+//! end with 'endsolid'. OBJ has no counts of its own: if a comment "# N vertices, M faces" precedes
+//! the data (write_mesh and OpenMesh write one), the numbers of 'v' and 'f' lines must match it.
+//! A text file cut inside its last number can still go unnoticed (e.g. "3 0 1 12" -> "3 0 1 1").
+//!
+//! Face and vertex numbers in error messages from validate_mesh are 0-based mesh indices (after
+//! triangulation); reader errors name the line (text formats) or element number in the file, with
+//! indices as written in the file (1-based for OBJ).
+#pragma once
+
+#include "strata/mesh.h"
+
+#include <string>
+#include <vector>
+
+namespace strata {
+
+//! Reads a triangle mesh from \p path; the format is chosen by the extension (.obj, .off, .ply,
+//! .stl in any letter case). PLY may be ascii, binary_little_endian or binary_big_endian; STL
+//! may be ASCII or binary (told apart by content, not by name). Polygons with more than three
+//! corners are split into triangles, stored consecutively in file order: a fan from the corner
+//! whose smallest triangle is largest (for up to 32 corners; else from the first corner), so
+//! convex polygons keep their exact area and simple non-convex ones get no flipped triangle.
+//! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face data (normals, colors,
+//! texture coordinates, materials) is ignored. The result has passed validate_mesh(mesh, path).
+//! \pre nothing; any file content is handled (garbage gives an error, never a crash).
+//! \throw IoError if the file is missing or unreadable, the extension is not supported, or the
+//!        contents cannot be parsed or are truncated (e.g. fewer elements than a header declares).
+//! \throw InvalidInput if the contents parse but do not form a valid mesh (see validate_mesh;
+//!        also an OBJ/OFF/PLY face with fewer than three corners).
+TriMesh read_mesh(const std::string& path);
+
+//! Encoding to use for formats that have both (PLY, STL).
+enum class MeshEncoding {
+  Default,  //!< Binary for PLY and STL, ASCII for OBJ and OFF.
+  Ascii,
+  Binary,   //!< Only valid for PLY (little-endian, double coordinates) and STL (float32).
+};
+
+//! Writes \p mesh to \p path in the format given by the extension (see read_mesh), replacing the
+//! file atomically (write_file_atomically): on any error \p path is left as it was.
+//! OBJ, OFF and PLY (ascii or binary) store everything exactly, including unreferenced vertices.
+//! STL stores only the triangles, binary STL in float32 (see the file comment).
+//! \pre validate_mesh(mesh, path) passes: files are only written if read_mesh would read them.
+//! \throw InvalidInput if the mesh fails validation, \p encoding is Binary for OBJ or OFF, or a
+//!        coordinate overflows float32 for binary STL.
+//! \throw IoError if the extension is not supported or the file cannot be written.
+void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding = MeshEncoding::Default);
+
+//! Checks that \p mesh is a valid triangle mesh for the numeric core, in this order:
+//! at least one face; every coordinate finite; every index in [0, num_vertices()); no index
+//! repeated within a face; no zero-area face (twice its area, |(b-a)x(c-a)|, is 0 or at most
+//! 2e-14 * bbox_diagonal(vertices)^2); no non-manifold edge (an undirected edge used by more than
+//! two faces); no edge used twice in the same direction (inconsistently oriented neighbours).
+//! Unreferenced vertices are allowed. The first problem found is reported.
+//! \param name names the mesh in messages (usually its file path).
+//! \throw InvalidInput "<name>: <problem>", e.g. "bunny.obj: face 12 has vertex index 99 out of
+//!        range (mesh has 40 vertices)" or "z.ply: edge (4,7) is non-manifold: shared by 3 faces".
+void validate_mesh(const TriMesh& mesh, const std::string& name);
+
+//! The file extensions read_mesh and write_mesh accept, lower case with the leading dot:
+//! {".obj", ".off", ".ply", ".stl"}.
+std::vector<std::string> supported_mesh_extensions();
+
+}  // namespace strata

@@ -1,0 +1,1329 @@
+// Mesh file I/O. The parsers and writers here are our own rather than OpenMesh's, because
+// OpenMesh 9's IO layer cannot give the guarantees mesh_io.h promises:
+//  - every reader (OBJ, OFF, PLY even with "property double", ASCII STL) parses coordinates as
+//    float32, and every writer converts to float32 (1e300 becomes inf, OBJ writes fixed notation
+//    so 1e-20 becomes 0), so a double round trip is impossible;
+//  - its importer silently repairs input: faces with an out-of-range index are dropped, repeated
+//    corners removed, and faces on a non-manifold edge get duplicated vertices (the vertex count
+//    changes), with only a message on omerr;
+//  - a truncated OFF reads the first face line as a vertex and returns success with no faces.
+// Everything below is strict instead: it either returns exactly what the file holds or throws.
+
+#include "strata/mesh_io.h"
+
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <string_view>
+#include <system_error>
+#include <unordered_map>
+
+namespace strata {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr long long kMaxIndexCount = std::numeric_limits<int>::max();  // TriMesh indexes with int
+
+enum class Format { Obj, Off, Ply, Stl };
+
+bool host_is_little_endian() {
+  const uint16_t probe = 1;
+  unsigned char first;
+  std::memcpy(&first, &probe, 1);
+  return first == 1;
+}
+
+//! Loads a little-endian value (binary STL and PLY data) on any host.
+template <class T>
+T load_le(const char* p) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, p, sizeof b);
+  if (!host_is_little_endian()) std::reverse(b, b + sizeof b);
+  T x;
+  std::memcpy(&x, b, sizeof x);
+  return x;
+}
+
+[[noreturn]] void fail_io(const std::string& name, const std::string& what) { throw IoError(name + ": " + what); }
+[[noreturn]] void fail_input(const std::string& name, const std::string& what) {
+  throw InvalidInput(name + ": " + what);
+}
+
+std::string to_lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+  return true;
+}
+
+//! Quotes a token for a message, cut short so binary garbage cannot flood it.
+std::string quote_token(std::string_view tok) {
+  std::string s;
+  for (char c : tok.substr(0, 40)) s += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  if (tok.size() > 40) s += "...";
+  return "'" + s + "'";
+}
+
+std::string supported_list() {
+  std::string s;
+  for (const std::string& e : supported_mesh_extensions()) s += (s.empty() ? "" : ", ") + e;
+  return s;
+}
+
+Format format_of(const std::string& path) {
+  const std::string ext = to_lower(fs::path(path).extension().string());
+  if (ext == ".obj") return Format::Obj;
+  if (ext == ".off") return Format::Off;
+  if (ext == ".ply") return Format::Ply;
+  if (ext == ".stl") return Format::Stl;
+  if (ext.empty()) fail_io(path, "no file extension to tell the mesh format (supported: " + supported_list() + ")");
+  fail_io(path, "unsupported mesh file extension '" + ext + "' (supported: " + supported_list() + ")");
+}
+
+std::string read_whole_file(const std::string& path) {
+  // Only regular files: a FIFO or a device like /dev/zero could block or never end.
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) fail_io(path, "cannot read: not a regular file");
+  struct Closer {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+  std::unique_ptr<std::FILE, Closer> f(std::fopen(path.c_str(), "rb"));
+  if (!f) fail_io(path, std::string("cannot open: ") + std::strerror(errno));
+  std::string data;
+  char buf[1 << 16];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
+  if (std::ferror(f.get())) fail_io(path, std::string("read error: ") + std::strerror(errno));
+  return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Numbers. std::from_chars is locale-independent and exact (the double nearest to the text).
+
+enum class Parsed { Ok, Malformed, OutOfRange };
+
+std::string_view strip_plus(std::string_view s) {
+  // from_chars rejects a leading '+', which some writers emit.
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  return s;
+}
+
+Parsed parse_double(std::string_view s, double& v) {
+  s = strip_plus(s);
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v, std::chars_format::general);
+  if (r.ec == std::errc::result_out_of_range) return Parsed::OutOfRange;
+  if (r.ec != std::errc() || r.ptr != s.data() + s.size() || s.empty()) return Parsed::Malformed;
+  return Parsed::Ok;
+}
+
+Parsed parse_int(std::string_view s, long long& v) {
+  s = strip_plus(s);
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (r.ec == std::errc::result_out_of_range) return Parsed::OutOfRange;
+  if (r.ec != std::errc() || r.ptr != s.data() + s.size() || s.empty()) return Parsed::Malformed;
+  return Parsed::Ok;
+}
+
+double need_double(std::string_view tok, const std::string& name, const std::string& where) {
+  double v = 0.0;
+  switch (parse_double(tok, v)) {
+    case Parsed::Ok: return v;
+    case Parsed::OutOfRange: fail_io(name, where + ": number " + quote_token(tok) + " is out of the range of a double");
+    case Parsed::Malformed: break;
+  }
+  fail_io(name, where + ": cannot parse " + quote_token(tok) + " as a number");
+}
+
+long long need_int(std::string_view tok, const std::string& name, const std::string& where) {
+  long long v = 0;
+  switch (parse_int(tok, v)) {
+    case Parsed::Ok: return v;
+    case Parsed::OutOfRange: fail_io(name, where + ": integer " + quote_token(tok) + " is out of range");
+    case Parsed::Malformed: break;
+  }
+  fail_io(name, where + ": cannot parse " + quote_token(tok) + " as an integer");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text scanning.
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+//! Rejects binary data in a text format: a NUL byte never occurs in a valid text mesh file.
+void reject_nul_bytes(std::string_view text, const std::string& name, const char* format) {
+  const size_t nul = text.find('\0');
+  if (nul == std::string_view::npos) return;
+  const long long line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
+  fail_io(name, "line " + std::to_string(line) + ": contains a NUL byte; not a text " + format + " file");
+}
+
+//! Splits text into lines (without the line break) and counts them.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    size_t end = text_.find('\n', pos_);
+    if (end == std::string_view::npos) end = text_.size();
+    line = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    ++line_no_;
+    return true;
+  }
+  long long line_no() const { return line_no_; }
+  //! True if the last line returned ends the text without a line break (a hint of truncation).
+  bool last_line_unterminated() const { return pos_ > text_.size(); }
+  std::string where() const { return "line " + std::to_string(line_no_); }
+  //! Offset just after the last line returned (start of the next one).
+  size_t pos() const { return std::min(pos_, text_.size()); }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  long long line_no_ = 0;
+};
+
+//! Whitespace-separated tokens of one line.
+class LineTokens {
+ public:
+  explicit LineTokens(std::string_view line) : rest_(line) {}
+  bool next(std::string_view& tok) {
+    size_t i = 0;
+    while (i < rest_.size() && is_blank(rest_[i])) ++i;
+    if (i == rest_.size()) return false;
+    size_t j = i;
+    while (j < rest_.size() && !is_blank(rest_[j])) ++j;
+    tok = rest_.substr(i, j - i);
+    rest_ = rest_.substr(j);
+    return true;
+  }
+
+ private:
+  std::string_view rest_;
+};
+
+//! Cuts a line at a '#' comment (no number or keyword of OBJ/OFF contains '#').
+std::string_view strip_comment(std::string_view line) {
+  const size_t hash = line.find('#');
+  return hash == std::string_view::npos ? line : line.substr(0, hash);
+}
+
+bool is_blank_line(std::string_view line) {
+  return std::all_of(line.begin(), line.end(), [](char c) { return is_blank(c); });
+}
+
+//! Whitespace-separated tokens across lines, tracking the line number for messages.
+class TextCursor {
+ public:
+  TextCursor(std::string_view text, long long first_line) : text_(text), line_no_(first_line) {}
+  bool next(std::string_view& tok) {
+    skip_space();
+    if (pos_ >= text_.size()) return false;
+    const size_t start = pos_;
+    while (pos_ < text_.size() && !is_blank(text_[pos_]) && text_[pos_] != '\n') ++pos_;
+    tok = text_.substr(start, pos_ - start);
+    return true;
+  }
+  void skip_rest_of_line() {
+    while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+  }
+  bool at_end() {
+    skip_space();
+    return pos_ >= text_.size();
+  }
+  std::string where() const { return "line " + std::to_string(line_no_); }
+
+ private:
+  void skip_space() {
+    while (pos_ < text_.size() && (is_blank(text_[pos_]) || text_[pos_] == '\n')) {
+      if (text_[pos_] == '\n') ++line_no_;
+      ++pos_;
+    }
+  }
+  std::string_view text_;
+  size_t pos_ = 0;
+  long long line_no_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Face assembly: checks each polygon against the vertex count as it is read and splits polygons
+// into triangles, keeping file order. Polygons with more than three corners are triangulated at
+// the end, when all positions are known (OBJ and PLY may list faces before vertices).
+
+class FaceBuilder {
+ public:
+  //! \param index_base added to 0-based indices when quoting them (1 for OBJ).
+  FaceBuilder(const std::string& name, long long num_vertices, int index_base)
+      : name_(name), num_vertices_(num_vertices), index_base_(index_base) {}
+
+  //! Adds one polygon with 0-based corner indices; \p where() names it in messages.
+  //! \throw InvalidInput for fewer than 3 corners, an index out of range or a repeated index.
+  template <class Where>
+  void add_checked(const std::vector<long long>& c, const Where& where) {
+    const size_t n = c.size();
+    if (n < 3)
+      fail_input(name_, where() + ": face has " + std::to_string(n) + (n == 1 ? " corner" : " corners") +
+                            " (a face needs at least 3)");
+    for (long long i : c)
+      if (i < 0 || i >= num_vertices_)
+        fail_input(name_, where() + ": face has vertex index " + std::to_string(i + index_base_) +
+                              " out of range (file has " + std::to_string(num_vertices_) + " vertices)");
+    if (n == 3) {
+      if (c[0] == c[1] || c[0] == c[2] || c[1] == c[2])
+        fail_input(name_, where() + ": face repeats vertex index " +
+                              std::to_string((c[0] == c[1] || c[0] == c[2] ? c[0] : c[1]) + index_base_));
+    } else {
+      sorted_.assign(c.begin(), c.end());
+      std::sort(sorted_.begin(), sorted_.end());
+      const auto dup = std::adjacent_find(sorted_.begin(), sorted_.end());
+      if (dup != sorted_.end())
+        fail_input(name_, where() + ": face repeats vertex index " + std::to_string(*dup + index_base_));
+    }
+    if (static_cast<long long>(faces_.size()) + static_cast<long long>(n - 2) > kMaxIndexCount)
+      fail_io(name_, "too many faces (more than " + std::to_string(kMaxIndexCount) + ")");
+    if (n == 3) {
+      faces_.push_back({static_cast<int>(c[0]), static_cast<int>(c[1]), static_cast<int>(c[2])});
+      return;
+    }
+    pending_.push_back({faces_.size(), pending_corners_.size(), n});
+    for (long long i : c) pending_corners_.push_back(static_cast<int>(i));
+    faces_.resize(faces_.size() + n - 2);  // placeholders, filled in finish()
+  }
+
+  //! Triangulates the pending polygons and returns all faces in file order.
+  std::vector<Face> finish(const std::vector<Vec3>& vertices);
+
+ private:
+  struct Pending {
+    size_t first_face, first_corner, n;
+  };
+  std::string name_;
+  long long num_vertices_;
+  int index_base_;
+  std::vector<Face> faces_;
+  std::vector<Pending> pending_;
+  std::vector<int> pending_corners_;
+  std::vector<long long> sorted_;
+};
+
+//! Fan apex for polygon \p c: the corner whose fan has the largest smallest triangle, measured
+//! along the polygon's (Newell) normal, so flipped or sliver triangles are avoided where a fan
+//! allows it. For a convex polygon every apex gives the polygon's exact area.
+size_t choose_fan_apex(const std::vector<Vec3>& v, const int* c, size_t n) {
+  if (n > 32) return 0;  // keeps the search O(n^2) on small polygons only
+  Vec3 normal = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) normal += v[c[i]].cross(v[c[(i + 1) % n]]);
+  size_t best = 0;
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < n; ++k) {
+    double score = std::numeric_limits<double>::infinity();
+    for (size_t i = 1; i + 1 < n; ++i) {
+      const Vec3& a = v[c[k]];
+      const double s = triangle_area_normal(a, v[c[(k + i) % n]], v[c[(k + i + 1) % n]]).dot(normal);
+      score = std::min(score, s);
+    }
+    if (score > best_score) {
+      best_score = score;
+      best = k;
+    }
+  }
+  return best;
+}
+
+std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
+  for (const Pending& p : pending_) {
+    const int* c = pending_corners_.data() + p.first_corner;
+    const size_t k = choose_fan_apex(vertices, c, p.n);
+    for (size_t i = 1; i + 1 < p.n; ++i)
+      faces_[p.first_face + i - 1] = {c[k], c[(k + i) % p.n], c[(k + i + 1) % p.n]};
+  }
+  pending_.clear();
+  pending_corners_.clear();
+  return std::move(faces_);
+}
+
+void check_vertex_count(long long n, const std::string& name) {
+  if (n > kMaxIndexCount) fail_io(name, "too many vertices (more than " + std::to_string(kMaxIndexCount) + ")");
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ. Only 'v' and 'f' lines matter; other statements (vt, vn, g, usemtl, ...) are skipped.
+// OBJ has no element counts, so truncation at a line boundary is only detectable through the
+// "# N vertices, M faces" comment that write_mesh (and OpenMesh) put at the top.
+
+struct ObjCountComment {
+  bool present = false;
+  long long vertices = 0, faces = 0;
+  long long line = 0;
+};
+
+//! Recognizes exactly "# <N> vertices, <M> faces".
+bool parse_obj_count_comment(std::string_view line, ObjCountComment& out) {
+  LineTokens t(line);
+  std::string_view hash, n, vw, m, fw, extra;
+  if (!t.next(hash) || hash != "#" || !t.next(n) || !t.next(vw) || vw != "vertices," || !t.next(m) ||
+      !t.next(fw) || fw != "faces" || t.next(extra))
+    return false;
+  out.present = parse_int(n, out.vertices) == Parsed::Ok && parse_int(m, out.faces) == Parsed::Ok &&
+                out.vertices >= 0 && out.faces >= 0;
+  return out.present;
+}
+
+TriMesh read_obj(const std::string& name, std::string_view text) {
+  reject_nul_bytes(text, name, "OBJ");
+  TriMesh mesh;
+  ObjCountComment declared;
+  long long face_lines = 0;
+  bool seen_data = false;
+
+  // Pass 1: vertices (and counts), so faces can refer to vertices defined later in the file.
+  {
+    LineReader lines(text);
+    std::string_view raw;
+    while (lines.next(raw)) {
+      if (!seen_data && !declared.present && parse_obj_count_comment(raw, declared)) declared.line = lines.line_no();
+      LineTokens tok(strip_comment(raw));
+      std::string_view key;
+      if (!tok.next(key)) continue;
+      seen_data = true;
+      if (key == "f") {
+        ++face_lines;
+      } else if (key == "v") {
+        Vec3 p;
+        for (int k = 0; k < 3; ++k) {
+          std::string_view s;
+          if (!tok.next(s))
+            fail_io(name, lines.where() + ": vertex has " + std::to_string(k) + " coordinates, needs 3" +
+                              (lines.last_line_unterminated() ? " (file truncated?)" : ""));
+          p[k] = need_double(s, name, lines.where());
+        }
+        check_vertex_count(static_cast<long long>(mesh.vertices.size()) + 1, name);
+        mesh.vertices.push_back(p);  // further numbers (w or a color) are ignored
+      }
+    }
+  }
+  if (declared.present && (declared.vertices != mesh.num_vertices() || declared.faces != face_lines)) {
+    const bool fewer = declared.vertices >= mesh.num_vertices() && declared.faces >= face_lines;
+    fail_io(name, std::string(fewer ? "truncated: " : "") + "header comment (line " + std::to_string(declared.line) +
+                      ") declares " + std::to_string(declared.vertices) + " vertices and " +
+                      std::to_string(declared.faces) + " faces, file holds " + std::to_string(mesh.num_vertices()) +
+                      " vertices and " + std::to_string(face_lines) + " faces" +
+                      (fewer ? "" : " (stale comment? remove it if the file is intended)"));
+  }
+
+  // Pass 2: faces. Negative indices count back from the last vertex defined before the line.
+  FaceBuilder faces(name, mesh.num_vertices(), 1);
+  std::vector<long long> corners;
+  LineReader lines(text);
+  std::string_view raw;
+  long long vertices_so_far = 0;
+  while (lines.next(raw)) {
+    LineTokens tok(strip_comment(raw));
+    std::string_view key;
+    if (!tok.next(key)) continue;
+    if (key == "v") {
+      ++vertices_so_far;
+      continue;
+    }
+    if (key != "f") continue;
+    corners.clear();
+    std::string_view corner;
+    while (tok.next(corner)) {
+      const std::string_view index_text = corner.substr(0, corner.find('/'));  // "i", "i/t", "i//n", "i/t/n"
+      long long i = 0;
+      if (parse_int(index_text, i) != Parsed::Ok)
+        fail_io(name, lines.where() + ": cannot parse face corner " + quote_token(corner) + " (expected a vertex index)");
+      if (i == 0) fail_input(name, lines.where() + ": face has vertex index 0 (OBJ indices start at 1)");
+      if (i < 0) {
+        if (-i > vertices_so_far)
+          fail_input(name, lines.where() + ": face has relative vertex index " + std::to_string(i) +
+                               " but only " + std::to_string(vertices_so_far) + " vertices precede it");
+        corners.push_back(vertices_so_far + i);
+      } else {
+        corners.push_back(i - 1);
+      }
+    }
+    faces.add_checked(corners, [&] { return lines.where(); });
+  }
+  mesh.faces = faces.finish(mesh.vertices);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// OFF (ASCII; optional ST/C/N prefixes, whose extra per-vertex values are ignored). One vertex or
+// face per line, as written by all common tools; '#' starts a comment.
+
+TriMesh read_off(const std::string& name, std::string_view text) {
+  reject_nul_bytes(text, name, "OFF");
+  LineReader lines(text);
+  std::string_view raw;
+  auto next_data_line = [&](std::string_view& line) {
+    while (lines.next(raw)) {
+      line = strip_comment(raw);
+      if (!is_blank_line(line)) return true;
+    }
+    return false;
+  };
+
+  std::string_view line;
+  if (!next_data_line(line)) fail_io(name, "empty file, expected an OFF header");
+  LineTokens header(line);
+  std::string_view magic;
+  header.next(magic);
+  {
+    // [ST][C][N][4][n]OFF
+    std::string_view m = magic;
+    if (m.substr(0, 2) == "ST") m.remove_prefix(2);
+    if (!m.empty() && m[0] == 'C') m.remove_prefix(1);
+    if (!m.empty() && m[0] == 'N') m.remove_prefix(1);
+    if (!m.empty() && (m[0] == '4' || m[0] == 'n'))
+      fail_io(name, "OFF variant " + quote_token(magic) + " (not 3-dimensional) is not supported");
+    if (m != "OFF") fail_io(name, "not an OFF file: first line starts with " + quote_token(magic) + ", expected 'OFF'");
+  }
+  std::array<long long, 3> counts{0, 0, 0};
+  int num_counts = 0;
+  std::string_view tok;
+  if (header.next(tok)) {
+    if (tok == "BINARY") fail_io(name, "binary OFF is not supported");
+    counts[num_counts++] = need_int(tok, name, lines.where());
+  }
+  if (num_counts == 0) {
+    if (!next_data_line(line)) fail_io(name, "truncated: no vertex and face counts after the OFF header");
+    header = LineTokens(line);
+  }
+  while (header.next(tok)) {
+    if (num_counts == 3) fail_io(name, lines.where() + ": too many numbers in the OFF counts line");
+    counts[num_counts++] = need_int(tok, name, lines.where());
+  }
+  if (num_counts < 2) fail_io(name, lines.where() + ": expected vertex and face counts");
+  const long long nv = counts[0], nf = counts[1];
+  if (nv < 0 || nf < 0) fail_io(name, lines.where() + ": negative element count");
+  check_vertex_count(nv, name);
+  if (nf > kMaxIndexCount) fail_io(name, lines.where() + ": face count " + std::to_string(nf) + " too large");
+
+  TriMesh mesh;
+  // Each vertex needs at least 6 bytes of text; never trust a header count for allocation.
+  mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(nv, static_cast<long long>(text.size() / 6))));
+  for (long long v = 0; v < nv; ++v) {
+    if (!next_data_line(line))
+      fail_io(name, "truncated: header declares " + std::to_string(nv) + " vertices, file holds " + std::to_string(v));
+    LineTokens t(line);
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) {
+      if (!t.next(tok))
+        fail_io(name, lines.where() + ": vertex " + std::to_string(v) + " has " + std::to_string(k) +
+                          " coordinates, needs 3");
+      p[k] = need_double(tok, name, lines.where());
+    }
+    mesh.vertices.push_back(p);
+  }
+
+  FaceBuilder faces(name, nv, 0);
+  std::vector<long long> corners;
+  for (long long f = 0; f < nf; ++f) {
+    if (!next_data_line(line))
+      fail_io(name, "truncated: header declares " + std::to_string(nf) + " faces, file holds " + std::to_string(f));
+    LineTokens t(line);
+    t.next(tok);
+    const long long k = need_int(tok, name, lines.where());
+    auto where = [&] { return lines.where() + " (face " + std::to_string(f) + ")"; };
+    if (k < 0) fail_io(name, where() + ": negative corner count");
+    corners.clear();
+    for (long long c = 0; c < k; ++c) {
+      if (!t.next(tok))
+        fail_io(name, where() + ": face declares " + std::to_string(k) + " corners but lists " + std::to_string(c) +
+                          (lines.last_line_unterminated() ? " (file truncated?)" : ""));
+      corners.push_back(need_int(tok, name, lines.where()));
+    }
+    faces.add_checked(corners, where);  // numbers after the corners (a face color) are ignored
+  }
+  if (next_data_line(line))
+    fail_io(name, lines.where() + ": unexpected data after the " + std::to_string(nf) +
+                      " faces the header declares (wrong counts?)");
+  mesh.faces = faces.finish(mesh.vertices);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY: ascii, binary_little_endian, binary_big_endian; any elements and properties (unused ones
+// are skipped); positions from vertex x/y/z, faces from the face list vertex_indices (or
+// vertex_index).
+
+enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+bool ply_type_from_name(std::string_view s, PlyType& t) {
+  static const std::pair<const char*, PlyType> names[] = {
+      {"char", PlyType::Int8},     {"int8", PlyType::Int8},      {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},    {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},  {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},    {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"float64", PlyType::Float64}};
+  for (const auto& [n, type] : names)
+    if (s == n) {
+      t = type;
+      return true;
+    }
+  return false;
+}
+
+size_t ply_size(PlyType t) {
+  switch (t) {
+    case PlyType::Int8:
+    case PlyType::UInt8: return 1;
+    case PlyType::Int16:
+    case PlyType::UInt16: return 2;
+    case PlyType::Int32:
+    case PlyType::UInt32:
+    case PlyType::Float32: return 4;
+    case PlyType::Float64: return 8;
+  }
+  return 8;
+}
+
+bool ply_is_integer(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
+
+bool fits_ply_type(long long v, PlyType t) {
+  switch (t) {
+    case PlyType::Int8: return v >= -128 && v <= 127;
+    case PlyType::UInt8: return v >= 0 && v <= 255;
+    case PlyType::Int16: return v >= -32768 && v <= 32767;
+    case PlyType::UInt16: return v >= 0 && v <= 65535;
+    case PlyType::Int32: return v >= std::numeric_limits<int32_t>::min() && v <= std::numeric_limits<int32_t>::max();
+    case PlyType::UInt32: return v >= 0 && v <= std::numeric_limits<uint32_t>::max();
+    default: return true;
+  }
+}
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::Float32;
+  bool is_list = false;
+  PlyType count_type = PlyType::UInt8;
+};
+
+struct PlyElement {
+  std::string name;
+  long long count = 0;
+  std::vector<PlyProperty> props;
+};
+
+enum class PlyEncoding { Ascii, BinaryLE, BinaryBE };
+
+struct PlyHeader {
+  PlyEncoding encoding = PlyEncoding::Ascii;
+  std::vector<PlyElement> elements;
+  size_t body_offset = 0;
+  long long body_first_line = 1;
+};
+
+PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
+  PlyHeader h;
+  LineReader lines(data);
+  std::string_view line;
+  if (!lines.next(line) || !(line == "ply" || line == "ply\r"))
+    fail_io(name, "not a PLY file: it does not start with the line 'ply'");
+  bool have_format = false, ended = false;
+  while (lines.next(line)) {
+    const std::string where = "header " + lines.where();
+    if (line.find('\0') != std::string_view::npos) fail_io(name, where + ": contains a NUL byte (corrupt header)");
+    LineTokens t(line);
+    std::string_view key, a, b, c, d;
+    if (!t.next(key)) continue;
+    if (key == "comment" || key == "obj_info") continue;
+    if (key == "end_header") {
+      ended = true;
+      break;
+    }
+    if (key == "format") {
+      if (!t.next(a) || !t.next(b)) fail_io(name, where + ": incomplete format line");
+      if (a == "ascii") h.encoding = PlyEncoding::Ascii;
+      else if (a == "binary_little_endian") h.encoding = PlyEncoding::BinaryLE;
+      else if (a == "binary_big_endian") h.encoding = PlyEncoding::BinaryBE;
+      else fail_io(name, where + ": unknown PLY format " + quote_token(a));
+      if (b != "1.0") fail_io(name, where + ": unsupported PLY version " + quote_token(b));
+      have_format = true;
+    } else if (key == "element") {
+      if (!t.next(a) || !t.next(b)) fail_io(name, where + ": incomplete element line");
+      PlyElement e;
+      e.name = std::string(a);
+      e.count = need_int(b, name, where);
+      if (e.count < 0) fail_io(name, where + ": negative element count");
+      for (const PlyElement& other : h.elements)
+        if (other.name == e.name) fail_io(name, where + ": element " + quote_token(a) + " declared twice");
+      h.elements.push_back(std::move(e));
+    } else if (key == "property") {
+      if (h.elements.empty()) fail_io(name, where + ": property before any element");
+      PlyProperty p;
+      if (!t.next(a)) fail_io(name, where + ": incomplete property line");
+      if (a == "list") {
+        if (!t.next(b) || !t.next(c) || !t.next(d)) fail_io(name, where + ": incomplete list property line");
+        p.is_list = true;
+        if (!ply_type_from_name(b, p.count_type)) fail_io(name, where + ": unknown type " + quote_token(b));
+        if (!ply_is_integer(p.count_type)) fail_io(name, where + ": list count type must be an integer type");
+        if (!ply_type_from_name(c, p.type)) fail_io(name, where + ": unknown type " + quote_token(c));
+        p.name = std::string(d);
+      } else {
+        if (!t.next(b)) fail_io(name, where + ": incomplete property line");
+        if (!ply_type_from_name(a, p.type)) fail_io(name, where + ": unknown type " + quote_token(a));
+        p.name = std::string(b);
+      }
+      h.elements.back().props.push_back(std::move(p));
+    } else {
+      fail_io(name, where + ": unexpected header line starting with " + quote_token(key));
+    }
+  }
+  if (!ended) fail_io(name, "truncated: PLY header has no 'end_header' line");
+  if (!have_format) fail_io(name, "PLY header has no 'format' line");
+  h.body_offset = lines.pos();
+  h.body_first_line = lines.line_no() + 1;
+  return h;
+}
+
+struct PlyValue {
+  long long i = 0;  // valid for integer types
+  double d = 0.0;
+};
+
+//! Values of an ascii PLY body, one token each.
+class PlyAsciiSource {
+ public:
+  PlyAsciiSource(const std::string& name, std::string_view body, long long first_line)
+      : name_(name), cursor_(body, first_line) {}
+  bool read(PlyType t, PlyValue& v) {
+    std::string_view tok;
+    if (!cursor_.next(tok)) return false;
+    if (ply_is_integer(t)) {
+      v.i = need_int(tok, name_, cursor_.where());
+      if (!fits_ply_type(v.i, t)) fail_io(name_, cursor_.where() + ": value " + quote_token(tok) + " does not fit its declared type");
+      v.d = static_cast<double>(v.i);
+    } else {
+      v.d = need_double(tok, name_, cursor_.where());
+    }
+    return true;
+  }
+  //! Describes leftover data after the last element, or returns "".
+  std::string leftover() { return cursor_.at_end() ? "" : cursor_.where() + ": data after the last declared element"; }
+
+ private:
+  const std::string& name_;
+  TextCursor cursor_;
+};
+
+//! Values of a binary PLY body; converts from the file's byte order.
+class PlyBinarySource {
+ public:
+  PlyBinarySource(std::string_view body, bool big_endian)
+      : p_(body.data()), end_(body.data() + body.size()), swap_(big_endian == host_is_little_endian()) {}
+  bool read(PlyType t, PlyValue& v) {
+    const size_t n = ply_size(t);
+    if (static_cast<size_t>(end_ - p_) < n) return false;
+    unsigned char b[8];
+    std::memcpy(b, p_, n);
+    p_ += n;
+    if (swap_) std::reverse(b, b + n);
+    switch (t) {
+      case PlyType::Int8: v.i = static_cast<int8_t>(b[0]); break;
+      case PlyType::UInt8: v.i = b[0]; break;
+      case PlyType::Int16: v.i = load<int16_t>(b); break;
+      case PlyType::UInt16: v.i = load<uint16_t>(b); break;
+      case PlyType::Int32: v.i = load<int32_t>(b); break;
+      case PlyType::UInt32: v.i = load<uint32_t>(b); break;
+      case PlyType::Float32: v.d = load<float>(b); return true;
+      case PlyType::Float64: v.d = load<double>(b); return true;
+    }
+    v.d = static_cast<double>(v.i);
+    return true;
+  }
+  std::string leftover() const {
+    return p_ == end_ ? "" : std::to_string(end_ - p_) + " bytes of data after the last declared element";
+  }
+
+ private:
+  template <class T>
+  static T load(const unsigned char* b) {
+    T x;
+    std::memcpy(&x, b, sizeof x);
+    return x;
+  }
+  const char* p_;
+  const char* end_;
+  bool swap_ = false;
+};
+
+std::string plural_element(const PlyElement& e) {
+  if (e.name == "vertex") return "vertices";
+  if (e.name == "face") return "faces";
+  return quote_token(e.name) + " elements";
+}
+
+template <class Source>
+TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src) {
+  long long num_vertices = 0;
+  for (const PlyElement& e : h.elements)
+    if (e.name == "vertex") num_vertices = e.count;
+  check_vertex_count(num_vertices, name);
+
+  TriMesh mesh;
+  FaceBuilder faces(name, num_vertices, 0);
+  std::vector<long long> corners;
+  PlyValue value;
+  for (const PlyElement& e : h.elements) {
+    if (e.props.empty()) continue;  // holds no data, whatever its count
+    const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
+    std::array<int, 3> xyz{-1, -1, -1};
+    int index_prop = -1;
+    for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
+      const PlyProperty& p = e.props[k];
+      for (int c = 0; c < 3; ++c)
+        if (is_vertex && p.name == std::string(1, static_cast<char>('x' + c))) {
+          if (p.is_list) fail_io(name, "vertex property " + p.name + " must not be a list");
+          xyz[c] = k;
+        }
+      if (is_face && p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index")) {
+        if (!ply_is_integer(p.type)) fail_io(name, "face property " + p.name + " must have an integer type");
+        index_prop = k;
+      }
+    }
+    if (is_vertex)
+      for (int c = 0; c < 3; ++c)
+        if (xyz[c] < 0) fail_io(name, std::string("vertex element has no property ") + static_cast<char>('x' + c));
+    if (is_face && index_prop < 0) fail_io(name, "face element has no list property vertex_indices");
+    if (is_vertex) mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
+
+    auto truncated = [&](long long done) {
+      fail_io(name, "truncated: header declares " + std::to_string(e.count) + " " + plural_element(e) +
+                        ", file holds " + std::to_string(done));
+    };
+    for (long long i = 0; i < e.count; ++i) {
+      Vec3 p = Vec3::Zero();
+      for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
+        const PlyProperty& prop = e.props[k];
+        if (!prop.is_list) {
+          if (!src.read(prop.type, value)) truncated(i);
+          for (int c = 0; c < 3; ++c)
+            if (k == xyz[c]) p[c] = value.d;
+          continue;
+        }
+        if (!src.read(prop.count_type, value)) truncated(i);
+        const long long n = value.i;
+        if (n < 0) fail_io(name, plural_element(e) + " " + std::to_string(i) + ": negative list length");
+        const bool keep = k == index_prop;
+        if (keep) corners.clear();
+        for (long long j = 0; j < n; ++j) {  // each item consumes input, so this is bounded by the file size
+          if (!src.read(prop.type, value)) truncated(i);
+          if (keep) corners.push_back(value.i);
+        }
+        if (keep) faces.add_checked(corners, [&] { return "face " + std::to_string(i); });
+      }
+      if (is_vertex) mesh.vertices.push_back(p);
+    }
+  }
+  const std::string rest = src.leftover();
+  if (!rest.empty()) fail_io(name, rest + " (wrong counts in the header?)");
+  mesh.faces = faces.finish(mesh.vertices);
+  return mesh;
+}
+
+TriMesh read_ply(const std::string& name, std::string_view data) {
+  const PlyHeader h = parse_ply_header(name, data);
+  const std::string_view body = data.substr(h.body_offset);
+  if (h.encoding == PlyEncoding::Ascii) {
+    reject_nul_bytes(body, name, "ascii PLY body");
+    PlyAsciiSource src(name, body, h.body_first_line);
+    return read_ply_body(name, h, src);
+  }
+  PlyBinarySource src(body, h.encoding == PlyEncoding::BinaryBE);
+  return read_ply_body(name, h, src);
+}
+
+// ---------------------------------------------------------------------------------------------
+// STL. Corners are welded: bitwise-equal positions (with -0 == +0) become one vertex, numbered in
+// order of first use.
+
+class Welder {
+ public:
+  explicit Welder(const std::string& name) : name_(name) {}
+  long long index_of(const Vec3& p) {
+    Key k;
+    for (int c = 0; c < 3; ++c) {
+      const double x = p[c] == 0.0 ? 0.0 : p[c];  // merge -0 and +0
+      std::memcpy(&k[c], &x, sizeof x);
+    }
+    const auto [it, inserted] = map_.try_emplace(k, static_cast<long long>(vertices.size()));
+    if (inserted) {
+      check_vertex_count(static_cast<long long>(vertices.size()) + 1, name_);
+      vertices.push_back(p);
+    }
+    return it->second;
+  }
+  std::vector<Vec3> vertices;
+
+ private:
+  using Key = std::array<uint64_t, 3>;
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 0x9E3779B97F4A7C15ull;
+      for (uint64_t x : k) h = (h ^ x) * 0x100000001B3ull + (h >> 29);
+      return static_cast<size_t>(h);
+    }
+  };
+  const std::string& name_;
+  std::unordered_map<Key, long long, KeyHash> map_;
+};
+
+TriMesh read_stl_binary(const std::string& name, std::string_view data, uint32_t count) {
+  Welder welder(name);
+  // The face count is at most 3 * count <= 2^32 * 3; faces must index with int.
+  if (3ll * count > kMaxIndexCount) fail_io(name, "too many triangles (" + std::to_string(count) + ")");
+  FaceBuilder faces(name, kMaxIndexCount, 0);
+  std::vector<long long> corners(3);
+  const char* rec = data.data() + 84;
+  for (uint32_t t = 0; t < count; ++t, rec += 50) {
+    for (int c = 0; c < 3; ++c) {
+      const char* p = rec + 12 + 12 * c;  // after the 12-byte normal
+      corners[c] = welder.index_of(Vec3(load_le<float>(p), load_le<float>(p + 4), load_le<float>(p + 8)));
+    }
+    faces.add_checked(corners, [&] { return "facet " + std::to_string(t) + " (corners weld to equal positions)"; });
+  }
+  TriMesh mesh;
+  mesh.vertices = std::move(welder.vertices);
+  mesh.faces = faces.finish(mesh.vertices);
+  return mesh;
+}
+
+TriMesh read_stl_ascii(const std::string& name, std::string_view text) {
+  TextCursor cur(text, 1);
+  std::string_view tok;
+  auto expect = [&](const char* word) {
+    if (!cur.next(tok)) fail_io(name, std::string("truncated: file ends where '") + word + "' was expected");
+    if (!iequals(tok, word)) fail_io(name, cur.where() + ": expected '" + word + "', found " + quote_token(tok));
+  };
+  auto number = [&]() {
+    if (!cur.next(tok)) fail_io(name, "truncated: file ends inside a facet");
+    return need_double(tok, name, cur.where());
+  };
+  expect("solid");
+  cur.skip_rest_of_line();  // the solid's name
+
+  Welder welder(name);
+  FaceBuilder faces(name, kMaxIndexCount, 0);
+  std::vector<long long> corners;
+  long long facet = 0;
+  for (;;) {
+    if (!cur.next(tok)) fail_io(name, "truncated: no 'endsolid' line");
+    if (iequals(tok, "endsolid")) {
+      cur.skip_rest_of_line();
+      if (cur.at_end()) break;
+      expect("solid");  // several solids in one file are concatenated
+      cur.skip_rest_of_line();
+      continue;
+    }
+    if (!iequals(tok, "facet")) fail_io(name, cur.where() + ": expected 'facet' or 'endsolid', found " + quote_token(tok));
+    const std::string where = cur.where() + " (facet " + std::to_string(facet) + ")";
+    expect("normal");
+    for (int k = 0; k < 3; ++k) number();  // the normal is redundant: orientation comes from the corner order
+    expect("outer");
+    expect("loop");
+    corners.clear();
+    for (;;) {
+      if (!cur.next(tok)) fail_io(name, "truncated: file ends inside a facet");
+      if (iequals(tok, "endloop")) break;
+      if (!iequals(tok, "vertex")) fail_io(name, cur.where() + ": expected 'vertex' or 'endloop', found " + quote_token(tok));
+      Vec3 p;
+      for (int k = 0; k < 3; ++k) p[k] = number();
+      corners.push_back(welder.index_of(p));
+    }
+    expect("endfacet");
+    faces.add_checked(corners, [&] { return where; });
+    ++facet;
+  }
+  TriMesh mesh;
+  mesh.vertices = std::move(welder.vertices);
+  mesh.faces = faces.finish(mesh.vertices);
+  return mesh;
+}
+
+TriMesh read_stl(const std::string& name, std::string_view data) {
+  // Binary STL: 80-byte header, uint32 count, 50 bytes per triangle. A matching size decides for
+  // binary even if the header starts with "solid" (some exporters write that).
+  uint32_t count = 0;
+  if (data.size() >= 84) count = load_le<uint32_t>(data.data() + 80);
+  const unsigned long long expected = 84ull + 50ull * count;
+  if (data.size() >= 84 && data.size() == expected) return read_stl_binary(name, data, count);
+
+  size_t start = 0;
+  while (start < data.size() && (is_blank(data[start]) || data[start] == '\n')) ++start;
+  const bool looks_ascii = data.size() - start >= 5 && iequals(data.substr(start, 5), "solid") &&
+                           data.find('\0') == std::string_view::npos;
+  if (looks_ascii) return read_stl_ascii(name, data);
+  if (data.size() < 84)
+    fail_io(name, "not an STL file: " + std::to_string(data.size()) +
+                      " bytes is too short for a binary STL and it does not start with 'solid'");
+  if (data.size() < expected)
+    fail_io(name, "truncated: header declares " + std::to_string(count) + " triangles, file holds " +
+                      std::to_string((data.size() - 84) / 50));
+  fail_io(name, "binary STL header declares " + std::to_string(count) + " triangles (" + std::to_string(expected) +
+                    " bytes) but the file has " + std::to_string(data.size()) + " bytes");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation.
+
+//! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid.
+std::string find_mesh_problem(const TriMesh& mesh) {
+  if (mesh.faces.empty()) return "no faces";
+  const long long nv = static_cast<long long>(mesh.vertices.size());
+  if (nv > kMaxIndexCount) return "too many vertices";
+  for (size_t v = 0; v < mesh.vertices.size(); ++v)
+    if (!mesh.vertices[v].allFinite()) return "vertex " + std::to_string(v) + " has a non-finite coordinate";
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& t = mesh.faces[f];
+    for (int i : t)
+      if (i < 0 || i >= nv)
+        return "face " + std::to_string(f) + " has vertex index " + std::to_string(i) + " out of range (mesh has " +
+               std::to_string(nv) + " vertices)";
+    if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2])
+      return "face " + std::to_string(f) + " has repeated vertex index " + std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]);
+  }
+  // Zero area relative to the model's size, so the test does not depend on units. Coordinates
+  // are scaled by a power of two (exact) so squares neither overflow nor underflow at 1e+-200.
+  double max_abs = 0.0;
+  for (const Vec3& p : mesh.vertices) max_abs = std::max(max_abs, p.cwiseAbs().maxCoeff());
+  int exponent = 0;
+  std::frexp(max_abs, &exponent);
+  const double scale = max_abs > 0.0 ? std::ldexp(1.0, std::min(-exponent, 1000)) : 1.0;  // 2^1000 < DBL_MAX
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& p : mesh.vertices) {
+    lo = lo.cwiseMin(p * scale);
+    hi = hi.cwiseMax(p * scale);
+  }
+  const double diag = (hi - lo).norm();  // bbox_diagonal(vertices) * scale
+  const double min_double_area = 2e-14 * diag * diag;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& t = mesh.faces[f];
+    const Vec3 a = mesh.vertices[t[0]] * scale, b = mesh.vertices[t[1]] * scale, c = mesh.vertices[t[2]] * scale;
+    const double double_area = triangle_area_normal(a, b, c).norm();
+    if (double_area == 0.0 || double_area <= min_double_area) return "face " + std::to_string(f) + " has zero area";
+  }
+
+  // Edge uses bucketed by their smaller vertex (a counting sort): linear time, 8 bytes per use.
+  struct Use {
+    int other;       // larger vertex of the edge
+    uint32_t code;   // face * 2 + (1 if the face traverses it from smaller to larger)
+  };
+  const size_t nf = mesh.faces.size();
+  std::vector<size_t> start(static_cast<size_t>(nv) + 1, 0);
+  for (const Face& t : mesh.faces)
+    for (int c = 0; c < 3; ++c) ++start[static_cast<size_t>(std::min(t[c], t[(c + 1) % 3])) + 1];
+  for (size_t v = 0; v < static_cast<size_t>(nv); ++v) start[v + 1] += start[v];
+  std::vector<Use> uses(3 * nf);
+  std::vector<size_t> fill(start.begin(), start.end() - 1);
+  for (size_t f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = mesh.faces[f][c], b = mesh.faces[f][(c + 1) % 3];
+      uses[fill[static_cast<size_t>(std::min(a, b))]++] = {std::max(a, b), static_cast<uint32_t>(f * 2 + (a < b ? 1 : 0))};
+    }
+  // Report the offending edge whose first face comes first, so messages are deterministic.
+  size_t best_face = nf;
+  std::string problem;
+  for (size_t v = 0; v < static_cast<size_t>(nv); ++v) {
+    Use* b = uses.data() + start[v];
+    Use* e = uses.data() + start[v + 1];
+    std::sort(b, e, [](const Use& x, const Use& y) { return x.other != y.other ? x.other < y.other : x.code < y.code; });
+    for (Use* g = b; g != e;) {
+      Use* h = g;
+      while (h != e && h->other == g->other) ++h;
+      const size_t n = static_cast<size_t>(h - g);
+      const size_t first_face = g->code / 2;
+      const std::string edge = "edge (" + std::to_string(v) + "," + std::to_string(g->other) + ")";
+      if (n > 2 && first_face < best_face) {
+        best_face = first_face;
+        problem = edge + " is non-manifold: shared by " + std::to_string(n) + " faces (";
+        for (size_t i = 0; i < std::min<size_t>(n, 6); ++i) problem += (i ? ", " : "") + std::to_string(g[i].code / 2);
+        problem += n > 6 ? ", ...)" : ")";
+      } else if (n == 2 && (g[0].code & 1) == (g[1].code & 1) && first_face < best_face) {
+        best_face = first_face;
+        const bool fwd = g[0].code & 1;
+        problem = edge + " has inconsistently oriented faces: faces " + std::to_string(g[0].code / 2) + " and " +
+                  std::to_string(g[1].code / 2) + " both traverse it from " +
+                  std::to_string(fwd ? v : static_cast<size_t>(g->other)) + " to " +
+                  std::to_string(fwd ? static_cast<size_t>(g->other) : v);
+      }
+      g = h;
+    }
+  }
+  return problem;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writers. Text is produced with std::to_chars: the shortest decimal that reads back to the
+// identical double, independent of the locale.
+
+//! Builds file contents in memory and writes them out in 1 MiB chunks.
+class ChunkedWriter {
+ public:
+  ChunkedWriter(const std::string& name, const std::string& tmp_path)
+      : name_(name), out_(tmp_path, std::ios::binary | std::ios::trunc) {
+    if (!out_) fail_io(name_, "cannot open temporary file " + tmp_path + " for writing");
+    buf_.reserve(kChunk + 256);
+  }
+  void text(std::string_view s) { buf_.append(s.data(), s.size()); }
+  void number(double x) {
+    char tmp[32];
+    const auto r = std::to_chars(tmp, tmp + sizeof tmp, x);
+    buf_.append(tmp, r.ptr);
+  }
+  void integer(long long x) {
+    char tmp[24];
+    const auto r = std::to_chars(tmp, tmp + sizeof tmp, x);
+    buf_.append(tmp, r.ptr);
+  }
+  template <class T>
+  void binary_le(T x) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &x, sizeof x);
+    if (!host_is_little_endian()) std::reverse(b, b + sizeof b);
+    buf_.append(reinterpret_cast<const char*>(b), sizeof b);
+  }
+  void maybe_flush() {
+    if (buf_.size() >= kChunk) flush();
+  }
+  void close() {
+    flush();
+    out_.close();
+    if (!out_) fail_io(name_, "writing failed (disk full?)");
+  }
+
+ private:
+  void flush() {
+    out_.write(buf_.data(), static_cast<std::streamsize>(buf_.size()));
+    if (!out_) fail_io(name_, "writing failed (disk full?)");
+    buf_.clear();
+  }
+  static constexpr size_t kChunk = 1 << 20;
+  const std::string& name_;
+  std::ofstream out_;
+  std::string buf_;
+};
+
+void write_vec(ChunkedWriter& w, const Vec3& p) {
+  w.number(p[0]);
+  w.text(" ");
+  w.number(p[1]);
+  w.text(" ");
+  w.number(p[2]);
+}
+
+void write_obj(const TriMesh& m, ChunkedWriter& w) {
+  // The count comment lets read_mesh detect truncation (OBJ has no counts of its own).
+  w.text("# " + std::to_string(m.num_vertices()) + " vertices, " + std::to_string(m.num_faces()) + " faces\n");
+  for (const Vec3& p : m.vertices) {
+    w.text("v ");
+    write_vec(w, p);
+    w.text("\n");
+    w.maybe_flush();
+  }
+  for (const Face& f : m.faces) {
+    w.text("f ");
+    w.integer(f[0] + 1ll);
+    w.text(" ");
+    w.integer(f[1] + 1ll);
+    w.text(" ");
+    w.integer(f[2] + 1ll);
+    w.text("\n");
+    w.maybe_flush();
+  }
+}
+
+void write_off(const TriMesh& m, ChunkedWriter& w) {
+  w.text("OFF\n" + std::to_string(m.num_vertices()) + " " + std::to_string(m.num_faces()) + " 0\n");
+  for (const Vec3& p : m.vertices) {
+    write_vec(w, p);
+    w.text("\n");
+    w.maybe_flush();
+  }
+  for (const Face& f : m.faces) {
+    w.text("3 ");
+    w.integer(f[0]);
+    w.text(" ");
+    w.integer(f[1]);
+    w.text(" ");
+    w.integer(f[2]);
+    w.text("\n");
+    w.maybe_flush();
+  }
+}
+
+void write_ply(const TriMesh& m, ChunkedWriter& w, bool binary) {
+  w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
+         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(m.num_vertices()) +
+         "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(m.num_faces()) +
+         "\nproperty list uchar int vertex_indices\nend_header\n");
+  for (const Vec3& p : m.vertices) {
+    if (binary) {
+      w.binary_le(p[0]);
+      w.binary_le(p[1]);
+      w.binary_le(p[2]);
+    } else {
+      write_vec(w, p);
+      w.text("\n");
+    }
+    w.maybe_flush();
+  }
+  for (const Face& f : m.faces) {
+    if (binary) {
+      w.binary_le(static_cast<uint8_t>(3));
+      for (int i : f) w.binary_le(static_cast<int32_t>(i));
+    } else {
+      w.text("3 ");
+      w.integer(f[0]);
+      w.text(" ");
+      w.integer(f[1]);
+      w.text(" ");
+      w.integer(f[2]);
+      w.text("\n");
+    }
+    w.maybe_flush();
+  }
+}
+
+Vec3 unit_normal(const TriMesh& m, const Face& f) {
+  const Vec3 n = triangle_area_normal(m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]);
+  const double len = n.norm();
+  return len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+void write_stl(const TriMesh& m, ChunkedWriter& w, bool binary) {
+  if (!binary) {
+    w.text("solid strata\n");
+    for (const Face& f : m.faces) {
+      w.text("  facet normal ");
+      write_vec(w, unit_normal(m, f));
+      w.text("\n    outer loop\n");
+      for (int i : f) {
+        w.text("      vertex ");
+        write_vec(w, m.vertices[i]);
+        w.text("\n");
+      }
+      w.text("    endloop\n  endfacet\n");
+      w.maybe_flush();
+    }
+    w.text("endsolid strata\n");
+    return;
+  }
+  std::string header = "Strata binary STL";  // must not start with "solid" (that marks ASCII STL)
+  header.resize(80, ' ');
+  w.text(header);
+  w.binary_le(static_cast<uint32_t>(m.faces.size()));
+  for (const Face& f : m.faces) {
+    const Vec3 n = unit_normal(m, f);
+    for (int c = 0; c < 3; ++c) w.binary_le(static_cast<float>(n[c]));
+    for (int i : f)
+      for (int c = 0; c < 3; ++c) w.binary_le(static_cast<float>(m.vertices[i][c]));
+    w.binary_le(static_cast<uint16_t>(0));
+    w.maybe_flush();
+  }
+}
+
+//! \p x rounded to float32. The volatile forces the conversion: GCC 12.2 at -O2 miscompiles
+//! pairs of double->float->double casts into plain copies (SLP vectorizer), e.g. in
+//! Eigen's v.cast<float>().cast<double>().
+double round_to_float(double x) {
+  volatile float f = static_cast<float>(x);
+  return f;
+}
+
+//! The mesh a reader will get back from an STL file written from \p mesh: welded corners,
+//! rounded to float32 for binary STL.
+TriMesh stl_image(const TriMesh& mesh, const std::string& name, bool binary) {
+  Welder welder(name);
+  TriMesh out;
+  out.faces.reserve(mesh.faces.size());
+  for (const Face& f : mesh.faces) {
+    Face g;
+    for (int c = 0; c < 3; ++c) {
+      Vec3 p = mesh.vertices[f[c]];
+      if (binary)
+        for (int k = 0; k < 3; ++k) p[k] = round_to_float(p[k]);
+      g[c] = static_cast<int>(welder.index_of(p));
+    }
+    out.faces.push_back(g);
+  }
+  out.vertices = std::move(welder.vertices);
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> supported_mesh_extensions() { return {".obj", ".off", ".ply", ".stl"}; }
+
+void validate_mesh(const TriMesh& mesh, const std::string& name) {
+  const std::string problem = find_mesh_problem(mesh);
+  if (!problem.empty()) fail_input(name.empty() ? std::string("mesh") : name, problem);
+}
+
+TriMesh read_mesh(const std::string& path) {
+  const Format format = format_of(path);
+  const std::string data = read_whole_file(path);
+  TriMesh mesh;
+  switch (format) {
+    case Format::Obj: mesh = read_obj(path, data); break;
+    case Format::Off: mesh = read_off(path, data); break;
+    case Format::Ply: mesh = read_ply(path, data); break;
+    case Format::Stl: mesh = read_stl(path, data); break;
+  }
+  validate_mesh(mesh, path);
+  return mesh;
+}
+
+void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding) {
+  const Format format = format_of(path);
+  if (encoding == MeshEncoding::Binary && (format == Format::Obj || format == Format::Off))
+    fail_input(path, "OBJ and OFF have no binary encoding");
+  validate_mesh(mesh, path);
+  const bool binary = encoding != MeshEncoding::Ascii;  // Default is binary where a binary form exists
+  if (format == Format::Stl) {
+    // STL cannot store a vertex list; refuse rather than write a file that reads back different.
+    if (binary)
+      for (const Face& f : mesh.faces)  // unreferenced vertices are not written
+        for (int v : f)
+          if (mesh.vertices[v].cwiseAbs().maxCoeff() > static_cast<double>(std::numeric_limits<float>::max()))
+            fail_input(path, "vertex " + std::to_string(v) + " has a coordinate too large for binary STL (float32)");
+    const std::string problem = find_mesh_problem(stl_image(mesh, path, binary));
+    if (!problem.empty())
+      fail_input(path, "cannot be stored as STL without changing it: once corners at equal positions are merged" +
+                           std::string(binary ? " (after rounding to float32)" : "") + ", " + problem);
+  }
+  write_file_atomically(path, [&](const std::string& tmp) {
+    ChunkedWriter w(path, tmp);
+    switch (format) {
+      case Format::Obj: write_obj(mesh, w); break;
+      case Format::Off: write_off(mesh, w); break;
+      case Format::Ply: write_ply(mesh, w, binary); break;
+      case Format::Stl: write_stl(mesh, w, binary); break;
+    }
+    w.close();
+  });
+}
+
+}  // namespace strata

@@ -1,0 +1,1001 @@
+// Tests for mesh_io.h and atomic_file.h. All fixture files are generated here, into a fresh
+// temporary directory per test, by small writers that are independent of the code under test.
+
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace strata;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() /
+            ("strata_mesh_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
+             (info ? std::string(info->name()) : std::string("x")));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  std::set<std::string> listing() const {
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(path_)) names.insert(e.path().filename().string());
+    return names;
+  }
+
+ private:
+  fs::path path_;
+};
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+//! Passes if f() throws exactly an E (or subclass) whose message contains every part.
+template <class E, class F>
+::testing::AssertionResult throws_with(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+  } catch (const E& e) {
+    const std::string msg = e.what();
+    for (const std::string& p : parts)
+      if (msg.find(p) == std::string::npos)
+        return ::testing::AssertionFailure() << "message \"" << msg << "\" lacks \"" << p << "\"";
+    return ::testing::AssertionSuccess() << msg;
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "wrong exception type, message: " << e.what();
+  }
+  return ::testing::AssertionFailure() << "no exception thrown";
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+::testing::AssertionResult identical(const TriMesh& a, const TriMesh& b) {
+  if (a.vertices.size() != b.vertices.size())
+    return ::testing::AssertionFailure() << "vertex counts " << a.vertices.size() << " vs " << b.vertices.size();
+  if (a.faces != b.faces) return ::testing::AssertionFailure() << "faces differ";
+  for (size_t v = 0; v < a.vertices.size(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!same_bits(a.vertices[v][c], b.vertices[v][c]))
+        return ::testing::AssertionFailure() << "vertex " << v << " coordinate " << c << ": "
+                                             << a.vertices[v][c] << " vs " << b.vertices[v][c];
+  return ::testing::AssertionSuccess();
+}
+
+double total_area(const TriMesh& m) {
+  double a = 0.0;
+  for (const Face& f : m.faces) a += 0.5 * triangle_area_normal(m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]).norm();
+  return a;
+}
+
+//! A closed octahedron with full-precision, awkward coordinates (random mantissas, -0.0, a
+//! subnormal), plus an unreferenced vertex in the middle of the list.
+TriMesh awkward_octahedron(unsigned seed = 7) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-1e-3, 1e-3);
+  TriMesh m;
+  const Vec3 base[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const Vec3& b : base) m.vertices.push_back(b + Vec3(jitter(rng), jitter(rng), jitter(rng)) / 3.0);
+  m.vertices[0][1] = -0.0;
+  m.vertices[2][0] = 1e-300;
+  // Unreferenced vertex at index 3; the octahedron's vertices 3..5 move to 4..6.
+  m.vertices.insert(m.vertices.begin() + 3, Vec3(5e-324, 0.1, 1.0 / 3.0));
+  const int X = 0, x = 1, Y = 2, y = 4, Z = 5, z = 6;
+  m.faces = {{X, Y, Z}, {Y, x, Z}, {x, y, Z}, {y, X, Z}, {Y, X, z}, {x, Y, z}, {y, x, z}, {X, y, z}};
+  return m;
+}
+
+TriMesh without_unreferenced(TriMesh m) {
+  std::vector<int> remap(m.vertices.size(), -1);
+  std::vector<Vec3> kept;
+  for (Face& f : m.faces)
+    for (int& i : f) {
+      if (remap[i] < 0) {
+        remap[i] = static_cast<int>(kept.size());
+        kept.push_back(m.vertices[i]);
+      }
+      i = remap[i];
+    }
+  m.vertices = kept;
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Independent fixture writers: a "soup" (positions + polygons, indices 0-based) in every format.
+
+struct Soup {
+  std::vector<std::array<double, 3>> v;
+  std::vector<std::vector<long long>> f;
+};
+
+enum class Fmt { Obj, Off, PlyAscii, PlyBinLE, PlyBinBE, StlAscii, StlBinary };
+const Fmt kAllFormats[] = {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::PlyBinBE, Fmt::StlAscii, Fmt::StlBinary};
+
+const char* fmt_name(Fmt f) {
+  switch (f) {
+    case Fmt::Obj: return "obj";
+    case Fmt::Off: return "off";
+    case Fmt::PlyAscii: return "ply-ascii";
+    case Fmt::PlyBinLE: return "ply-le";
+    case Fmt::PlyBinBE: return "ply-be";
+    case Fmt::StlAscii: return "stl-ascii";
+    case Fmt::StlBinary: return "stl-binary";
+  }
+  return "?";
+}
+std::string fmt_ext(Fmt f) {
+  switch (f) {
+    case Fmt::Obj: return ".obj";
+    case Fmt::Off: return ".off";
+    case Fmt::StlAscii:
+    case Fmt::StlBinary: return ".stl";
+    default: return ".ply";
+  }
+}
+bool is_stl(Fmt f) { return f == Fmt::StlAscii || f == Fmt::StlBinary; }
+
+std::string num(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+template <class T>
+void put(std::string& out, T x, bool big_endian = false) {
+  char b[sizeof(T)];
+  std::memcpy(b, &x, sizeof x);
+  if (big_endian) std::reverse(b, b + sizeof b);  // test hosts are little-endian (x86-64, arm64)
+  out.append(b, sizeof b);
+}
+
+std::string encode(const Soup& s, Fmt fmt) {
+  std::string o;
+  switch (fmt) {
+    case Fmt::Obj:
+      o = "# fixture\nmtllib none.mtl\n";
+      for (const auto& p : s.v) o += "v " + num(p[0]) + " " + num(p[1]) + " " + num(p[2]) + "\n";
+      o += "vn 0 0 1\ng group\n";
+      for (const auto& f : s.f) {
+        o += "f";
+        for (long long i : f) o += " " + std::to_string(i + 1) + "//1";
+        o += "\n";
+      }
+      return o;
+    case Fmt::Off:
+      o = "OFF\n# fixture\n" + std::to_string(s.v.size()) + " " + std::to_string(s.f.size()) + " 0\n";
+      for (const auto& p : s.v) o += num(p[0]) + " " + num(p[1]) + " " + num(p[2]) + "\n";
+      for (const auto& f : s.f) {
+        o += std::to_string(f.size());
+        for (long long i : f) o += " " + std::to_string(i);
+        o += "\n";
+      }
+      return o;
+    case Fmt::PlyAscii:
+    case Fmt::PlyBinLE:
+    case Fmt::PlyBinBE: {
+      const bool ascii = fmt == Fmt::PlyAscii, be = fmt == Fmt::PlyBinBE;
+      o = std::string("ply\nformat ") + (ascii ? "ascii" : be ? "binary_big_endian" : "binary_little_endian") +
+          " 1.0\ncomment fixture\nelement vertex " + std::to_string(s.v.size()) +
+          "\nproperty double x\nproperty double y\nproperty double z\nproperty uchar red\nelement face " +
+          std::to_string(s.f.size()) + "\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n";
+      for (const auto& p : s.v) {
+        if (ascii) {
+          o += num(p[0]) + " " + num(p[1]) + " " + num(p[2]) + " 255\n";
+        } else {
+          for (double c : p) put(o, c, be);
+          put(o, static_cast<uint8_t>(255), be);
+        }
+      }
+      for (const auto& f : s.f) {
+        if (ascii) {
+          o += std::to_string(f.size());
+          for (long long i : f) o += " " + std::to_string(i);
+          o += " 0.5\n";
+        } else {
+          put(o, static_cast<uint8_t>(f.size()), be);
+          for (long long i : f) put(o, static_cast<int32_t>(i), be);
+          put(o, 0.5f, be);
+        }
+      }
+      return o;
+    }
+    case Fmt::StlAscii:
+      o = "solid fixture\n";
+      for (const auto& f : s.f) {
+        o += " facet normal 0 0 0\n  outer loop\n";
+        for (long long i : f) o += "   vertex " + num(s.v[i][0]) + " " + num(s.v[i][1]) + " " + num(s.v[i][2]) + "\n";
+        o += "  endloop\n endfacet\n";
+      }
+      return o + "endsolid fixture\n";
+    case Fmt::StlBinary:
+      o = std::string(80, ' ');
+      put(o, static_cast<uint32_t>(s.f.size()));
+      for (const auto& f : s.f) {
+        for (int k = 0; k < 3; ++k) put(o, 0.0f);
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < 3; ++k) put(o, static_cast<float>(s.v[f[c]][k]));
+        put(o, static_cast<uint16_t>(0));
+      }
+      return o;
+  }
+  return o;
+}
+
+//! A closed tetrahedron, consistently oriented outwards.
+Soup tetra() { return {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}}; }
+
+struct Fixture {
+  TempDir dir;
+  std::string put(const Soup& s, Fmt fmt, const std::string& stem = "mesh") {
+    const std::string path = dir.file(stem + "_" + fmt_name(fmt) + fmt_ext(fmt));
+    write_bytes(path, encode(s, fmt));
+    return path;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Round trips
+
+TEST(MeshIoRoundTrip, ExactForObjOffPly) {
+  TempDir dir;
+  const TriMesh m = awkward_octahedron();
+  struct Case {
+    std::string name;
+    MeshEncoding enc;
+  };
+  const Case cases[] = {{"a.obj", MeshEncoding::Default}, {"b.off", MeshEncoding::Default},
+                        {"c.ply", MeshEncoding::Ascii},   {"d.ply", MeshEncoding::Binary},
+                        {"e.ply", MeshEncoding::Default}, {"F.OBJ", MeshEncoding::Ascii},
+                        {"g.Off", MeshEncoding::Ascii},   {"h.PLY", MeshEncoding::Binary}};
+  for (const Case& c : cases) {
+    const std::string path = dir.file(c.name);
+    write_mesh(m, path, c.enc);
+    const TriMesh r = read_mesh(path);
+    EXPECT_TRUE(identical(m, r)) << c.name;
+    // Writing what was read gives the same bytes: the text is canonical.
+    const std::string again = dir.file("again_" + c.name);
+    write_mesh(r, again, c.enc);
+    EXPECT_EQ(read_bytes(path), read_bytes(again)) << c.name;
+  }
+  EXPECT_EQ(read_bytes(dir.file("c.ply")).find("format ascii"), 4u);
+  EXPECT_NE(read_bytes(dir.file("e.ply")).find("format binary_little_endian"), std::string::npos);
+}
+
+TEST(MeshIoRoundTrip, ExactAtExtremeScales) {
+  TempDir dir;
+  for (double scale : {1e-200, 1e-9, 1e9, 1e200}) {
+    TriMesh m = awkward_octahedron(11);
+    for (Vec3& p : m.vertices) p *= scale;
+    for (const char* name : {"s.obj", "s.off", "s.ply"}) {
+      write_mesh(m, dir.file(name), MeshEncoding::Ascii);
+      EXPECT_TRUE(identical(m, read_mesh(dir.file(name)))) << name << " scale " << scale;
+    }
+    write_mesh(m, dir.file("b.ply"), MeshEncoding::Binary);
+    EXPECT_TRUE(identical(m, read_mesh(dir.file("b.ply")))) << "binary ply scale " << scale;
+  }
+}
+
+TEST(MeshIoRoundTrip, BinaryStlKeepsTrianglesToFloatPrecision) {
+  TempDir dir;
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  const std::string path = dir.file("m.stl");
+  write_mesh(m, path);  // Default: binary
+  const std::string bytes = read_bytes(path);
+  ASSERT_EQ(bytes.size(), 84u + 50u * m.faces.size());
+  EXPECT_NE(bytes.substr(0, 5), "solid");
+  const TriMesh r = read_mesh(path);
+  ASSERT_EQ(r.num_faces(), m.num_faces());
+  EXPECT_EQ(r.num_vertices(), m.num_vertices());  // corners welded back into shared vertices
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      Vec3 expected;
+      for (int k = 0; k < 3; ++k) {
+        // volatile: GCC 12.2 -O2 folds Eigen's cast<float>().cast<double>() into a copy.
+        volatile float rounded = static_cast<float>(m.vertices[m.faces[f][c]][k]);
+        expected[k] = rounded;
+      }
+      EXPECT_NE(expected, m.vertices[m.faces[f][c]]);  // the awkward coordinates are not floats
+      EXPECT_EQ(r.vertices[r.faces[f][c]], expected) << "face " << f << " corner " << c;
+      EXPECT_NEAR((r.vertices[r.faces[f][c]] - m.vertices[m.faces[f][c]]).norm(), 0.0, 1e-7);
+    }
+  EXPECT_NEAR(signed_volume(r), signed_volume(m), 1e-6);
+}
+
+TEST(MeshIoRoundTrip, AsciiStlIsExactPerCorner) {
+  TempDir dir;
+  const TriMesh m = awkward_octahedron();  // the unreferenced vertex cannot be stored in STL
+  const std::string path = dir.file("m.stl");
+  write_mesh(m, path, MeshEncoding::Ascii);
+  EXPECT_EQ(read_bytes(path).substr(0, 5), "solid");
+  const TriMesh r = read_mesh(path);
+  ASSERT_EQ(r.num_faces(), m.num_faces());
+  EXPECT_EQ(r.num_vertices(), m.num_vertices() - 1);
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_TRUE(same_bits(r.vertices[r.faces[f][c]][k] == 0.0 ? 0.0 : r.vertices[r.faces[f][c]][k],
+                              m.vertices[m.faces[f][c]][k] == 0.0 ? 0.0 : m.vertices[m.faces[f][c]][k]));
+  // STL reading numbers vertices by first use, so an STL round trip of the result is exact.
+  write_mesh(r, dir.file("r.stl"), MeshEncoding::Ascii);
+  EXPECT_TRUE(identical(r, read_mesh(dir.file("r.stl"))));
+}
+
+TEST(MeshIoRoundTrip, EveryFixtureFormatReadsTheSameTetrahedron) {
+  Fixture fx;
+  const Soup s = tetra();
+  for (Fmt fmt : kAllFormats) {
+    const TriMesh r = read_mesh(fx.put(s, fmt));
+    ASSERT_EQ(r.num_vertices(), 4) << fmt_name(fmt);
+    ASSERT_EQ(r.num_faces(), 4) << fmt_name(fmt);
+    for (int f = 0; f < 4; ++f)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(r.vertices[r.faces[f][c]][k], s.v[s.f[f][c]][k]) << fmt_name(fmt);
+    EXPECT_NEAR(signed_volume(r), 1.0 / 6.0, 1e-15) << fmt_name(fmt);
+    if (!is_stl(fmt)) {
+      for (int f = 0; f < 4; ++f)
+        EXPECT_EQ(r.faces[f], (Face{int(s.f[f][0]), int(s.f[f][1]), int(s.f[f][2])})) << fmt_name(fmt);
+    }
+  }
+}
+
+TEST(MeshIoRoundTrip, ObjSyntaxVariants) {
+  TempDir dir;
+  // CRLF, negative (relative) indices, v/vt/vn corners, a face before its vertices, comments,
+  // a vertex color, an unknown statement, leading '+' and no final newline.
+  const std::string text =
+      "# comment\r\nf 1/1/1 3/2/1 2/3/1\r\nv 0 0 0 1 0 0\r\nv +1 0 0\r\nv 0 1 0 # trailing comment\r\n"
+      "vt 0 0\r\nvt 1 0\r\nvt 0 1\r\nvn 0 0 -1\r\nv 0 0 1\r\ns off\r\nusemtl none\r\nf -4 -3 -1\r\n"
+      "f 1//1 4//1 3//1\r\nf 2 3 4";
+  write_bytes(dir.file("t.obj"), text);
+  const TriMesh r = read_mesh(dir.file("t.obj"));
+  ASSERT_EQ(r.num_vertices(), 4);
+  EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+  EXPECT_EQ(r.vertices[1], Vec3(1, 0, 0));
+}
+
+TEST(MeshIoRoundTrip, OffAndPlySyntaxVariants) {
+  TempDir dir;
+  // COFF with colors, counts on the header line, comments, blank lines, face colors, CRLF.
+  write_bytes(dir.file("c.off"),
+              "COFF 4 4 6\r\n# c\r\n\r\n0 0 0 1 0 0 1\r\n1 0 0 1 0 0 1\r\n0 1 0 1 0 0 1\r\n0 0 1 1 0 0 1\r\n"
+              "3 0 2 1 255 0 0\r\n3 0 1 3\r\n3 0 3 2\r\n3 1 2 3 # last\r\n");
+  TriMesh r = read_mesh(dir.file("c.off"));
+  EXPECT_EQ(r.num_vertices(), 4);
+  EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+
+  // Big-endian binary PLY with float coordinates, uint indices named vertex_index, faces
+  // before vertices, and an extra element with a list.
+  std::string ply =
+      "ply\r\nformat binary_big_endian 1.0\r\nelement face 4\r\nproperty list uchar uint vertex_index\r\n"
+      "element extra 2\r\nproperty list int short stuff\r\nelement vertex 4\r\nproperty float z\r\n"
+      "property float y\r\nproperty float x\r\nend_header\r\n";
+  const Soup s = tetra();
+  for (const auto& f : s.f) {
+    put(ply, static_cast<uint8_t>(3), true);
+    for (long long i : f) put(ply, static_cast<uint32_t>(i), true);
+  }
+  for (int e = 0; e < 2; ++e) {
+    put(ply, static_cast<int32_t>(2), true);
+    put(ply, static_cast<int16_t>(-7), true);
+    put(ply, static_cast<int16_t>(9), true);
+  }
+  for (const auto& p : s.v)
+    for (int k = 2; k >= 0; --k) put(ply, static_cast<float>(p[k]), true);
+  write_bytes(dir.file("be.ply"), ply);
+  r = read_mesh(dir.file("be.ply"));
+  EXPECT_EQ(r.num_vertices(), 4);
+  EXPECT_EQ(r.vertices[3], Vec3(0, 0, 1));
+  EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+}
+
+TEST(MeshIoRoundTrip, BinaryStlWhoseHeaderStartsWithSolid) {
+  Fixture fx;
+  std::string bytes = encode(tetra(), Fmt::StlBinary);
+  bytes.replace(0, 11, "solid thing");  // some exporters do this; the size decides
+  const std::string path = fx.dir.file("solid.stl");
+  write_bytes(path, bytes);
+  const TriMesh r = read_mesh(path);
+  EXPECT_EQ(r.num_vertices(), 4);
+  EXPECT_EQ(r.num_faces(), 4);
+}
+
+TEST(MeshIoRoundTrip, SupportedExtensionsAllWork) {
+  TempDir dir;
+  const auto exts = supported_mesh_extensions();
+  EXPECT_EQ(exts, (std::vector<std::string>{".obj", ".off", ".ply", ".stl"}));
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  for (const std::string& e : exts) {
+    write_mesh(m, dir.file("m" + e));
+    EXPECT_EQ(read_mesh(dir.file("m" + e)).num_faces(), m.num_faces()) << e;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Polygons
+
+TEST(MeshIoTriangulate, QuadAndPentagonInEveryPolygonFormat) {
+  Fixture fx;
+  // A unit square and a regular pentagon (circumradius 1) in the z = 0 plane, side by side.
+  Soup s;
+  s.v = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (int k = 0; k < 5; ++k) s.v.push_back({3 + std::cos(2 * kPi * k / 5), std::sin(2 * kPi * k / 5), 0});
+  s.f = {{0, 1, 2, 3}, {4, 5, 6, 7, 8}};
+  const double pentagon = 2.5 * std::sin(2 * kPi / 5);
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::StlAscii}) {
+    const TriMesh r = read_mesh(fx.put(s, fmt));
+    ASSERT_EQ(r.num_faces(), 2 + 3) << fmt_name(fmt);
+    EXPECT_NEAR(total_area(r), 1.0 + pentagon, 1e-14) << fmt_name(fmt);
+    // File order: the quad's two triangles first, each covering only the quad's vertices.
+    for (int f = 0; f < r.num_faces(); ++f) {
+      const bool in_quad = f < 2;
+      for (int i : r.faces[f]) EXPECT_EQ(r.vertices[i][0] < 2.0, in_quad) << fmt_name(fmt) << " face " << f;
+      // Orientation is kept: every triangle faces +z like its polygon.
+      EXPECT_GT(triangle_area_normal(r.vertices[r.faces[f][0]], r.vertices[r.faces[f][1]], r.vertices[r.faces[f][2]])[2],
+                0.0)
+          << fmt_name(fmt) << " face " << f;
+    }
+  }
+}
+
+TEST(MeshIoTriangulate, NonConvexQuadGetsNoFlippedTriangle) {
+  Fixture fx;
+  // An arrowhead whose reflex corner is the last one: a fan from the first corner would produce
+  // an inverted triangle; the reader fans from the reflex corner instead.
+  Soup s{{{0, 0, 0}, {2, 1, 0}, {0, 2, 0}, {0.5, 1, 0}}, {{0, 1, 2, 3}}};
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+    const TriMesh r = read_mesh(fx.put(s, fmt));
+    ASSERT_EQ(r.num_faces(), 2);
+    for (const Face& f : r.faces)
+      EXPECT_GT(triangle_area_normal(r.vertices[f[0]], r.vertices[f[1]], r.vertices[f[2]])[2], 0.0) << fmt_name(fmt);
+    EXPECT_NEAR(total_area(r), 1.5, 1e-15);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors, for every reader where the format can express the problem
+
+TEST(MeshIoErrors, OutOfRangeIndex) {
+  Fixture fx;
+  Soup s = tetra();
+  s.f[2] = {0, 3, 7};
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::PlyBinBE}) {
+    const std::string path = fx.put(s, fmt);
+    const std::string shown = fmt == Fmt::Obj ? "8" : "7";  // as written in the file
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
+                                          {path + ": ", "vertex index " + shown + " out of range", "4 vertices"}))
+        << fmt_name(fmt);
+  }
+  s.f[2] = {0, 3, -1};
+  for (Fmt fmt : {Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE}) {
+    const std::string path = fx.put(s, fmt, "neg");
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "vertex index -1 out of range"}))
+        << fmt_name(fmt);
+  }
+  // OBJ: index 0 and relative indices reaching before the first vertex.
+  write_bytes(fx.dir.file("zero.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("zero.obj")); }, {"line 4", "index 0"}));
+  write_bytes(fx.dir.file("rel.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("rel.obj")); }, {"line 4", "-4", "3 vertices"}));
+  // A uint index beyond the int range in binary PLY.
+  std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+  for (float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(ply, c);
+  put(ply, static_cast<uint8_t>(3));
+  for (uint32_t i : {0u, 1u, 4000000000u}) put(ply, i);
+  write_bytes(fx.dir.file("big.ply"), ply);
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("big.ply")); }, {"4000000000 out of range"}));
+}
+
+TEST(MeshIoErrors, NonFiniteCoordinate) {
+  Fixture fx;
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    Soup s = tetra();
+    s.v[3][1] = bad;
+    for (Fmt fmt : kAllFormats) {
+      const std::string path = fx.put(s, fmt);
+      // STL numbers vertices by first use; vertex 3 of the tetrahedron is also its 4th to appear.
+      EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": vertex 3 has a non-finite coordinate"}))
+          << fmt_name(fmt) << " " << bad;
+    }
+  }
+  // Text spellings other than our own.
+  TempDir dir;
+  write_bytes(dir.file("n.obj"), "v 0 0 0\nv 1 0 NaN\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("n.obj")); }, {"vertex 1 has a non-finite"}));
+  write_bytes(dir.file("n.off"), "OFF\n3 1 0\n0 0 0\n-inf 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("n.off")); }, {"vertex 1 has a non-finite"}));
+  // A number beyond the double range is a parse error, not a silent infinity.
+  write_bytes(dir.file("r.obj"), "v 0 0 0\nv 1 0 1e400\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("r.obj")); }, {"line 2", "1e400", "out of the range"}));
+}
+
+TEST(MeshIoErrors, NoFaces) {
+  Fixture fx;
+  Soup s = tetra();
+  s.f.clear();
+  for (Fmt fmt : kAllFormats) {
+    const std::string path = fx.put(s, fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": no faces"})) << fmt_name(fmt);
+  }
+  // A PLY point cloud without a face element.
+  write_bytes(fx.dir.file("cloud.ply"),
+              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+              "end_header\n1 2 3\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("cloud.ply")); }, {"no faces"}));
+}
+
+TEST(MeshIoErrors, ZeroAreaFace) {
+  Fixture fx;
+  Soup s = tetra();
+  s.v.push_back({0.5, 0.5, 0.0});  // on the segment from vertex 1 to vertex 2
+  s.f.push_back({1, 4, 2});
+  for (Fmt fmt : kAllFormats) {
+    const std::string path = fx.put(s, fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": face 4 has zero area"})) << fmt_name(fmt);
+  }
+  // STL: a facet with two corners at the same position collapses to a repeated vertex.
+  s = tetra();
+  s.f.push_back({1, 2, 2});
+  for (Fmt fmt : {Fmt::StlAscii, Fmt::StlBinary}) {
+    const std::string path = fx.put(s, fmt, "collapsed");
+    // The facet's corners are welded vertex indices, numbered by first use.
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "facet 4", "repeats vertex index 1"}))
+        << fmt_name(fmt);
+  }
+}
+
+TEST(MeshIoErrors, RepeatedIndexIsNotSilentlyRemoved) {
+  Fixture fx;
+  Soup s = tetra();
+  s.f[3] = {1, 2, 2, 3};  // OpenMesh would silently turn this quad into triangle (1,2,3)
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE}) {
+    const std::string path = fx.put(s, fmt);
+    const std::string shown = fmt == Fmt::Obj ? "3" : "2";
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "repeats vertex index " + shown}))
+        << fmt_name(fmt);
+  }
+  s.f[3] = {1, 1, 3};
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinBE}) {
+    const std::string path = fx.put(s, fmt, "tri");
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "repeats vertex index"})) << fmt_name(fmt);
+  }
+  s.f[3] = {1, 2};
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+    const std::string path = fx.put(s, fmt, "two");
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "face has 2 corners"})) << fmt_name(fmt);
+  }
+}
+
+TEST(MeshIoErrors, NonManifoldEdge) {
+  Fixture fx;
+  // Three triangles on edge (0,1), consistently oriented as far as possible: OpenMesh would
+  // report a "complex edge" and duplicate vertices instead of failing.
+  const Soup s{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}}, {{0, 1, 2}, {1, 0, 3}, {1, 0, 4}}};
+  for (Fmt fmt : kAllFormats) {
+    const std::string path = fx.put(s, fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
+                                          {path + ": edge (0,1) is non-manifold: shared by 3 faces"}))
+        << fmt_name(fmt);
+  }
+}
+
+TEST(MeshIoErrors, InconsistentOrientation) {
+  Fixture fx;
+  const Soup s{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}}, {{0, 1, 2}, {0, 1, 3}}};
+  for (Fmt fmt : kAllFormats) {
+    const std::string path = fx.put(s, fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
+                                          {path + ": edge (0,1) has inconsistently oriented faces",
+                                           "faces 0 and 1 both traverse it from 0 to 1"}))
+        << fmt_name(fmt);
+  }
+}
+
+TEST(MeshIoErrors, TruncatedFiles) {
+  TempDir dir;
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  // Text formats losing their last line: a cut at a line boundary, no partial line to give it away.
+  const std::pair<std::string, std::string> cases[] = {
+      {"t.obj", "truncated: header comment (line 1) declares 6 vertices and 8 faces, file holds 6 vertices and 7 faces"},
+      {"t.off", "truncated: header declares 8 faces, file holds 7"},
+      {"t.ply", "truncated: header declares 8 faces, file holds 7"},
+      {"t.stl", "truncated: no 'endsolid' line"},
+  };
+  for (const auto& [name, expected] : cases) {
+    const std::string path = dir.file(name);
+    write_mesh(m, path, MeshEncoding::Ascii);
+    const std::string full = read_bytes(path);
+    ASSERT_EQ(full.back(), '\n');
+    write_bytes(path, full.substr(0, full.rfind('\n', full.size() - 2) + 1));
+    EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(path); }, {path + ": " + expected})) << name;
+  }
+  // Cut within the vertex block: "OFF", the counts and 3 of the 6 vertex lines remain.
+  write_mesh(m, dir.file("v.off"), MeshEncoding::Ascii);
+  std::string off = read_bytes(dir.file("v.off"));
+  size_t end = 0;
+  for (int line = 0; line < 5; ++line) end = off.find('\n', end) + 1;
+  write_bytes(dir.file("v.off"), off.substr(0, end));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("v.off")); }, {"truncated: header declares 6 vertices, file holds 3"}));
+  // OBJ without a count comment, cut inside its last vertex line.
+  write_bytes(dir.file("p.obj"), "v 0 0 0\nv 1 0 0\nv 0 1");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("p.obj")); }, {"line 3: vertex has 2 coordinates, needs 3 (file truncated?)"}));
+  // OFF cut inside the last face line.
+  write_bytes(dir.file("f.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("f.off")); }, {"face declares 3 corners but lists 2 (file truncated?)"}));
+  // Binary formats.
+  write_mesh(m, dir.file("b.ply"), MeshEncoding::Binary);
+  std::string ply = read_bytes(dir.file("b.ply"));
+  write_bytes(dir.file("b.ply"), ply.substr(0, ply.size() - 13 * 2 - 5));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.ply")); }, {"truncated: header declares 8 faces, file holds 5"}));
+  write_bytes(dir.file("h.ply"), ply.substr(0, ply.find("end_header")));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("h.ply")); }, {"truncated: PLY header has no 'end_header' line"}));
+  write_mesh(m, dir.file("b.stl"), MeshEncoding::Binary);
+  std::string stl = read_bytes(dir.file("b.stl"));
+  write_bytes(dir.file("b.stl"), stl.substr(0, stl.size() - 60));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.stl")); }, {"truncated: header declares 8 triangles, file holds 6"}));
+  // Too much data is as suspicious as too little.
+  write_bytes(dir.file("x.stl"), stl + "junk");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.stl")); }, {"declares 8 triangles", "the file has 488 bytes"}));
+  write_bytes(dir.file("x.ply"), ply + "j");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.ply")); }, {"1 bytes of data after the last declared element"}));
+  write_bytes(dir.file("x.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.off")); }, {"line 7: unexpected data after the 1 faces"}));
+}
+
+TEST(MeshIoErrors, MissingFileAndUnknownExtension) {
+  TempDir dir;
+  for (const char* name : {"none.obj", "none.off", "none.ply", "none.stl"}) {
+    const std::string path = dir.file(name);
+    EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(path); }, {path + ": cannot open: No such file or directory"}));
+  }
+  write_bytes(dir.file("m.xyz"), "v 0 0 0\n");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("m.xyz")); },
+                                   {dir.file("m.xyz") + ": unsupported mesh file extension '.xyz'", ".obj, .off, .ply, .stl"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("noext")); }, {"no file extension"}));
+  fs::create_directory(dir.file("dir.obj"));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("dir.obj")); }, {"dir.obj: cannot read: not a regular file"}));
+
+  const TriMesh m = awkward_octahedron();
+  EXPECT_TRUE(throws_with<IoError>([&] { write_mesh(m, dir.file("out.xyz")); }, {"out.xyz", "unsupported"}));
+  EXPECT_FALSE(fs::exists(dir.file("out.xyz")));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, dir.file("out.obj"), MeshEncoding::Binary); }, {"no binary"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_mesh(m, dir.file("missing_dir/out.obj")); }, {"cannot create a temporary file"}));
+}
+
+TEST(MeshIoErrors, UnparsableContent) {
+  TempDir dir;
+  const std::pair<std::string, std::vector<std::string>> cases[] = {
+      {"a.obj", {"v 0 0 0\nv 1 0 0\nv 0 1 zero\nf 1 2 3\n", "line 3: cannot parse 'zero' as a number"}},
+      {"b.obj", {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: cannot parse face corner 'x'"}},
+      {"c.obj", {std::string("v 0 0 0\n\0\n", 10), "line 2: contains a NUL byte"}},
+      {"d.off", {"OFX\n", "not an OFF file"}},
+      {"e.off", {"OFF\n1 1\n0 0 0\n3 0 0 z\n", "line 4", "cannot parse 'z' as an integer"}},
+      {"f.off", {"OFF BINARY\n", "binary OFF is not supported"}},
+      {"g.ply", {"plyx\n", "not a PLY file"}},
+      {"h.ply", {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"}},
+      {"i.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "no property y"}},
+      {"j.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n300 0 0 0\n",
+                 "line 11", "'300' does not fit its declared type"}},
+      {"k.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty blob x\nend_header\n", "unknown type 'blob'"}},
+      {"l.stl", {"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\nendloop\n", "line 6",
+                 "cannot parse 'endloop' as a number"}},
+      {"m.stl", {"solid x\nfacet normal 0 0 1\nouter ring\n", "line 3: expected 'loop', found 'ring'"}},
+      {"n.stl", {"short", "not an STL file"}},
+  };
+  for (const auto& [name, spec] : cases) {
+    write_bytes(dir.file(name), spec[0]);
+    for (size_t i = 1; i < spec.size(); ++i)
+      EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file(name)); }, {dir.file(name) + ": ", spec[i]})) << name;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Garbage never crashes: random bytes, every prefix of valid files, and byte flips.
+
+//! Reads \p path; passes if it throws a strata::Error or returns a mesh that validates.
+::testing::AssertionResult error_or_valid(const std::string& path, TriMesh* out = nullptr) {
+  try {
+    TriMesh m = read_mesh(path);
+    validate_mesh(m, path);
+    if (out) *out = std::move(m);
+    return ::testing::AssertionSuccess();
+  } catch (const Error&) {
+    return ::testing::AssertionSuccess();
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "non-strata exception: " << e.what();
+  } catch (...) {
+    return ::testing::AssertionFailure() << "unknown exception";
+  }
+}
+
+TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
+  TempDir dir;
+  std::mt19937 rng(12345);
+  const std::string prefixes[] = {"", "v ", "f 1 2 3\n", "OFF\n", "OFF\n3 1 0\n", "ply\n",
+                                  "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                  "property float y\nproperty float z\nelement face 1\n"
+                                  "property list uint int vertex_indices\nend_header\n",
+                                  "ply\nformat ascii 1.0\nelement face 99999999\nproperty list int int vertex_indices\nend_header\n",
+                                  "solid ", std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4)};
+  const char alphabet[] = "vf0123456789 -+./\n#eE\r";
+  int files = 0;
+  for (const std::string ext : {".obj", ".off", ".ply", ".stl"})
+    for (const std::string& prefix : prefixes)
+      for (int trial = 0; trial < 12; ++trial) {
+        std::string bytes = prefix;
+        const int n = std::uniform_int_distribution<int>(0, 600)(rng);
+        const bool text_like = trial % 2 == 0;
+        for (int i = 0; i < n; ++i)
+          bytes += text_like ? alphabet[rng() % (sizeof alphabet - 1)] : static_cast<char>(rng() & 0xff);
+        const std::string path = dir.file("r" + std::to_string(files++) + ext);
+        write_bytes(path, bytes);
+        EXPECT_TRUE(error_or_valid(path)) << path;
+      }
+  EXPECT_EQ(files, 4 * 10 * 12);
+}
+
+TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
+  TempDir dir;
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  struct Case {
+    std::string name;
+    MeshEncoding enc;
+    bool binary;
+  };
+  const Case cases[] = {{"p.obj", MeshEncoding::Ascii, false},     {"p.off", MeshEncoding::Ascii, false},
+                        {"a.ply", MeshEncoding::Ascii, false},     {"b.ply", MeshEncoding::Binary, true},
+                        {"a.stl", MeshEncoding::Ascii, false},     {"b.stl", MeshEncoding::Binary, true}};
+  for (const Case& c : cases) {
+    write_mesh(m, dir.file(c.name), c.enc);
+    const TriMesh whole = read_mesh(dir.file(c.name));
+    const std::string full = read_bytes(dir.file(c.name));
+    const std::string cut = dir.file("cut_" + c.name);
+    int accepted = 0;
+    for (size_t len = 0; len < full.size(); ++len) {
+      write_bytes(cut, full.substr(0, len));
+      if (c.binary) {
+        // Binary files carry counts for everything: every strict prefix is detected.
+        EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(cut); }, {cut + ": "})) << c.name << " length " << len;
+        continue;
+      }
+      TriMesh r;
+      ASSERT_TRUE(error_or_valid(cut, &r)) << c.name << " length " << len;
+      if (r.num_faces() > 0) {
+        // Only losing trailing whitespace or a name may go unnoticed; never part of the mesh.
+        ++accepted;
+        EXPECT_TRUE(identical(r, whole)) << c.name << " length " << len;
+      }
+    }
+    EXPECT_LT(accepted, 20) << c.name;
+  }
+}
+
+TEST(MeshIoFuzz, ByteFlipsInValidFiles) {
+  TempDir dir;
+  std::mt19937 rng(99);
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  for (const auto& [name, enc] : {std::pair<std::string, MeshEncoding>{"f.obj", MeshEncoding::Ascii},
+                                  {"f.off", MeshEncoding::Ascii},
+                                  {"a.ply", MeshEncoding::Ascii},
+                                  {"b.ply", MeshEncoding::Binary},
+                                  {"a.stl", MeshEncoding::Ascii},
+                                  {"b.stl", MeshEncoding::Binary}}) {
+    write_mesh(m, dir.file(name), enc);
+    const std::string full = read_bytes(dir.file(name));
+    for (int trial = 0; trial < 150; ++trial) {
+      std::string bytes = full;
+      for (int k = 0; k < 1 + trial % 3; ++k) bytes[rng() % bytes.size()] = static_cast<char>(rng() & 0xff);
+      const std::string path = dir.file("flip_" + name);
+      write_bytes(path, bytes);
+      EXPECT_TRUE(error_or_valid(path)) << name << " trial " << trial;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// validate_mesh on meshes built in memory
+
+TEST(MeshIoValidate, AcceptsValidMeshesWithUnreferencedVertices) {
+  const TriMesh m = awkward_octahedron();
+  EXPECT_NO_THROW(validate_mesh(m, "octa"));
+  TriMesh open;  // a single triangle: boundary edges are fine
+  open.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {7, 7, 7}};
+  open.faces = {{0, 1, 2}};
+  EXPECT_NO_THROW(validate_mesh(open, "open"));
+  for (double s : {1e-300, 1e300}) {
+    TriMesh scaled = m;
+    for (Vec3& p : scaled.vertices) p *= s;
+    EXPECT_NO_THROW(validate_mesh(scaled, "scaled")) << s;
+  }
+}
+
+TEST(MeshIoValidate, ExactMessages) {
+  auto message = [](const TriMesh& m, const std::string& name) -> std::string {
+    try {
+      validate_mesh(m, name);
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  TriMesh t;
+  t.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  EXPECT_EQ(message(t, "w.obj"), "w.obj: no faces");
+  t.faces = {{0, 1, 2}, {0, 2, 99}};
+  EXPECT_EQ(message(t, "bunny.obj"), "bunny.obj: face 1 has vertex index 99 out of range (mesh has 3 vertices)");
+  t.faces = {{0, 1, -1}};
+  EXPECT_EQ(message(t, "m"), "m: face 0 has vertex index -1 out of range (mesh has 3 vertices)");
+  t.faces = {{0, 1, 0}};
+  EXPECT_EQ(message(t, "m"), "m: face 0 has repeated vertex index 0");
+  t.faces = {{0, 1, 2}};
+  t.vertices[1][2] = std::nan("");
+  EXPECT_EQ(message(t, "y.stl"), "y.stl: vertex 1 has a non-finite coordinate");
+  t.vertices = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  EXPECT_EQ(message(t, "v.obj"), "v.obj: face 0 has zero area");
+  // A sliver below the relative threshold (area 1e-15 * bbox^2) is zero area; one above is not.
+  t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 2e-15, 0}};
+  EXPECT_EQ(message(t, "s"), "s: face 0 has zero area");
+  t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-12, 0}};
+  EXPECT_EQ(message(t, "s"), "(no error)");
+
+  TriMesh fan;  // four triangles around edge (4,7)
+  fan.vertices.assign(12, Vec3::Zero());
+  fan.vertices[4] = {0, 0, 0};
+  fan.vertices[7] = {1, 0, 0};
+  fan.vertices[0] = {0.5, 1, 0};
+  fan.vertices[1] = {0.5, -1, 0};
+  fan.vertices[2] = {0.5, 0, 1};
+  fan.vertices[3] = {0.5, 0, -1};
+  fan.faces = {{4, 7, 0}, {7, 4, 1}, {7, 4, 2}, {4, 7, 3}};
+  EXPECT_EQ(message(fan, "z.ply"), "z.ply: edge (4,7) is non-manifold: shared by 4 faces (0, 1, 2, 3)");
+  fan.faces = {{4, 7, 0}, {4, 7, 1}};
+  EXPECT_EQ(message(fan, "o"), "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 4 to 7");
+  fan.faces = {{7, 4, 0}, {7, 4, 1}};
+  EXPECT_EQ(message(fan, "o"), "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
+  EXPECT_EQ(message(fan, ""), "mesh: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
+}
+
+TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
+  TempDir dir;
+  TriMesh bad = awkward_octahedron();
+  bad.faces.push_back(bad.faces.front());  // every edge of face 0 now used three times
+  write_text_file_atomically(dir.file("keep.obj"), "old");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(bad, dir.file("keep.obj")); }, {"keep.obj: edge", "non-manifold"}));
+  EXPECT_EQ(read_bytes(dir.file("keep.obj")), "old");
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"keep.obj"}));
+
+  // Two vertices at the same position are fine in a mesh but merge in STL: refuse, don't mangle.
+  TriMesh seam;
+  seam.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  seam.faces = {{0, 1, 2}, {3, 4, 5}, {3, 5, 4}};
+  EXPECT_NO_THROW(validate_mesh(seam, "seam"));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(seam, dir.file("seam.stl")); },
+                                        {"seam.stl: cannot be stored as STL", "edge (0,2)"}));
+  EXPECT_FALSE(fs::exists(dir.file("seam.stl")));
+  TriMesh huge = without_unreferenced(awkward_octahedron());
+  for (Vec3& p : huge.vertices) p *= 1e39;
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(huge, dir.file("huge.stl")); }, {"vertex 0", "float32"}));
+  EXPECT_NO_THROW(write_mesh(huge, dir.file("huge.stl"), MeshEncoding::Ascii));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Atomic writes
+
+TEST(MeshIoAtomicFile, WritesAndReplacesWithoutLeftovers) {
+  TempDir dir;
+  const std::string path = dir.file("out.txt");
+  write_text_file_atomically(path, std::string("first\0line\n", 11));
+  EXPECT_EQ(read_bytes(path), std::string("first\0line\n", 11));
+  ::chmod(path.c_str(), 0640);
+  write_text_file_atomically(path, "second");
+  EXPECT_EQ(read_bytes(path), "second");
+  struct stat st;
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);  // replacing keeps the permissions
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"out.txt"}));
+
+  std::string seen_tmp;
+  write_file_atomically(path, [&](const std::string& tmp) {
+    seen_tmp = tmp;
+    EXPECT_EQ(fs::path(tmp).parent_path(), fs::path(path).parent_path());  // same directory: rename is atomic
+    EXPECT_TRUE(fs::exists(tmp));
+    EXPECT_EQ(read_bytes(path), "second");  // target untouched while writing
+    std::ofstream(tmp) << "third";
+  });
+  EXPECT_EQ(read_bytes(path), "third");
+  EXPECT_FALSE(fs::exists(seen_tmp));
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"out.txt"}));
+}
+
+TEST(MeshIoAtomicFile, ThrowingWriterLeavesTargetAndNoTempFile) {
+  TempDir dir;
+  const std::string path = dir.file("keep.txt");
+  write_text_file_atomically(path, "original");
+  std::string tmp_path;
+  struct WriterFailed : std::exception {};
+  EXPECT_THROW(write_file_atomically(path,
+                                     [&](const std::string& tmp) {
+                                       tmp_path = tmp;
+                                       std::ofstream(tmp) << "half-writ";
+                                       throw WriterFailed();
+                                     }),
+               WriterFailed);  // propagates unchanged
+  EXPECT_EQ(read_bytes(path), "original");
+  EXPECT_FALSE(fs::exists(tmp_path));
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"keep.txt"}));
+
+  // No target yet: none is created.
+  const std::string fresh = dir.file("fresh.txt");
+  EXPECT_THROW(write_file_atomically(fresh, [](const std::string&) { throw IoError("boom"); }), IoError);
+  EXPECT_FALSE(fs::exists(fresh));
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"keep.txt"}));
+}
+
+TEST(MeshIoAtomicFile, FailedRenameIsIoErrorWithoutLeftovers) {
+  TempDir dir;
+  fs::create_directories(dir.file("occupied/child"));  // a non-empty directory cannot be replaced by a file
+  EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("occupied"), "x"); },
+                                   {dir.file("occupied") + ": cannot replace it"}));
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"occupied"}));
+  EXPECT_TRUE(fs::is_directory(dir.file("occupied/child")));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("no/such/dir/f.txt"), "x"); },
+                                   {"cannot create a temporary file in directory"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("trailing/"), "x"); }, {"not a file path"}));
+}
+
+TEST(MeshIoAtomicFile, WriteMeshIsAtomic) {
+  TempDir dir;
+  const std::string path = dir.file("m.ply");
+  const TriMesh a = awkward_octahedron(1), b = awkward_octahedron(2);
+  write_mesh(a, path);
+  write_mesh(b, path);
+  EXPECT_TRUE(identical(read_mesh(path), b));
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"m.ply"}));
+}
+
+}  // namespace
