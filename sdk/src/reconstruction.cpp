@@ -1,6 +1,8 @@
 #include "strata/reconstruction.h"
 
+#include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -36,6 +38,14 @@ struct Level {
   std::vector<int> jj_offsets;
   std::vector<int> jj_prism;
   std::vector<std::uint8_t> jj_corner_j, jj_corner_k;
+  // The direct solver of J W^-1 J^T: its lower triangle with the pattern fixed, where each
+  // pattern entry lands in its value array (-1: upper triangle, skipped), the diagonal's slots,
+  // and the Cholesky factorization whose symbolic analysis is done once per level.
+  // Mutable: refactorized in every step of a (logically const) reconstruction.
+  mutable Eigen::SparseMatrix<double> jj;
+  std::vector<int> jj_slot;
+  std::vector<int> jj_diag_slot;
+  mutable std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> llt;
 };
 
 // Scratch of one Gauss-Newton step, reused across steps.
@@ -154,8 +164,8 @@ class VolumeReconstructor::Impl {
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
         opt_.regularization_iterations < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
-        !(opt_.damping > 0 && opt_.damping <= 1.5) || !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) ||
-        opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
+        !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
+        opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
       throw InvalidInput("reconstruction options out of range");
   }
 
@@ -227,6 +237,43 @@ class VolumeReconstructor::Impl {
       }
       L.jj_offsets[j + 1] = static_cast<int>(L.jj_prism.size());
     }
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(L.jj_prism.size() / 2 + m);
+    for (std::size_t j = 0; j < m; ++j)
+      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
+        if (L.jj_prism[t] <= static_cast<int>(j)) trip.emplace_back(static_cast<int>(j), L.jj_prism[t], 1.0);
+    L.jj.resize(static_cast<int>(m), static_cast<int>(m));
+    L.jj.setFromTriplets(trip.begin(), trip.end());
+    L.jj.makeCompressed();
+    auto slot = [&](int row, int col) {
+      const int* inner = L.jj.innerIndexPtr();
+      const int b = L.jj.outerIndexPtr()[col], e = L.jj.outerIndexPtr()[col + 1];
+      return static_cast<int>(std::lower_bound(inner + b, inner + e, row) - inner);
+    };
+    L.jj_slot.assign(L.jj_prism.size(), -1);
+    L.jj_diag_slot.resize(m);
+    for (std::size_t j = 0; j < m; ++j) {
+      L.jj_diag_slot[j] = slot(static_cast<int>(j), static_cast<int>(j));
+      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
+        if (L.jj_prism[t] <= static_cast<int>(j)) L.jj_slot[t] = slot(static_cast<int>(j), L.jj_prism[t]);
+    }
+    L.llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
+    L.llt->analyzePattern(L.jj);
+  }
+
+  // Writes J J^T (+ a tiny diagonal shift) for gradients g into L.jj's fixed pattern.
+  static void assemble(const Level& L, const std::vector<std::array<Vec3, 3>>& g) {
+    const std::size_t m = L.faces.size();
+    double* val = L.jj.valuePtr();
+    std::fill(val, val + L.jj.nonZeros(), 0.0);
+    double max_diag = 0.0;
+    for (std::size_t j = 0; j < m; ++j) {
+      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
+        if (L.jj_slot[t] >= 0) val[L.jj_slot[t]] += g[j][L.jj_corner_j[t]].dot(g[L.jj_prism[t]][L.jj_corner_k[t]]);
+      max_diag = std::max(max_diag, val[L.jj_diag_slot[j]]);
+    }
+    const double eps = 1e-10 * max_diag + 1e-300;
+    for (std::size_t j = 0; j < m; ++j) val[L.jj_diag_slot[j]] += eps;
   }
 
   void init_state(const std::vector<Vec3>& base, State& s) const {
@@ -263,7 +310,8 @@ class VolumeReconstructor::Impl {
         st.regularization_sweeps += opt_.regularization_iterations;
         continue;
       }
-      const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, st, V);
+      const int max_cycles = finest && h == 1.0 ? opt_.final_max_cycles : opt_.max_cycles;
+      const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
         if (h == 1.0) polish(L, s, final_tol, st, V);
@@ -274,13 +322,14 @@ class VolumeReconstructor::Impl {
   // "Do until convergence" of Listing 1: volume steps until the prisms hold their (scaled)
   // volumes, then regularization; repeated until the regularization stops moving the solution
   // (a fixed point of smoothing and projection) or max_cycles. Ends on volume steps.
-  int solve_level(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+  int solve_level(const Level& L, State& s, double h, double tol, int max_cycles, ReconstructStats& st,
+                  std::vector<double>& V) const {
     double lambda = 1.0;
     int c = 0;
     for (;; ++c) {
       project(L, s, h, tol, st, V);
       ++st.cycles;
-      if (c + 1 >= opt_.max_cycles || opt_.regularization_iterations == 0) break;
+      if (c + 1 >= max_cycles || opt_.regularization_iterations == 0) break;
       before_ = s.P;
       for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, lambda);
       st.regularization_sweeps += opt_.regularization_iterations;
@@ -300,25 +349,29 @@ class VolumeReconstructor::Impl {
     compute_volumes(L, s, V);
     double err = relative_error(L, h, V, nullptr);
     for (int it = 0; it < opt_.volume_iterations && err > tol; ++it) {
-      volume_sweep(L, s, h, V, st);
+      const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
+                          static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
+      gauss_newton_step(L, s, h, direct, st);
       ++st.volume_sweeps;
+      compute_volumes(L, s, V);
       err = relative_error(L, h, V, nullptr);
     }
   }
 
-  // Volume-only sweeps until the tolerance holds (the volume terms' weight grows to all).
+  // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
+  // tolerance holds: the volume terms get all the weight at the end (section 4.2).
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
     compute_volumes(L, s, V);
     double err = relative_error(L, 1.0, V, nullptr);
-    int sweeps = 0;
-    while (err > tol && sweeps < opt_.max_final_sweeps) {
-      for (int it = 0; it < 5; ++it) volume_sweep(L, s, 1.0, V, st);
-      sweeps += 5;
+    int steps = 0;
+    while (err > tol && steps < opt_.max_final_steps) {
+      gauss_newton_step(L, s, 1.0, true, st);
+      ++steps;
       compute_volumes(L, s, V);
       err = relative_error(L, 1.0, V, nullptr);
     }
-    st.final_sweeps += sweeps;
-    st.volume_sweeps += sweeps;
+    st.final_sweeps += steps;
+    st.volume_sweeps += steps;
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
@@ -343,57 +396,11 @@ class VolumeReconstructor::Impl {
     return mx / scale;
   }
 
-  // Section 4.1, as a nonlinear Gauss-Seidel: each vertex moves to the damped least-squares
-  // point of the planes on which its prisms have their target volumes. The volume is affine in a
-  // single vertex, so the planes are exact and the volumes are updated incrementally.
-  void volume_sweep(const Level& L, State& s, double h, std::vector<double>& V, ReconstructStats& st) const {
-    if (opt_.levenberg < -1.5) {
-      gauss_newton_step(L, s, h, st);
-      compute_volumes(L, s, V);
-      return;
-    }
-    if (opt_.levenberg < 0) {
-      prism_sweep(L, s, h, st);
-      return;
-    }
-    Vec3 grads[64];
-    std::vector<Vec3> big;
-    const int nv = static_cast<int>(L.verts.size());
-    for (int k = 0; k < nv; ++k) {
-      const int b = L.vf_offsets[k], e = L.vf_offsets[k + 1];
-      if (b == e) continue;
-      Vec3* g = grads;
-      if (e - b > 64) {
-        big.resize(e - b);
-        g = big.data();
-      }
-      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-      Vec3 rhs = Vec3::Zero();
-      for (int t = b; t < e; ++t) {
-        const int j = L.vf_faces[t], c = L.vf_corners[t];
-        const Face& f = L.faces[j];
-        const int ia = f[c], ib = f[(c + 1) % 3], ic = f[(c + 2) % 3];
-        const Vec3 gv = prism_vertex_gradient(s.P[ia], s.P[ib], s.P[ic], s.Q[ia], s.Q[ib], s.Q[ic]);
-        g[t - b] = gv;
-        A.selfadjointView<Eigen::Lower>().rankUpdate(gv);
-        rhs += (h * L.targets[j] - V[j]) * gv;
-      }
-      A = A.selfadjointView<Eigen::Lower>();
-      const double mu = opt_.levenberg * A.trace() + 1e-300;
-      A.diagonal().array() += mu;
-      const Vec3 delta = opt_.damping * A.ldlt().solve(rhs);
-      if (!delta.allFinite()) continue;
-      s.P[L.verts[k]] += delta;
-      for (int t = b; t < e; ++t) V[L.vf_faces[t]] += g[t - b].dot(delta);
-    }
-    st.constraint_updates += static_cast<long long>(L.vf_faces.size());
-  }
-
   // One Gauss-Newton step towards the volume constraints: the minimum-norm correction
   // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
   // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
   // the projection of the current positions onto the linearized constraint set.
-  void gauss_newton_step(const Level& L, State& s, double h, ReconstructStats& st) const {
+  void gauss_newton_step(const Level& L, State& s, double h, bool direct, ReconstructStats& st) const {
     GnScratch& w = gn_;
     const std::size_t m = L.faces.size();
     w.grad.resize(m);
@@ -403,7 +410,7 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      w.grad[j] = {g.grad[0], g.grad[1], g.grad[2]};
+      for (int c = 0; c < 3; ++c) w.grad[j][c] = g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
       rr += w.r[j] * w.r[j];
     }
@@ -426,11 +433,47 @@ class VolumeReconstructor::Impl {
         out[j] = acc;
       }
     };
+    if (direct) {
+      solve_direct(L, w, rr, st);
+    } else {
+      solve_cg(L, w, rr, st, apply);
+    }
+    // delta = J^T y.
+    for (std::size_t j = 0; j < m; ++j) {
+      const Face& f = L.faces[j];
+      for (int c = 0; c < 3; ++c) s.P[f[c]] += w.y[j] * w.grad[j][c];
+    }
+    st.constraint_updates += static_cast<long long>(m);
+  }
+
+  // (J W^-1 J^T + eps I) y = r by the level's Cholesky factorization (numeric part only; the
+  // symbolic analysis was done at construction). eps keeps the clean start, where all
+  // gradients are normal and J J^T is singular, factorizable.
+  void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
+    const std::size_t m = L.faces.size();
+    assemble(L, w.grad);
+    L.llt->factorize(L.jj);
+    if (L.llt->info() != Eigen::Success) throw SolverError("Cholesky factorization of the volume step failed");
+    Eigen::Map<const Eigen::VectorXd> r(w.r.data(), static_cast<Eigen::Index>(m));
+    const Eigen::VectorXd y = L.llt->solve(r);
+    w.y.assign(y.data(), y.data() + m);
+    ++st.factorizations;
+  }
+
+  // z = D^-1 res with D the diagonal of J J^T.
+  static void precondition(GnScratch& w, const std::vector<double>& res) {
+    w.z.resize(res.size());
+    for (std::size_t j = 0; j < res.size(); ++j) w.z[j] = w.diag[j] * res[j];
+  }
+
+  template <class Apply>
+  void solve_cg(const Level& L, GnScratch& w, double rr, ReconstructStats& st, Apply&& apply) const {
+    const std::size_t m = L.faces.size();
     // Preconditioned CG from y = 0.
     w.y.assign(m, 0.0);
     w.z.resize(m);
     std::vector<double>& res = w.r;  // r becomes the CG residual
-    for (std::size_t j = 0; j < m; ++j) w.z[j] = w.diag[j] * res[j];
+    precondition(w, res);
     w.p = w.z;
     double rz = 0.0;
     for (std::size_t j = 0; j < m; ++j) rz += res[j] * w.z[j];
@@ -447,34 +490,15 @@ class VolumeReconstructor::Impl {
       for (std::size_t j = 0; j < m; ++j) {
         w.y[j] += alpha * w.p[j];
         res[j] -= alpha * w.Ap[j];
-        w.z[j] = w.diag[j] * res[j];
         rr += res[j] * res[j];
-        rz_new += res[j] * w.z[j];
       }
+      precondition(w, res);
+      for (std::size_t j = 0; j < m; ++j) rz_new += res[j] * w.z[j];
       const double beta = rz_new / rz;
       rz = rz_new;
       for (std::size_t j = 0; j < m; ++j) w.p[j] = w.z[j] + beta * w.p[j];
     }
     st.cg_iterations += it;
-    for (std::size_t j = 0; j < m; ++j) {
-      const Face& f = L.faces[j];
-      for (int c = 0; c < 3; ++c) s.P[f[c]] += w.y[j] * w.grad[j][c];
-    }
-    st.constraint_updates += static_cast<long long>(m);
-  }
-
-  // Minimum-norm projection per prism (Kaczmarz; Gauss-Seidel on J J^T): the prism's three top
-  // vertices move along their volume gradients just enough to restore its volume.
-  void prism_sweep(const Level& L, State& s, double h, ReconstructStats& st) const {
-    for (std::size_t j = 0; j < L.faces.size(); ++j) {
-      const Face& f = L.faces[j];
-      const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      const double gg = g.grad[0].squaredNorm() + g.grad[1].squaredNorm() + g.grad[2].squaredNorm();
-      if (!(gg > 0)) continue;
-      const double step = opt_.damping * (h * L.targets[j] - g.volume) / gg;
-      for (int c = 0; c < 3; ++c) s.P[f[c]] += step * g.grad[c];
-    }
-    st.constraint_updates += static_cast<long long>(L.faces.size());
   }
 
   // Section 4.2 on the displacements d_i = p_i - q_i (Jacobi sweep): the length filter

@@ -16,6 +16,16 @@ namespace strata {
 //! Reports progress: a phase name and the fraction done in [0,1].
 using ProgressCallback = std::function<void(const std::string& phase, double fraction)>;
 
+//! How the linear system (J J^T) y = r of a Gauss-Newton volume step is solved during the
+//! multigrid cycles. The final polish always factorizes.
+enum class VolumeStepSolver {
+  //! Conjugate gradients with a diagonal preconditioner, stopped at cg_tolerance or
+  //! cg_max_iterations: an inexact Newton step, cheap per step.
+  JacobiCG,
+  //! A sparse Cholesky factorization (CHOLMOD) per step, its symbolic analysis kept per level.
+  Direct
+};
+
 //! User options of the reconstruction (the paper's k, g, n, m, lambdas and tolerances). The
 //! defaults reach a max relative prism volume error of 1e-4 on the paper's 90-degree bends.
 struct ReconstructOptions {
@@ -28,12 +38,16 @@ struct ReconstructOptions {
   int coarsest_vertices = 200;
   //! Vertex count of a level relative to the next finer one.
   double coarsening_ratio = 0.25;
-  //! n: volume-preservation sweeps per cycle.
-  int volume_iterations = 10;
+  //! n: volume-preservation steps (Gauss-Newton projections onto the prism volumes, section 4.1)
+  //! per cycle at most; a cycle's volume steps stop once the level's tolerance holds.
+  int volume_iterations = 5;
   //! m: regularization sweeps per cycle.
   int regularization_iterations = 2;
   //! Cycles (n volume sweeps, then m regularization sweeps) per level and volume scale at most.
-  int max_cycles = 20;
+  int max_cycles = 3;
+  //! Cycles at most on the finest level at full volume scale, where the regularization settles
+  //! the final shape.
+  int final_max_cycles = 10;
   //! Damping of the tangential Laplacian of the displacements (section 4.2).
   double tangential_lambda = 0.5;
   //! Damping of the displacement-length filter d -> d + lambda f Laplacian(d / f) (section 4.2).
@@ -41,29 +55,29 @@ struct ReconstructOptions {
   //! The regularization weights are multiplied by this after every cycle, so the volume terms
   //! gain weight as the solve goes on (as in augmented Lagrangian methods, section 4.2).
   double regularization_decay = 0.8;
-  //! Relaxation factor of the per-vertex volume update (the paper damps it slightly).
-  double damping = 0.9;
-  //! Levenberg term of the per-vertex 3x3 least-squares system, relative to its trace; keeps
-  //! nearly parallel volume gradients from causing large tangential jumps.
-  double levenberg = 1e-4;
   //! Max relative volume error (|V - h V*| / mean |h V*|) at which a coarse level, or the finest
   //! level of an intermediate volume scale, counts as converged.
   double level_tolerance = 1e-2;
   //! Max relative volume error required on the finest level at full scale.
   double tolerance = 1e-4;
-  //! Volume-only sweeps at most on the finest level at full scale after the cycles, to reach
-  //! `tolerance`.
-  int max_final_sweeps = 400;
+  //! Exact Gauss-Newton steps (a sparse Cholesky factorization each) at most on the finest level
+  //! at full scale after the cycles, to reach `tolerance`.
+  int max_final_steps = 10;
   //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
   //! filter's ratio d_i / f_i, which is undefined at f = 0.
   double min_length_fraction = 0.05;
   //! The cycles on a level stop once a regularization round moves no vertex farther than this
   //! fraction of the mean displacement length.
   double fixed_point_tolerance = 1e-3;
+  //! Solver of the volume step's linear system.
+  VolumeStepSolver step_solver = VolumeStepSolver::JacobiCG;
+  //! Levels with at most this many prisms always take exact (factorized) steps: cheap there, and
+  //! fewer steps.
+  int direct_max_prisms = 0;
   //! Relative residual at which the conjugate-gradient solve of a Gauss-Newton step stops.
-  double cg_tolerance = 1e-3;
+  double cg_tolerance = 1e-2;
   //! Conjugate-gradient iterations per Gauss-Newton step at most.
-  int cg_max_iterations = 200;
+  int cg_max_iterations = 60;
   //! Optional progress reports (phase, fraction).
   ProgressCallback progress;
 };
@@ -73,16 +87,17 @@ struct ReconstructStats {
   int levels = 0;                    //!< multigrid levels used, finest included
   std::vector<int> level_vertices;   //!< vertex count per level, coarsest first
   std::vector<int> level_faces;      //!< prism count per level, coarsest first
-  int volume_sweeps = 0;             //!< volume-preservation sweeps over all levels and scales
+  int volume_sweeps = 0;             //!< Gauss-Newton volume steps over all levels and scales
   int regularization_sweeps = 0;     //!< regularization sweeps over all levels and scales
   int cycles = 0;                    //!< multigrid cycles (n + m sweeps) over all levels and scales
-  int final_sweeps = 0;              //!< volume-only polish sweeps on the finest level
+  int final_sweeps = 0;              //!< exact Gauss-Newton polish steps on the finest level
   std::vector<int> finest_cycles_per_scale;
   double max_relative_error = 0.0;   //!< on the finest level at the end
   double rms_relative_error = 0.0;
   bool converged = false;            //!< max_relative_error <= tolerance
   double seconds_frames = 0.0;       //!< evaluating the base points on the edited base
   double seconds_solve = 0.0;        //!< the multigrid solve
+  long long factorizations = 0;     //!< numeric Cholesky factorizations (direct step solver)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume sweeps (for throughput)
 };
