@@ -123,7 +123,15 @@ class VolumeReconstructor::Impl {
         throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
                            std::to_string(enc_.num_detail_vertices()) + " vertices");
       s.P = *start;
-      multigrid_pass(s, 1.0, warm->tolerance, warm->coarse_levels_only, st, V);
+      if (warm->coarse_levels_only) {
+        multigrid_pass(s, 1.0, warm->tolerance, true, st, V);
+      } else {
+        // The exact solve from a nearby start: the finest level only, so that a start which
+        // already solves the problem stays put (coarse levels have their own targets).
+        const Level& F = levels_.back();
+        st.finest_cycles_per_scale.push_back(solve_level(F, s, 1.0, warm->tolerance, opt_.final_max_cycles, st, V));
+        polish(F, s, warm->tolerance, st, V);
+      }
     }
     // Final accuracy on the finest level.
     const Level& F = levels_.back();

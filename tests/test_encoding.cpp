@@ -1,0 +1,133 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "paper_cases.h"
+#include "strata/encoding.h"
+#include "strata/exceptions.h"
+#include "strata/metrics.h"
+
+using namespace strata;
+
+namespace {
+
+// A small bumps case: its detail is an exact normal displacement of the analytic cylinder.
+const cases::CylinderCase& small_case() {
+  static const cases::CylinderCase c = [] {
+    cases::CylinderCaseOptions o;
+    o.target_detail_triangles = 3000;
+    return cases::make_cylinder_case(o);
+  }();
+  return c;
+}
+
+// Unit normal of the base's interpolated (Phong) normal field at a base point.
+Vec3 interpolated_normal(const TriMesh& base, const BasePoint& bp) {
+  const std::vector<Vec3> vn = vertex_normals(base.vertices, base.faces);
+  const Face& f = base.faces[bp.face];
+  return (bp.bary[0] * vn[f[0]] + bp.bary[1] * vn[f[1]] + bp.bary[2] * vn[f[2]]).normalized();
+}
+
+}  // namespace
+
+TEST(Encoding, DisplacementsAreParallelToInterpolatedNormals) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  EXPECT_EQ(e.report.num_fallback, 0);
+  EXPECT_EQ(e.report.num_projected, c.detail.num_vertices());
+  const std::vector<Vec3> vn = vertex_normals(c.base.vertices, c.base.faces);
+  for (int i = 0; i < c.detail.num_vertices(); i += 7) {
+    const BasePoint& bp = e.base_points[i];
+    ASSERT_GE(bp.face, 0);
+    EXPECT_NEAR(bp.bary.sum(), 1.0, 1e-12);
+    EXPECT_GE(bp.bary.minCoeff(), 0.0);
+    const Face& f = c.base.faces[bp.face];
+    const Vec3 q = bp.bary[0] * c.base.vertices[f[0]] + bp.bary[1] * c.base.vertices[f[1]] +
+                   bp.bary[2] * c.base.vertices[f[2]];
+    const Vec3 d = c.detail.vertices[i] - q;
+    const Vec3 n = interpolated_normal(c.base, bp);
+    // p - q parallel to n(q): the cross product vanishes relative to |d|.
+    EXPECT_LE(d.cross(n).norm(), 1e-8 * d.norm()) << "vertex " << i;
+    EXPECT_NEAR(d.dot(n), e.normal_offsets[i], 1e-10);
+    EXPECT_GT(e.normal_offsets[i], 0.0);  // the detail lies outside the cylinder
+    EXPECT_TRUE(e.tangential_offsets[i].isZero());
+  }
+}
+
+TEST(Encoding, TargetsAreThePrismVolumesOverTheOriginalBase) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const BaseFrames fr = evaluate_base_frames(e, c.base.vertices);
+  const VolumeMetrics m = volume_metrics(e, fr, c.detail.vertices);
+  EXPECT_EQ(m.max_relative_error, 0.0);
+  EXPECT_GT(m.total_target, 0.0);
+  // The layer between a cylinder of radius R and the detail (offsets in [0.175, 0.525]) over
+  // length 6 has a volume between the two bounding shells.
+  const double R = 1.0, L = 6.0;
+  EXPECT_GT(m.total_target, M_PI * L * ((R + 0.175) * (R + 0.175) - R * R) * 0.95);
+  EXPECT_LT(m.total_target, M_PI * L * ((R + 0.525) * (R + 0.525) - R * R));
+}
+
+TEST(Encoding, DetailOnTheBaseHasZeroOffsetsAndVolumes) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.base, c.base);
+  for (double f : e.normal_offsets) EXPECT_NEAR(f, 0.0, 1e-12);
+  for (double v : e.target_volumes) EXPECT_NEAR(v, 0.0, 1e-12);
+}
+
+TEST(Encoding, FallbackToClosestPointIsCountedAndLossless) {
+  // A detail point far off to the side of a single base triangle has no normal projection:
+  // it falls back to the closest point, keeps its tangential offset, and the vectors rebuild it.
+  TriMesh base;
+  base.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  base.faces = {Face{0, 1, 2}};
+  TriMesh detail;
+  detail.vertices = {Vec3(0.1, 0.1, 0.5), Vec3(0.6, 0.1, 0.5), Vec3(3.0, 3.0, 0.2)};
+  detail.faces = {Face{0, 1, 2}};
+  const DetailEncoding e = encode_detail(detail, base);
+  EXPECT_EQ(e.report.num_projected, 2);
+  EXPECT_EQ(e.report.num_fallback, 1);
+  EXPECT_GT(e.report.max_tangential_offset, 1.0);
+  const std::vector<Vec3> p = reconstruct_vectors(e, base.vertices);
+  for (int i = 0; i < 3; ++i) EXPECT_LE((p[i] - detail.vertices[i]).norm(), 1e-12);
+}
+
+TEST(Encoding, VectorsOverTheOriginalBaseReturnTheDetail) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const std::vector<Vec3> p = reconstruct_vectors(e, c.base.vertices);
+  double worst = 0.0;
+  for (int i = 0; i < c.detail.num_vertices(); ++i) worst = std::max(worst, (p[i] - c.detail.vertices[i]).norm());
+  EXPECT_LE(worst, 1e-12);
+}
+
+TEST(Encoding, VectorsFollowARigidMotionOfTheBase) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3 t(0.5, -2.0, 3.0);
+  std::vector<Vec3> moved;
+  for (const Vec3& x : c.base.vertices) moved.push_back(R * x + t);
+  const std::vector<Vec3> p = reconstruct_vectors(e, moved);
+  for (int i = 0; i < c.detail.num_vertices(); i += 5)
+    EXPECT_LE((p[i] - (R * c.detail.vertices[i] + t)).norm(), 1e-10);
+}
+
+TEST(Encoding, RejectsBadInput) {
+  const auto& c = small_case();
+  TriMesh empty;
+  EXPECT_THROW(encode_detail(empty, c.base), InvalidInput);
+  EXPECT_THROW(encode_detail(c.detail, empty), InvalidInput);
+  TriMesh nan_detail = c.detail;
+  nan_detail.vertices[3][1] = std::nan("");
+  EXPECT_THROW(encode_detail(nan_detail, c.base), InvalidInput);
+  TriMesh bad_index = c.detail;
+  bad_index.faces[0][2] = c.detail.num_vertices() + 5;
+  EXPECT_THROW(encode_detail(bad_index, c.base), InvalidInput);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  std::vector<Vec3> short_base(c.base.vertices.begin(), c.base.vertices.end() - 1);
+  EXPECT_THROW(evaluate_base_frames(e, short_base), InvalidInput);
+  std::vector<Vec3> nan_base = c.base.vertices;
+  nan_base[0][0] = INFINITY;
+  EXPECT_THROW(reconstruct_vectors(e, nan_base), InvalidInput);
+}

@@ -1,0 +1,180 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "paper_cases.h"
+#include "strata/encoding.h"
+#include "strata/exceptions.h"
+#include "strata/intersections.h"
+#include "strata/metrics.h"
+#include "strata/reconstruction.h"
+
+using namespace strata;
+
+namespace {
+
+struct Outcome {
+  VolumeMetrics volumes, vectors;
+  std::size_t volumes_pairs = 0, vectors_pairs = 0, input_pairs = 0;
+  ReconstructStats stats;
+};
+
+// Encodes the case's detail over its base, rebuilds it over the bent base both ways and
+// measures both results.
+Outcome run_bend(const cases::CylinderCase& c) {
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  const ReconstructResult r = rec.reconstruct(c.edited_base.vertices);
+  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  const std::vector<Vec3> vec = reconstruct_vectors(e, fr);
+  Outcome o;
+  o.stats = r.stats;
+  o.volumes = volume_metrics(e, fr, r.positions);
+  o.vectors = volume_metrics(e, fr, vec);
+  o.input_pairs = find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs;
+  o.volumes_pairs = find_self_intersections(r.positions, c.detail.faces).num_pairs;
+  o.vectors_pairs = find_self_intersections(vec, c.detail.faces).num_pairs;
+  return o;
+}
+
+cases::CylinderCase make_case(cases::DetailKind kind, int triangles) {
+  cases::CylinderCaseOptions o;
+  o.detail = kind;
+  o.target_detail_triangles = triangles;
+  return cases::make_cylinder_case(o);
+}
+
+double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double d = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
+  return d;
+}
+
+}  // namespace
+
+// The paper's Fig. 6 cases (section 6): a 90-degree bend whose inner radius (0.2) is smaller
+// than the detail height, so displacement vectors fold while displacement volumes do not.
+class PaperBend : public ::testing::TestWithParam<cases::DetailKind> {};
+
+TEST_P(PaperBend, VolumesAvoidTheFoldsThatVectorsMake) {
+  const cases::CylinderCase c = make_case(GetParam(), 8000);
+  ASSERT_LT(c.inner_bend_radius, c.max_detail_height);
+  const Outcome o = run_bend(c);
+  EXPECT_EQ(o.input_pairs, 0u);
+  EXPECT_EQ(o.volumes_pairs, 0u) << c.name;
+  EXPECT_GT(o.vectors_pairs, 0u) << c.name;
+  EXPECT_TRUE(o.stats.converged);
+  EXPECT_LE(o.volumes.max_relative_error, 1e-3);
+  EXPECT_LE(o.volumes.rms_relative_error, 1e-4);
+  EXPECT_LE(std::abs(o.volumes.total_volume_change), 1e-3);
+  // Vectors do not keep the volumes: the bend changes them by far more than the tolerance.
+  EXPECT_GT(o.vectors.max_relative_error, 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Fig6, PaperBend, ::testing::Values(cases::DetailKind::Bumps, cases::DetailKind::Cuboid),
+                         [](const auto& info) { return std::string(cases::to_string(info.param)); });
+
+TEST(Reconstruction, RingsBendKeepsVolumesAndCutsVectorFolds) {
+  // Ring crests are taller than the inner bend radius and get squeezed together; volumes keep
+  // the prisms exactly and leave far fewer intersecting pairs than vectors (not yet none: see
+  // the README's measured results).
+  const Outcome o = run_bend(make_case(cases::DetailKind::Rings, 8000));
+  EXPECT_LE(o.volumes.max_relative_error, 1e-3);
+  EXPECT_LE(o.volumes.rms_relative_error, 1e-4);
+  EXPECT_LT(o.volumes_pairs * 10, o.vectors_pairs);
+}
+
+TEST(Reconstruction, UneditedBaseGivesBackTheDetailFromTheCleanStart) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  const ReconstructResult r = rec.reconstruct(c.base.vertices);
+  EXPECT_TRUE(r.stats.converged);
+  // The solve starts from p' = q' (r.stats counts the scales it went through), not from the
+  // stored positions.
+  EXPECT_EQ(static_cast<int>(r.stats.finest_cycles_per_scale.size()), rec.options().volume_scales);
+  EXPECT_LE(max_distance(r.positions, c.detail.vertices), 0.005 * bbox_diagonal(c.detail.vertices));
+}
+
+TEST(Reconstruction, CuboidRoundTripStaysWithinItsCurrentBound) {
+  // Regression bound, not the 0.5% target: sharp corners at the open tube ends come back to
+  // within about 1.8% of the diagonal today (see the README).
+  const cases::CylinderCase c = make_case(cases::DetailKind::Cuboid, 8000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const ReconstructResult r = VolumeReconstructor(e).reconstruct(c.base.vertices);
+  EXPECT_LE(max_distance(r.positions, c.detail.vertices), 0.02 * bbox_diagonal(c.detail.vertices));
+}
+
+TEST(Reconstruction, RigidMotionOfTheBaseMovesTheResultRigidly) {
+  // Prism volumes are invariant under rigid motions, and so is every step of the solver. The
+  // volume constraints leave one degree of freedom per vertex, and rounding differences can
+  // stop the inexact (capped-CG) cycles at slightly different points of that solution set, so
+  // the results agree to within a percent of the diagonal, not to round-off.
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  const ReconstructResult a = rec.reconstruct(c.edited_base.vertices);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(1.1, Vec3(0.3, -1, 2).normalized()).toRotationMatrix();
+  const Vec3 t(2.0, 0.5, -1.0);
+  std::vector<Vec3> moved;
+  for (const Vec3& x : c.edited_base.vertices) moved.push_back(R * x + t);
+  const ReconstructResult b = rec.reconstruct(moved);
+  std::vector<Vec3> expected;
+  for (const Vec3& x : a.positions) expected.push_back(R * x + t);
+  EXPECT_LE(max_distance(b.positions, expected), 1e-2 * bbox_diagonal(c.detail.vertices));
+  EXPECT_LE(b.stats.max_relative_error, 1e-4);
+}
+
+TEST(Reconstruction, SolverIsReusableAndDeterministic) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
+  const VolumeReconstructor rec(encode_detail(c.detail, c.base));
+  const std::vector<int> levels = rec.level_vertex_counts();
+  ASSERT_GE(levels.size(), 2u);  // a real hierarchy
+  for (std::size_t l = 1; l < levels.size(); ++l) EXPECT_LT(levels[l - 1], levels[l]);
+  EXPECT_EQ(levels.back(), c.detail.num_vertices());
+  const ReconstructResult a = rec.reconstruct(c.edited_base.vertices);
+  const ReconstructResult b = rec.reconstruct(c.base.vertices);
+  const ReconstructResult a2 = rec.reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(max_distance(a.positions, a2.positions), 0.0);
+  EXPECT_GT(max_distance(a.positions, b.positions), 0.1);
+  EXPECT_EQ(rec.level_vertex_counts(), levels);
+}
+
+TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
+  // The cold solve stops its regularization once it barely moves (with a decayed weight); a warm
+  // restart regularizes a little further, so it stays close but not bitwise at the start.
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
+  const VolumeReconstructor rec(encode_detail(c.detail, c.base));
+  const ReconstructResult a = rec.reconstruct(c.edited_base.vertices);
+  const ReconstructResult b = rec.reconstruct_from(c.edited_base.vertices, a.positions);
+  EXPECT_TRUE(b.stats.converged);
+  EXPECT_LE(b.stats.max_relative_error, 1e-4);
+  EXPECT_LE(max_distance(a.positions, b.positions), 0.02 * bbox_diagonal(c.detail.vertices));
+  // From a perturbed start, the exact warm solve restores the volumes.
+  std::vector<Vec3> noisy = a.positions;
+  for (std::size_t i = 0; i < noisy.size(); ++i) noisy[i] += 1e-3 * Vec3(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(7.0 * i));
+  const ReconstructResult n = rec.reconstruct_from(c.edited_base.vertices, noisy);
+  EXPECT_TRUE(n.stats.converged);
+  EXPECT_LE(n.stats.max_relative_error, 1e-4);
+}
+
+TEST(Reconstruction, RejectsBadInput) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  std::vector<Vec3> wrong(c.base.vertices.begin(), c.base.vertices.end() - 2);
+  EXPECT_THROW(rec.reconstruct(wrong), InvalidInput);
+  std::vector<Vec3> nan_base = c.edited_base.vertices;
+  nan_base[5][2] = std::nan("");
+  EXPECT_THROW(rec.reconstruct(nan_base), InvalidInput);
+  EXPECT_THROW(rec.reconstruct_from(c.base.vertices, std::vector<Vec3>(3)), InvalidInput);
+  ReconstructOptions bad;
+  bad.volume_scales = 0;
+  EXPECT_THROW(VolumeReconstructor(e, bad), InvalidInput);
+  bad = ReconstructOptions{};
+  bad.coarsening_ratio = 1.5;
+  EXPECT_THROW(VolumeReconstructor(e, bad), InvalidInput);
+  DetailEncoding broken = e;
+  broken.target_volumes.pop_back();
+  EXPECT_THROW(VolumeReconstructor{broken}, InvalidInput);
+}
