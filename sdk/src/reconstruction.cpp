@@ -26,12 +26,9 @@ struct Level {
   std::vector<Face> faces;
   std::vector<double> targets;
   double mean_abs_target = 0.0;
-  std::vector<int> vf_offsets, vf_faces;
-  std::vector<std::uint8_t> vf_corners;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
   std::vector<double> weights;
   std::vector<int> inserted, ring_offsets, ring_vertices;
-  int max_valence = 0;
   // Pattern of J J^T (prisms sharing a vertex), kept for every Gauss-Newton step: row j holds
   // (prism k, corner of the shared vertex in j, corner in k), one entry per shared vertex; a
   // pair sharing an edge appears twice. Sorted by k within a row.
@@ -54,7 +51,8 @@ struct GnScratch {
   std::vector<double> r, y, z, p, Ap, diag, values;
 };
 
-// The per-reconstruction working arrays, indexed by original vertex id.
+// The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
+// the sweeps (one State per call, so calls share nothing but the levels' factorizations).
 struct State {
   std::vector<Vec3> P;       // current detail positions
   std::vector<Vec3> Q;       // base points on the edited base
@@ -63,6 +61,10 @@ struct State {
   std::vector<Vec3> P0;      // positions at the start of the current multigrid pass
   std::vector<double> dRho;  // prolongated change of d/f
   std::vector<Vec3> dT;      // prolongated change of the tangential displacement
+  std::vector<double> rho;   // regularization scratch: d/f per level vertex
+  std::vector<Vec3> tdev;    // regularization scratch: tangential deviation per level vertex
+  std::vector<Vec3> before;  // positions before a regularization round
+  GnScratch gn;
 };
 
 }  // namespace
@@ -193,10 +195,6 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < L.faces.size(); ++j)
       for (int c = 0; c < 3; ++c) lf[j][c] = local[L.faces[j][c]];
     const internal::Adjacency adj = internal::build_adjacency(nv, lf);
-    L.vf_offsets = adj.face_offsets;
-    L.vf_faces = adj.faces;
-    L.vf_corners = adj.corners;
-    for (int k = 0; k < nv; ++k) L.max_valence = std::max(L.max_valence, adj.face_offsets[k + 1] - adj.face_offsets[k]);
     build_jj_pattern(lf, adj, L);
     if (finest) {
       // The encoding's own weights (the finest level's vertex ids are the original ones).
@@ -338,12 +336,12 @@ class VolumeReconstructor::Impl {
       project(L, s, h, tol, st, V);
       ++st.cycles;
       if (c + 1 >= max_cycles || opt_.regularization_iterations == 0) break;
-      before_ = s.P;
+      s.before = s.P;
       for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, lambda);
       st.regularization_sweeps += opt_.regularization_iterations;
       lambda *= opt_.regularization_decay;
       double moved = 0.0;
-      for (int i : L.verts) moved = std::max(moved, (s.P[i] - before_[i]).norm());
+      for (int i : L.verts) moved = std::max(moved, (s.P[i] - s.before[i]).norm());
       if (moved <= opt_.fixed_point_tolerance * mean_abs_f_) {
         project(L, s, h, tol, st, V);
         break;
@@ -409,7 +407,7 @@ class VolumeReconstructor::Impl {
   // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
   // the projection of the current positions onto the linearized constraint set.
   void gauss_newton_step(const Level& L, State& s, double h, bool direct, ReconstructStats& st) const {
-    GnScratch& w = gn_;
+    GnScratch& w = s.gn;
     const std::size_t m = L.faces.size();
     w.grad.resize(m);
     w.r.resize(m);
@@ -514,14 +512,14 @@ class VolumeReconstructor::Impl {
   // (relative to its rest offset), both with the original's weights.
   void regularize(const Level& L, State& s, double lambda_scale) const {
     const int nv = static_cast<int>(L.verts.size());
-    rho_.resize(nv);
-    tdev_.resize(nv);
+    s.rho.resize(nv);
+    s.tdev.resize(nv);
     for (int k = 0; k < nv; ++k) {
       const int i = L.verts[k];
       const Vec3 d = s.P[i] - s.Q[i];
       const double hgt = d.dot(s.N[i]);
-      rho_[k] = hgt / guarded_f_[i];
-      tdev_[k] = d - hgt * s.N[i] - s.R[i];
+      s.rho[k] = hgt / guarded_f_[i];
+      s.tdev[k] = d - hgt * s.N[i] - s.R[i];
     }
     const double ll = opt_.length_lambda * lambda_scale, lt = opt_.tangential_lambda * lambda_scale;
     for (int k = 0; k < nv; ++k) {
@@ -530,15 +528,15 @@ class VolumeReconstructor::Impl {
       double avg_rho = 0.0;
       Vec3 avg_t = Vec3::Zero();
       for (int t = b; t < e; ++t) {
-        avg_rho += L.weights[t] * rho_[L.nb[t]];
-        avg_t += L.weights[t] * tdev_[L.nb[t]];
+        avg_rho += L.weights[t] * s.rho[L.nb[t]];
+        avg_t += L.weights[t] * s.tdev[L.nb[t]];
       }
       const int i = L.verts[k];
       const Vec3& n = s.N[i];
-      const double hgt = (rho_[k] + ll * (avg_rho - rho_[k])) * guarded_f_[i];
-      Vec3 lap = avg_t - tdev_[k];
+      const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
+      Vec3 lap = avg_t - s.tdev[k];
       lap -= lap.dot(n) * n;
-      s.P[i] = s.Q[i] + hgt * n + s.R[i] + tdev_[k] + lt * lap;
+      s.P[i] = s.Q[i] + hgt * n + s.R[i] + s.tdev[k] + lt * lap;
     }
   }
 
@@ -578,11 +576,6 @@ class VolumeReconstructor::Impl {
   double mean_abs_f_ = 0.0;
   std::vector<Level> levels_;
   double setup_seconds_ = 0.0;
-  // Scratch of the regularization sweep (reused between calls; not thread-safe across calls).
-  mutable std::vector<double> rho_;
-  mutable std::vector<Vec3> tdev_;
-  mutable GnScratch gn_;
-  mutable std::vector<Vec3> before_;
 };
 
 VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)

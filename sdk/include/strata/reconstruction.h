@@ -118,8 +118,10 @@ struct WarmStartOptions {
 };
 
 //! The volumetric reconstruction operator for one encoding. Construction builds the multigrid
-//! hierarchy (decimation of the detail connectivity, per-level targets and weights) once; every
-//! reconstruct() call over an edited base reuses it.
+//! hierarchy (decimation of the detail connectivity, per-level targets and weights, and the
+//! symbolic analysis of each level's volume system) once; every reconstruct() call over an
+//! edited base reuses it. The calls refactorize that kept analysis, so one object must not be
+//! used from two threads at once (use one object per thread).
 class VolumeReconstructor {
  public:
   //! \throw InvalidInput if the encoding is inconsistent or options are out of range.
