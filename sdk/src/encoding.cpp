@@ -102,41 +102,22 @@ class Encoder {
     const auto hit = tree_.closest(p);
     const double dc = std::sqrt(hit.distance_sq);
     const double T = opt_.max_distance_ratio * dc + 1e-12;
-    collect_rings(i, hit.face);
+    // Search outwards ring by ring and stop after the first ring (past the closest face's
+    // neighbourhood) that yields a projection: nearer solutions lie in the inner rings.
+    ring_.clear();
+    ring_.push_back(hit.face);
+    mark_[hit.face] = i;
     int found = 0;
     double best = INFINITY;
     BasePoint bp;
     Vec3 best_q = Vec3::Zero();
-    for (int f : ring_) {
-      const Face& F = base_.faces[f];
-      const Vec3 &x0 = base_.vertices[F[0]], &n0 = normals_[F[0]];
-      const Vec3 a1 = base_.vertices[F[1]] - x0, b1 = normals_[F[1]] - n0;
-      const Vec3 a2 = base_.vertices[F[2]] - x0, b2 = normals_[F[2]] - n0;
-      const Vec3 a3 = p - x0, b3 = -n0;
-      const double c[4] = {det3(a1, a2, a3), det3(b1, a2, a3) + det3(a1, b2, a3) + det3(a1, a2, b3),
-                           det3(b1, b2, a3) + det3(b1, a2, b3) + det3(a1, b2, b3), det3(b1, b2, b3)};
-      double roots[3];
-      const int nr = cubic_roots_in(c, T, roots);
-      for (int r = 0; r < nr; ++r) {
-        const double t = roots[r];
-        const Vec3 y0 = x0 + t * n0, y1 = base_.vertices[F[1]] + t * normals_[F[1]],
-                   y2 = base_.vertices[F[2]] + t * normals_[F[2]];
-        Vec3 b = barycentric(p, y0, y1, y2);
-        if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
-        b = b.cwiseMax(0.0);
-        b /= b.sum();
-        const Vec3 q = b[0] * x0 + b[1] * base_.vertices[F[1]] + b[2] * base_.vertices[F[2]];
-        const double d = (p - q).norm();
-        if (d > T) continue;
-        // The same point found through two faces sharing an edge is not an ambiguity.
-        if (found == 0 || (q - best_q).norm() > 1e-9 * (1.0 + d)) ++found;
-        if (d < best) {
-          best = d;
-          best_q = q;
-          bp.face = f;
-          bp.bary = b;
-        }
-      }
+    std::size_t begin = 0;  // first face of the ring being tested
+    for (int r = 0; r <= opt_.search_rings; ++r) {
+      const std::size_t end = ring_.size();
+      for (std::size_t k = begin; k < end; ++k) test_face(ring_[k], p, T, found, best, best_q, bp);
+      if (found > 0 && r >= 1) break;
+      if (r < opt_.search_rings) grow_ring(i, begin);
+      begin = end;
     }
     if (found == 0) {
       ++report.num_fallback;
@@ -150,24 +131,51 @@ class Encoder {
   }
 
  private:
-  // Faces within opt_.search_rings vertex-rings of `seed`, into ring_.
-  void collect_rings(int stamp, int seed) {
-    ring_.clear();
-    ring_.push_back(seed);
-    mark_[seed] = stamp;
-    std::size_t begin = 0;
-    for (int r = 0; r < opt_.search_rings; ++r) {
-      const std::size_t end = ring_.size();
-      for (std::size_t k = begin; k < end; ++k)
-        for (int v : base_.faces[ring_[k]])
-          for (int s = adj_.face_offsets[v]; s < adj_.face_offsets[v + 1]; ++s) {
-            const int g = adj_.faces[s];
-            if (mark_[g] != stamp) {
-              mark_[g] = stamp;
-              ring_.push_back(g);
-            }
+  // Appends the faces sharing a vertex with ring_[begin..) that are not yet marked.
+  void grow_ring(int stamp, std::size_t begin) {
+    const std::size_t end = ring_.size();
+    for (std::size_t k = begin; k < end; ++k)
+      for (int v : base_.faces[ring_[k]])
+        for (int s = adj_.face_offsets[v]; s < adj_.face_offsets[v + 1]; ++s) {
+          const int g = adj_.faces[s];
+          if (mark_[g] != stamp) {
+            mark_[g] = stamp;
+            ring_.push_back(g);
           }
-      begin = end;
+        }
+  }
+
+  // Solves for the points of face f whose interpolated normal passes through p (the roots t of
+  // det[y1 - y0, y2 - y0, p - y0] = 0 with y_k = x_k + t n_k) and keeps the nearest one inside.
+  void test_face(int f, const Vec3& p, double T, int& found, double& best, Vec3& best_q, BasePoint& bp) const {
+    const Face& F = base_.faces[f];
+    const Vec3 &x0 = base_.vertices[F[0]], &n0 = normals_[F[0]];
+    const Vec3 a1 = base_.vertices[F[1]] - x0, b1 = normals_[F[1]] - n0;
+    const Vec3 a2 = base_.vertices[F[2]] - x0, b2 = normals_[F[2]] - n0;
+    const Vec3 a3 = p - x0, b3 = -n0;
+    const double c[4] = {det3(a1, a2, a3), det3(b1, a2, a3) + det3(a1, b2, a3) + det3(a1, a2, b3),
+                         det3(b1, b2, a3) + det3(b1, a2, b3) + det3(a1, b2, b3), det3(b1, b2, b3)};
+    double roots[3];
+    const int nr = cubic_roots_in(c, T, roots);
+    for (int r = 0; r < nr; ++r) {
+      const double t = roots[r];
+      const Vec3 y0 = x0 + t * n0, y1 = base_.vertices[F[1]] + t * normals_[F[1]],
+                 y2 = base_.vertices[F[2]] + t * normals_[F[2]];
+      Vec3 b = barycentric(p, y0, y1, y2);
+      if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
+      b = b.cwiseMax(0.0);
+      b /= b.sum();
+      const Vec3 q = b[0] * x0 + b[1] * base_.vertices[F[1]] + b[2] * base_.vertices[F[2]];
+      const double d = (p - q).norm();
+      if (d > T) continue;
+      // The same point found through two faces sharing an edge is not an ambiguity.
+      if (found == 0 || (q - best_q).norm() > 1e-9 * (1.0 + d)) ++found;
+      if (d < best) {
+        best = d;
+        best_q = q;
+        bp.face = f;
+        bp.bary = b;
+      }
     }
   }
 
