@@ -35,6 +35,9 @@ struct Level {
   std::vector<int> jj_offsets;
   std::vector<int> jj_prism;
   std::vector<std::uint8_t> jj_corner_j, jj_corner_k;
+  // The same rows with each prism k once (the matrix's sparsity): jj_col[jj_row[j] ..
+  // jj_row[j+1]), and the merged entry each shared-vertex entry above adds to.
+  std::vector<int> jj_row, jj_col, jj_entry;
   // The direct solver of J W^-1 J^T: its lower triangle with the pattern fixed, where each
   // pattern entry lands in its value array (-1: upper triangle, skipped), the diagonal's slots,
   // and the Cholesky factorization whose symbolic analysis is done once per level.
@@ -223,6 +226,7 @@ class VolumeReconstructor::Impl {
   static void build_jj_pattern(const std::vector<Face>& lf, const internal::Adjacency& adj, Level& L) {
     const std::size_t m = lf.size();
     L.jj_offsets.assign(m + 1, 0);
+    L.jj_row.assign(1, 0);
     struct E {
       int k;
       std::uint8_t cj, ck;
@@ -240,14 +244,18 @@ class VolumeReconstructor::Impl {
         L.jj_prism.push_back(e.k);
         L.jj_corner_j.push_back(e.cj);
         L.jj_corner_k.push_back(e.ck);
+        if (L.jj_col.size() == static_cast<std::size_t>(L.jj_row.back()) || L.jj_col.back() != e.k)
+          L.jj_col.push_back(e.k);
+        L.jj_entry.push_back(static_cast<int>(L.jj_col.size()) - 1);
       }
       L.jj_offsets[j + 1] = static_cast<int>(L.jj_prism.size());
+      L.jj_row.push_back(static_cast<int>(L.jj_col.size()));
     }
     std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(L.jj_prism.size() / 2 + m);
+    trip.reserve(L.jj_col.size() / 2 + m);
     for (std::size_t j = 0; j < m; ++j)
-      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
-        if (L.jj_prism[t] <= static_cast<int>(j)) trip.emplace_back(static_cast<int>(j), L.jj_prism[t], 1.0);
+      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
+        if (L.jj_col[t] <= static_cast<int>(j)) trip.emplace_back(static_cast<int>(j), L.jj_col[t], 1.0);
     L.jj.resize(static_cast<int>(m), static_cast<int>(m));
     L.jj.setFromTriplets(trip.begin(), trip.end());
     L.jj.makeCompressed();
@@ -256,26 +264,44 @@ class VolumeReconstructor::Impl {
       const int b = L.jj.outerIndexPtr()[col], e = L.jj.outerIndexPtr()[col + 1];
       return static_cast<int>(std::lower_bound(inner + b, inner + e, row) - inner);
     };
-    L.jj_slot.assign(L.jj_prism.size(), -1);
+    L.jj_slot.assign(L.jj_col.size(), -1);
     L.jj_diag_slot.resize(m);
     for (std::size_t j = 0; j < m; ++j) {
       L.jj_diag_slot[j] = slot(static_cast<int>(j), static_cast<int>(j));
-      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
-        if (L.jj_prism[t] <= static_cast<int>(j)) L.jj_slot[t] = slot(static_cast<int>(j), L.jj_prism[t]);
+      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
+        if (L.jj_col[t] <= static_cast<int>(j)) L.jj_slot[t] = slot(static_cast<int>(j), L.jj_col[t]);
     }
     L.llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
     L.llt->analyzePattern(L.jj);
   }
 
-  // Writes J J^T (+ a tiny diagonal shift) for gradients g into L.jj's fixed pattern.
-  static void assemble(const Level& L, const std::vector<std::array<Vec3, 3>>& g) {
+  // J J^T's values on the merged pattern for gradients g (dot products of the gradients of the
+  // shared vertices), and the inverse diagonal.
+  static void jj_values(const Level& L, const std::vector<std::array<Vec3, 3>>& g, std::vector<double>& values,
+                        std::vector<double>& inv_diag) {
+    const std::size_t m = L.faces.size();
+    values.assign(L.jj_col.size(), 0.0);
+    for (std::size_t j = 0; j < m; ++j)
+      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
+        values[L.jj_entry[t]] += g[j][L.jj_corner_j[t]].dot(g[L.jj_prism[t]][L.jj_corner_k[t]]);
+    inv_diag.resize(m);
+    for (std::size_t j = 0; j < m; ++j) {
+      double d = 0.0;
+      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
+        if (L.jj_col[t] == static_cast<int>(j)) d = values[t];
+      inv_diag[j] = d > 0 ? 1.0 / d : 0.0;
+    }
+  }
+
+  // Writes the lower triangle of J J^T (+ a tiny diagonal shift) into L.jj's fixed pattern.
+  static void assemble(const Level& L, const std::vector<double>& values) {
     const std::size_t m = L.faces.size();
     double* val = L.jj.valuePtr();
     std::fill(val, val + L.jj.nonZeros(), 0.0);
     double max_diag = 0.0;
     for (std::size_t j = 0; j < m; ++j) {
-      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
-        if (L.jj_slot[t] >= 0) val[L.jj_slot[t]] += g[j][L.jj_corner_j[t]].dot(g[L.jj_prism[t]][L.jj_corner_k[t]]);
+      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
+        if (L.jj_slot[t] >= 0) val[L.jj_slot[t]] += values[t];
       max_diag = std::max(max_diag, val[L.jj_diag_slot[j]]);
     }
     const double eps = 1e-10 * max_diag + 1e-300;
@@ -421,21 +447,12 @@ class VolumeReconstructor::Impl {
       rr += w.r[j] * w.r[j];
     }
     // J J^T's values on the kept pattern; then each CG product is a plain sparse row sweep.
-    w.values.resize(L.jj_prism.size());
-    for (std::size_t j = 0; j < m; ++j) {
-      double d = 0.0;
-      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t) {
-        const int k = L.jj_prism[t];
-        w.values[t] = w.grad[j][L.jj_corner_j[t]].dot(w.grad[k][L.jj_corner_k[t]]);
-        if (k == static_cast<int>(j)) d += w.values[t];
-      }
-      w.diag[j] = d > 0 ? 1.0 / d : 0.0;
-    }
+    jj_values(L, w.grad, w.values, w.diag);
     auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
       out.resize(m);
       for (std::size_t j = 0; j < m; ++j) {
         double acc = 0.0;
-        for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t) acc += w.values[t] * x[L.jj_prism[t]];
+        for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t) acc += w.values[t] * x[L.jj_col[t]];
         out[j] = acc;
       }
     };
@@ -457,7 +474,7 @@ class VolumeReconstructor::Impl {
   // gradients are normal and J J^T is singular, factorizable.
   void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
     const std::size_t m = L.faces.size();
-    assemble(L, w.grad);
+    assemble(L, w.values);
     L.llt->factorize(L.jj);
     if (L.llt->info() != Eigen::Success) throw SolverError("Cholesky factorization of the volume step failed");
     Eigen::Map<const Eigen::VectorXd> r(w.r.data(), static_cast<Eigen::Index>(m));
