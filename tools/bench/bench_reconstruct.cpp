@@ -1,0 +1,416 @@
+// strata_bench: timings, throughput, peak memory and accuracy of the volumetric reconstruction on
+// the paper's bent-cylinder cases (section 6), one forked child process per size so that the peak
+// resident set size is per size. Prints one JSON document (stdout, and --out FILE if given);
+// progress lines go to stderr. A measurement: exits 0 even when targets fail, non-zero on errors.
+//
+// Single-thread: the reconstruction is single-threaded; CHOLMOD's OpenMP pool is pinned to one
+// thread (OMP_NUM_THREADS=1, set by re-executing when unset); the self-intersection search runs
+// with IntersectionOptions::parallel = false.
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "paper_cases.h"
+#include "strata/encoding.h"
+#include "strata/intersections.h"
+#include "strata/metrics.h"
+#include "strata/reconstruction.h"
+
+namespace {
+
+using json = nlohmann::json;
+using namespace strata;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// CPU seconds of this process (all threads): less sensitive than wall time to a loaded machine.
+double cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+long long max_rss_bytes() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<long long>(ru.ru_maxrss) * 1024;  // Linux reports kilobytes
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos)
+      return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string a, b, c;
+  in >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+struct Args {
+  std::vector<int> sizes{10000, 100000, 1000000};
+  cases::DetailKind detail = cases::DetailKind::Bumps;
+  std::string out;
+  double max_seconds = 900.0;
+};
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  auto value = [&](int& i) -> std::string {
+    if (i + 1 >= argc) throw std::runtime_error(std::string(argv[i]) + " needs a value");
+    return argv[++i];
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string opt = argv[i];
+    if (opt == "--sizes") {
+      a.sizes.clear();
+      std::stringstream ss(value(i));
+      for (std::string s; std::getline(ss, s, ',');) {
+        std::size_t used = 0;
+        const int n = std::stoi(s, &used);
+        if (used != s.size() || n <= 0) throw std::runtime_error("bad size '" + s + "'");
+        a.sizes.push_back(n);
+      }
+      if (a.sizes.empty()) throw std::runtime_error("--sizes is empty");
+    } else if (opt == "--case") {
+      const std::string v = value(i);
+      const auto kind = cases::parse_detail_kind(v);
+      if (!kind) throw std::runtime_error("unknown case '" + v + "' (bumps, rings or cuboid)");
+      a.detail = *kind;
+    } else if (opt == "--out") {
+      a.out = value(i);
+    } else if (opt == "--max-seconds") {
+      a.max_seconds = std::stod(value(i));
+      if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
+    } else {
+      throw std::runtime_error("unknown argument '" + opt + "'");
+    }
+  }
+  return a;
+}
+
+// Everything measured for one size; runs in the child process.
+json run_size(const Args& args, int size, long long parent_rss) {
+  const long long start_rss = max_rss_bytes();
+  const std::string tag = "strata_bench [" + std::to_string(size) + "]: ";
+  auto log = [&](const std::string& s) { std::cerr << tag << s << std::endl; };
+  json sec, cpu, rss;
+  auto timed = [&](const char* name, auto&& f) {
+    log(std::string(name) + "...");
+    const auto t0 = Clock::now();
+    const double c0 = cpu_seconds();
+    auto r = f();
+    sec[name] = since(t0);
+    cpu[name] = cpu_seconds() - c0;
+    rss[name] = max_rss_bytes();
+    log(std::string(name) + " done in " + std::to_string(sec[name].get<double>()) + " s");
+    return r;
+  };
+  IntersectionOptions io;
+  io.collect_pairs = true;
+  io.parallel = false;
+
+  cases::CylinderCaseOptions co;
+  co.detail = args.detail;
+  co.target_detail_triangles = size;
+  cases::CylinderCase c = timed("generate", [&] { return cases::make_cylinder_case(co); });
+  DetailEncoding enc = timed("encode", [&] { return encode_detail(c.detail, c.base); });
+  const std::vector<Vec3> edited = std::move(c.edited_base.vertices);
+  const int base_vertices = c.base.num_vertices(), base_faces = c.base.num_faces();
+  c = {};  // an application keeps only the encoding and the edited base
+
+  log("setup (hierarchy + factorization analysis)...");
+  const VolumeReconstructor rec(std::move(enc));
+  sec["setup"] = rec.setup_seconds();
+  rss["setup"] = max_rss_bytes();
+  const DetailEncoding& e = rec.encoding();
+  const ReconstructResult r = timed("reconstruct", [&] { return rec.reconstruct(edited); });
+  const ReconstructStats& st = r.stats;
+  sec["frames"] = st.seconds_frames;
+  sec["solve"] = st.seconds_solve;
+
+  const BaseFrames frames = evaluate_base_frames(e, edited);
+  const VolumeMetrics vm = timed("volume_metrics", [&] { return volume_metrics(e, frames, r.positions); });
+  const std::vector<Vec3> vec = timed("vectors", [&] { return reconstruct_vectors(e, frames); });
+  const VolumeMetrics vv = volume_metrics(e, frames, vec);
+  const auto in = timed("intersections_input", [&] { return find_self_intersections(e.detail_rest, e.detail_faces, io); });
+  const auto out = timed("intersections_volumes", [&] { return find_self_intersections(r.positions, e.detail_faces, io); });
+  const auto outv = timed("intersections_vectors", [&] { return find_self_intersections(vec, e.detail_faces, io); });
+  const std::size_t new_pairs = count_new_intersections(in, out), new_pairs_v = count_new_intersections(in, outv);
+
+  const long long prisms = static_cast<long long>(e.detail_faces.size());
+  const long long peak = max_rss_bytes();
+  const double solve = st.seconds_solve > 0 ? st.seconds_solve : 1e-300;
+  const bool err_ok = vm.max_relative_error <= 1e-3, rms_ok = vm.rms_relative_error <= 1e-4;
+  auto metrics = [](const VolumeMetrics& m) {
+    return json{{"max_relative_error", m.max_relative_error},
+                {"rms_relative_error", m.rms_relative_error},
+                {"total_volume_change", m.total_volume_change}};
+  };
+  return json{
+      {"size", size},
+      {"case", cases::to_string(args.detail)},
+      {"prisms", prisms},
+      {"detail_vertices", e.num_detail_vertices()},
+      {"base_vertices", base_vertices},
+      {"base_faces", base_faces},
+      {"levels", st.levels},
+      {"level_vertices", st.level_vertices},
+      {"level_faces", st.level_faces},
+      {"seconds", sec},
+      {"cpu_seconds", cpu},
+      {"stats",
+       {{"cycles", st.cycles},
+        {"volume_sweeps", st.volume_sweeps},
+        {"regularization_sweeps", st.regularization_sweeps},
+        {"cg_iterations", st.cg_iterations},
+        {"factorizations", st.factorizations},
+        {"final_sweeps", st.final_sweeps},
+        {"finest_cycles_per_scale", st.finest_cycles_per_scale},
+        {"constraint_updates", st.constraint_updates},
+        {"solver_max_relative_error", st.max_relative_error},
+        {"converged", st.converged}}},
+      {"throughput",
+       {{"constraint_updates_per_second", static_cast<double>(st.constraint_updates) / solve},
+        {"prisms_per_second_per_multigrid_pass",
+         static_cast<double>(prisms) * rec.options().volume_scales / solve}}},
+      {"accuracy", {{"volumes", metrics(vm)}, {"vectors", metrics(vv)}}},
+      {"intersections",
+       {{"input_pairs", in.num_pairs},
+        {"volumes_pairs", out.num_pairs},
+        {"volumes_new_pairs", new_pairs},
+        {"vectors_pairs", outv.num_pairs},
+        {"vectors_new_pairs", new_pairs_v}}},
+      {"memory",
+       {{"parent_baseline_rss_bytes", parent_rss},
+        {"child_start_rss_bytes", start_rss},
+        {"peak_rss_bytes", peak},
+        {"peak_rss_bytes_after_phase", rss},
+        {"bytes_per_prism", static_cast<double>(peak - parent_rss) / static_cast<double>(prisms)}}},
+      {"targets",
+       {{"max_relative_error_le_1e-3", err_ok},
+        {"rms_relative_error_le_1e-4", rms_ok},
+        {"no_new_intersections", new_pairs == 0},
+        {"all", err_ok && rms_ok && new_pairs == 0}}}};
+}
+
+// Runs run_size() in a forked child; kills it after max_seconds. Returns its JSON object, or
+// {"timed_out": true} or {"error": ...}.
+json run_forked(const Args& args, int size, long long parent_rss) {
+  int fd[2];
+  if (pipe(fd) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
+  std::cerr.flush();
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+  if (pid == 0) {
+    close(fd[0]);
+    int code = 0;
+    std::string text;
+    try {
+      text = run_size(args, size, parent_rss).dump();
+    } catch (const std::exception& ex) {
+      text = json{{"size", size}, {"error", ex.what()}}.dump();
+      code = 1;
+    }
+    for (std::size_t done = 0; done < text.size();) {
+      const ssize_t w = write(fd[1], text.data() + done, text.size() - done);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) _exit(2);
+      done += static_cast<std::size_t>(w);
+    }
+    _exit(code);
+  }
+  close(fd[1]);
+  const auto deadline = Clock::now() + std::chrono::duration<double>(args.max_seconds);
+  std::string text;
+  bool timed_out = false;
+  for (char buf[4096];;) {
+    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    if (left <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fd[0], POLLIN, 0};
+    const int ready = poll(&p, 1, static_cast<int>(std::min(left * 1000.0 + 1.0, 60000.0)));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready < 0) throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
+    if (ready == 0) continue;
+    const ssize_t n = read(fd[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;  // EOF: the child has exited (or closed the pipe on its way out)
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+  close(fd[0]);
+  if (timed_out) kill(pid, SIGKILL);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) {
+    std::cerr << "strata_bench [" << size << "]: killed after " << args.max_seconds << " s" << std::endl;
+    return json{{"size", size}, {"timed_out", true}, {"max_seconds", args.max_seconds}};
+  }
+  json j = json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) {
+    std::ostringstream why;
+    why << "child produced no result (status " << status;
+    if (WIFSIGNALED(status)) why << ", signal " << WTERMSIG(status);
+    why << ")";
+    j = json{{"size", size}, {"error", why.str()}};
+  }
+  return j;
+}
+
+const json* find_size(const json& results, int size) {
+  for (const json& r : results)
+    if (r.value("size", 0) == size) return &r;
+  return nullptr;
+}
+bool completed(const json* r) { return r && r->contains("prisms"); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // libgomp reads OMP_NUM_THREADS when it is loaded, before main: re-execute with it set.
+  if (!std::getenv("OMP_NUM_THREADS")) {
+    setenv("OMP_NUM_THREADS", "1", 1);
+    setenv("OPENBLAS_NUM_THREADS", "1", 1);
+    char self[4096];
+    const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) self[n] = '\0';
+    execv(n > 0 ? self : "/proc/self/exe", argv);
+    std::perror("strata_bench: re-exec");
+    return 1;
+  }
+  Args args;
+  try {
+    args = parse_args(argc, argv);
+  } catch (const std::exception& ex) {
+    std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
+              << "[--case bumps|rings|cuboid] [--out FILE.json] [--max-seconds S]" << std::endl;
+    return 2;
+  }
+  try {
+    const long long parent_rss = max_rss_bytes();
+    const std::string load_avg = load_average();
+    json results = json::array();
+    bool errors = false;
+    for (int size : args.sizes) {
+      std::cerr << "strata_bench: size " << size << " (" << cases::to_string(args.detail) << ")" << std::endl;
+      results.push_back(run_forked(args, size, parent_rss));
+      errors = errors || results.back().contains("error");
+    }
+
+    const ReconstructOptions ro;
+    const json* r100k = find_size(results, 100000);
+    const json* r1m = find_size(results, 1000000);
+    auto reconstruct_seconds = [](const json* r) { return (*r)["seconds"]["reconstruct"].get<double>(); };
+    json ratio = nullptr;
+    if (completed(r100k) && completed(r1m)) ratio = reconstruct_seconds(r1m) / reconstruct_seconds(r100k);
+
+    json per_size_throughput = json::object(), per_size_bytes = json::object();
+    bool any_done = false, thr_ok = true, mem_ok = true, acc_ok = true;
+    for (const json& r : results) {
+      if (!completed(&r)) continue;
+      any_done = true;
+      const double thr = r["throughput"]["prisms_per_second_per_multigrid_pass"].get<double>();
+      const double bpp = r["memory"]["bytes_per_prism"].get<double>();
+      per_size_throughput[std::to_string(r["size"].get<int>())] = thr;
+      per_size_bytes[std::to_string(r["size"].get<int>())] = bpp;
+      thr_ok = thr_ok && thr >= 1e6;
+      mem_ok = mem_ok && bpp <= 1024.0;
+      acc_ok = acc_ok && r["targets"]["all"].get<bool>();
+    }
+    auto verdict = [&](bool ok) { return any_done ? json(ok) : json(nullptr); };
+    json t100k = nullptr, tscale = nullptr;
+    if (completed(r100k)) t100k = reconstruct_seconds(r100k) <= 2.0;
+    else if (r100k && r100k->value("timed_out", false)) t100k = false;
+    if (ratio.is_number()) tscale = ratio.get<double>() <= 12.0;
+    else if (completed(r100k) && r1m && r1m->value("timed_out", false)) tscale = false;
+
+    const json report{
+        {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
+        {"case", cases::to_string(args.detail)},
+        {"sizes", args.sizes},
+        {"max_seconds", args.max_seconds},
+        {"machine",
+         {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
+          {"cpu_model", cpu_model()},
+          {"compiler", __VERSION__},
+          {"load_average_at_start", load_avg},
+          {"load_average_at_end", load_average()},
+#ifdef NDEBUG
+          {"ndebug", true}}},
+#else
+          {"ndebug", false}}},
+#endif
+        {"threads",
+         {{"note", "single thread: the reconstruction is single-threaded, OMP_NUM_THREADS pins CHOLMOD's "
+                   "OpenMP pool, the intersection search runs with IntersectionOptions::parallel = false"},
+          {"OMP_NUM_THREADS", std::getenv("OMP_NUM_THREADS")},
+          {"intersections_parallel", false}}},
+        {"reconstruct_options",
+         {{"volume_scales", ro.volume_scales},
+          {"max_levels", ro.max_levels},
+          {"volume_iterations", ro.volume_iterations},
+          {"regularization_iterations", ro.regularization_iterations},
+          {"max_cycles", ro.max_cycles},
+          {"final_max_cycles", ro.final_max_cycles},
+          {"tolerance", ro.tolerance},
+          {"step_solver", ro.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi_cg"}}},
+        {"parent_baseline_rss_bytes", parent_rss},
+        {"results", results},
+        {"time_ratio_1m_over_100k", ratio},
+        {"targets",
+         {{"throughput_ge_1e6_per_cycle",
+           {{"definition", "prisms_per_second_per_multigrid_pass = prisms * volume_scales / seconds_solve, "
+                           "every completed size"},
+            {"values", per_size_throughput},
+            {"pass", verdict(thr_ok)}}},
+          {"reconstruct_100k_le_2s",
+           {{"definition", "wall time of VolumeReconstructor::reconstruct() (frames + solve; setup excluded)"},
+            {"seconds", completed(r100k) ? json(reconstruct_seconds(r100k)) : json(nullptr)},
+            {"pass", t100k}}},
+          {"scaling_1m_le_12x_100k", {{"ratio", ratio}, {"pass", tscale}}},
+          {"memory_le_1kb_per_prism",
+           {{"definition", "(child peak rss - parent baseline rss) / prisms, whole pipeline, every completed size"},
+            {"values", per_size_bytes},
+            {"pass", verdict(mem_ok)}}},
+          {"accuracy_and_no_new_intersections", verdict(acc_ok)}}}};
+    const std::string text = report.dump(2);
+    std::cout << text << std::endl;
+    if (!args.out.empty()) {
+      std::ofstream f(args.out);
+      f << text << '\n';
+      if (!f) throw std::runtime_error("cannot write " + args.out);
+    }
+    return errors ? 1 : 0;
+  } catch (const std::exception& ex) {
+    std::cerr << "strata_bench: error: " << ex.what() << std::endl;
+    return 1;
+  }
+}
