@@ -52,6 +52,7 @@ struct Level {
 struct GnScratch {
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<double> r, y, z, p, Ap, diag, values;
+  std::vector<Vec3> delta;
 };
 
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
@@ -446,6 +447,7 @@ class VolumeReconstructor::Impl {
       w.r[j] = h * L.targets[j] - g.volume;
       rr += w.r[j] * w.r[j];
     }
+    const double rr0 = rr;
     // J J^T's values on the kept pattern; then each CG product is a plain sparse row sweep.
     jj_values(L, w.grad, w.values, w.diag);
     auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
@@ -461,12 +463,33 @@ class VolumeReconstructor::Impl {
     } else {
       solve_cg(L, w, rr, st, apply);
     }
-    // delta = J^T y.
+    // delta = J^T y, with backtracking: the constraints are only multi-affine, so a full step
+    // from a poor configuration can overshoot; halve it while the residual grows.
+    w.delta.assign(s.P.size(), Vec3::Zero());
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = L.faces[j];
-      for (int c = 0; c < 3; ++c) s.P[f[c]] += w.y[j] * w.grad[j][c];
+      for (int c = 0; c < 3; ++c) w.delta[f[c]] += w.y[j] * w.grad[j][c];
+    }
+    double alpha = 1.0;
+    for (int i : L.verts) s.P[i] += w.delta[i];
+    for (int halvings = 0; halvings < 4; ++halvings) {
+      if (residual_norm2(L, s, h) <= rr0) break;
+      alpha *= 0.5;
+      for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
+      ++st.step_halvings;
     }
     st.constraint_updates += static_cast<long long>(m);
+  }
+
+  // sum_j (h V*_j - V_j)^2 at the current positions.
+  static double residual_norm2(const Level& L, const State& s, double h) {
+    double rr = 0.0;
+    for (std::size_t j = 0; j < L.faces.size(); ++j) {
+      const Face& f = L.faces[j];
+      const double r = h * L.targets[j] - prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+      rr += r * r;
+    }
+    return rr;
   }
 
   // (J W^-1 J^T + eps I) y = r by the level's Cholesky factorization (numeric part only; the

@@ -97,6 +97,7 @@ struct ReconstructStats {
   bool converged = false;            //!< max_relative_error <= tolerance
   double seconds_frames = 0.0;       //!< evaluating the base points on the edited base
   double seconds_solve = 0.0;        //!< the multigrid solve
+  long long step_halvings = 0;      //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;     //!< numeric Cholesky factorizations (direct step solver)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume sweeps (for throughput)
