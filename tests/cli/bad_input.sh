@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Bad input never crashes `strata` and never leaves an output file: each case below must exit
+# non-zero with a `strata: error:` message naming the offending file (or option), and the output
+# directory must stay empty. Usage: bash bad_input.sh <path-to-strata> <tests/data dir>
+set -euo pipefail
+STRATA=${1:?usage: bad_input.sh <path-to-strata> <tests/data dir>}
+STRATA=$(cd "$(dirname "$STRATA")" && pwd)/$(basename "$STRATA")  # absolute: the script changes directory
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+cd "$TMP"
+
+"$STRATA" generate --case cuboid --triangles 500 --out-dir good >/dev/null
+mkdir out
+failures=0
+
+# expect_fail <label> <text the message must contain> <strata arguments...>
+expect_fail() {
+  local label=$1 needle=$2
+  shift 2
+  local rc=0
+  "$STRATA" "$@" >stdout.txt 2>stderr.txt || rc=$?
+  if [ "$rc" -eq 0 ]; then
+    echo "FAIL [$label]: exited 0" >&2; failures=$((failures + 1))
+  elif [ "$rc" -ne 1 ] && [ "$rc" -ne 2 ]; then
+    echo "FAIL [$label]: exit code $rc (crash?), expected 1 or 2" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+  elif ! grep -q "^strata: error: " stderr.txt; then
+    echo "FAIL [$label]: no 'strata: error:' line on stderr:" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+  elif ! grep -qF -- "$needle" stderr.txt; then
+    echo "FAIL [$label]: message does not mention '$needle':" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+  fi
+  if [ -n "$(ls -A out)" ]; then
+    echo "FAIL [$label]: output left behind: $(ls -A out)" >&2; failures=$((failures + 1))
+    rm -rf out/* out/.[!.]* 2>/dev/null || true
+  fi
+}
+
+# reconstruct with one of the three inputs replaced
+rec() {  # rec <detail> <base> <edited base> [extra args...]
+  local d=$1 b=$2 e=$3
+  shift 3
+  echo reconstruct -q --detail "$d" --base "$b" --edited-base "$e" -o out/result.obj --report out/report.json "$@"
+}
+
+# Bad files.
+printf 'this is not a mesh\nv 1 2\nf 1 2 3 4 5\n' >garbage.obj
+python3 -c "import random,sys; r=random.Random(7); sys.stdout.buffer.write(bytes(r.randrange(256) for _ in range(4096)))" >binary.obj
+head -c 2000 good/detail.obj >truncated.obj          # cuts a line in half
+awk 'NR==1{print; next} /^v / && !done {print "v nan 0 0"; done=1; next} {print}' good/detail.obj >nan.obj
+# One vertex more (drop the writer's "# N vertices, M faces" comment, which the reader checks).
+awk '!/^#/ {print} END{print "v 0 0 0"}' good/edited_base.obj >extra_vertex.obj
+python3 - <<'PY'
+# Same vertex count, different faces: swap the first two faces.
+lines = open("good/edited_base.obj").read().splitlines()
+idx = [i for i, l in enumerate(lines) if l.startswith("f ")]
+lines[idx[0]], lines[idx[1]] = lines[idx[1]], lines[idx[0]]
+open("swapped_faces.obj", "w").write("\n".join(lines) + "\n")
+PY
+cp good/detail.obj detail.xyz
+
+G=good
+expect_fail "missing detail"        missing.obj      $(rec missing.obj $G/base.obj $G/edited_base.obj)
+expect_fail "missing base"          nobase.obj       $(rec $G/detail.obj nobase.obj $G/edited_base.obj)
+expect_fail "garbage text"          garbage.obj      $(rec garbage.obj $G/base.obj $G/edited_base.obj)
+expect_fail "garbage bytes"         binary.obj       $(rec binary.obj $G/base.obj $G/edited_base.obj)
+expect_fail "truncated OBJ"         truncated.obj    $(rec truncated.obj $G/base.obj $G/edited_base.obj)
+expect_fail "NaN coordinate"        nan.obj          $(rec nan.obj $G/base.obj $G/edited_base.obj)
+expect_fail "unsupported extension" detail.xyz       $(rec detail.xyz $G/base.obj $G/edited_base.obj)
+expect_fail "edited base +1 vertex" "extra_vertex.obj: edited base has" $(rec $G/detail.obj $G/base.obj extra_vertex.obj)
+expect_fail "edited base faces"     swapped_faces.obj $(rec $G/detail.obj $G/base.obj swapped_faces.obj)
+expect_fail "edited base = detail"  detail.obj       $(rec $G/detail.obj $G/base.obj $G/detail.obj)
+expect_fail "unknown method"        bogus            $(rec $G/detail.obj $G/base.obj $G/edited_base.obj --method bogus)
+expect_fail "vectors, bad base"     garbage.obj      $(rec $G/detail.obj garbage.obj $G/edited_base.obj --method vectors)
+expect_fail "output dir missing"    nodir/result.obj reconstruct --detail $G/detail.obj --base $G/base.obj \
+  --edited-base $G/edited_base.obj -o nodir/result.obj
+expect_fail "report dir missing"    nodir/r.json     reconstruct --detail $G/detail.obj --base $G/base.obj \
+  --edited-base $G/edited_base.obj -o out/result.obj --report nodir/r.json
+expect_fail "stats missing"         missing.obj      stats missing.obj
+expect_fail "stats truncated"       truncated.obj    stats --json truncated.obj
+expect_fail "generate unknown case" sphere           generate --case sphere --out-dir out/case
+expect_fail "generate bad bend"     bend-degrees     generate --case bumps --bend-degrees 400 --out-dir out/case
+
+if [ "$failures" -ne 0 ]; then
+  echo "bad_input: $failures check(s) failed" >&2
+  exit 1
+fi
+echo "bad_input: all checks passed"

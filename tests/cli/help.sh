@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Every subcommand's --help exits 0 and prints its usage; a missing or unknown subcommand is a usage
+# error (exit 2). Usage: bash help.sh <path-to-strata> <tests/data dir>
+set -euo pipefail
+STRATA=${1:?usage: help.sh <path-to-strata> <tests/data dir>}
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+out=$("$STRATA" --help) || fail "strata --help exited non-zero"
+for sub in reconstruct stats generate demo; do
+  grep -q "$sub" <<<"$out" || fail "strata --help does not list '$sub'"
+  sub_out=$("$STRATA" "$sub" --help) || fail "strata $sub --help exited non-zero"
+  grep -q "Usage: strata $sub" <<<"$sub_out" || fail "strata $sub --help prints no usage line"
+done
+
+set +e
+"$STRATA" >/dev/null 2>&1; rc=$?
+[ "$rc" -eq 2 ] || fail "strata without a subcommand exited $rc, expected 2"
+err=$("$STRATA" frobnicate 2>&1 >/dev/null); rc=$?
+[ "$rc" -eq 2 ] || fail "strata frobnicate exited $rc, expected 2"
+grep -q "^strata: error: " <<<"$err" || fail "usage error message not prefixed 'strata: error: ': $err"
+"$STRATA" reconstruct >/dev/null 2>&1; rc=$?
+[ "$rc" -eq 2 ] || fail "strata reconstruct without options exited $rc, expected 2"
+set -e
+echo "help: all checks passed"

@@ -1,0 +1,151 @@
+// `strata reconstruct`: encode a detail mesh over a base, rebuild it over an edited base.
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "common.h"
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+
+namespace strata::cli {
+
+namespace {
+
+struct ReconstructCmdOptions {
+  std::string detail;
+  std::string base;
+  std::string edited_base;
+  std::string method = "volumes";
+  std::string output;
+  std::string report;  // empty: no report
+  bool quiet = false;
+};
+
+void print_summary(std::ostream& os, const json& r) {
+  const json& in = r["inputs"];
+  const json& enc = r["encoding"];
+  const json& vm = r["volume_metrics"];
+  const json& is = r["intersections"];
+  const json& t = r["timing_seconds"];
+  auto mesh_line = [](const json& m) {
+    return m["name"].get<std::string>() + ": " + std::to_string(m["vertices"].get<int>()) + " vertices, " +
+           std::to_string(m["faces"].get<int>()) + " faces";
+  };
+  os << "method         " << r["method"].get<std::string>() << "\n"
+     << "detail         " << mesh_line(in["detail"]) << "\n"
+     << "base           " << mesh_line(in["base"]) << "\n"
+     << "edited base    " << in["edited_base"]["name"].get<std::string>() << "\n"
+     << "encoding       " << enc["projected"].get<int>() << " projected, " << enc["fallback"].get<int>()
+     << " fallback, " << enc["ambiguous"].get<int>() << " ambiguous\n"
+     << "prism volumes  max error " << sci(vm["max_relative_error"].get<double>()) << ", RMS "
+     << sci(vm["rms_relative_error"].get<double>()) << " (relative to the mean prism volume)\n"
+     << "total volume   change " << sci(vm["total_volume_change"].get<double>()) << " (relative)\n"
+     << "intersections  " << is["input_pairs"].get<std::size_t>() << " pairs in the input, "
+     << is["output_pairs"].get<std::size_t>() << " in the output, " << is["new_pairs"].get<std::size_t>()
+     << " new\n";
+  const json& it = r["iterations"];
+  if (!it.is_null())
+    os << "solver         " << it["levels"].get<int>() << " levels, " << it["cycles"].get<int>()
+       << " cycles, " << it["volume_sweeps"].get<int>() << " volume + "
+       << it["regularization_sweeps"].get<int>() << " regularization sweeps, "
+       << it["final_sweeps"].get<int>() << " final sweeps, " << it["cg_iterations"].get<long long>()
+       << " CG iterations, " << (it["converged"].get<bool>() ? "converged" : "NOT converged") << "\n";
+  os << "time           read " << fixed(t["read"].get<double>()) << " s, encode "
+     << fixed(t["encode"].get<double>()) << " s, setup " << fixed(t["setup"].get<double>()) << " s, frames "
+     << fixed(t["frames"].get<double>()) << " s, solve " << fixed(t["solve"].get<double>()) << " s, metrics "
+     << fixed(t["metrics"].get<double>()) << " s, write " << fixed(t["write"].get<double>()) << " s, total "
+     << fixed(t["total"].get<double>()) << " s\n"
+     << "output         " << r["output"]["name"].get<std::string>() << "\n";
+  if (r.contains("report")) os << "report         " << r["report"].get<std::string>() << "\n";
+}
+
+int run_reconstruct(const ReconstructCmdOptions& o) {
+  const Log log(o.quiet);
+  const Method method = parse_method(o.method);
+  // Fail on an unwritable destination before the (possibly long) computation.
+  check_mesh_output_path(o.output);
+  if (!o.report.empty()) {
+    check_output_path(o.report);
+    if (same_file_name(o.report, o.output))
+      throw InvalidInput(o.report +
+                         ": the report would overwrite the output mesh; give them different names");
+  }
+
+  PhaseTimes times;
+  log.phase("reading " + o.detail + ", " + o.base + ", " + o.edited_base);
+  Stopwatch sw;
+  const NamedMesh detail = read_named_mesh(o.detail);
+  const NamedMesh base = read_named_mesh(o.base);
+  const NamedMesh edited = read_named_mesh(o.edited_base);
+  times.read = sw.seconds();
+  check_same_connectivity(base, edited);
+
+  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) +
+            " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
+  sw.restart();
+  const DetailEncoding encoding = encode_detail(detail.mesh, base.mesh);
+  times.encode = sw.seconds();
+
+  log.phase("counting self-intersections of the input detail");
+  const TimedIntersections input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
+
+  ReconstructOptions options;
+  options.progress = log.progress(to_string(method));
+  MethodOutcome outcome = run_method(method, {encoding, edited.mesh.vertices, input.result}, options, log);
+  times.setup = outcome.times.setup;
+  times.frames = outcome.times.frames;
+  times.solve = outcome.times.solve;
+  times.metrics = outcome.times.metrics + input.seconds;
+
+  log.phase("writing " + o.output);
+  sw.restart();
+  TriMesh result;
+  result.vertices = std::move(outcome.positions);
+  result.faces = detail.mesh.faces;
+  write_mesh(result, o.output);
+  times.write = sw.seconds();
+
+  json report{{"command", "reconstruct"},
+              {"method", to_string(method)},
+              {"inputs",
+               {{"detail", mesh_json(detail.mesh, detail.name)},
+                {"base", mesh_json(base.mesh, base.name)},
+                {"edited_base", mesh_json(edited.mesh, edited.name)}}},
+              {"output", mesh_json(result, o.output)},
+              {"encoding", encoding_json(encoding.report)},
+              {"volume_metrics", volume_metrics_json(outcome.volume)},
+              {"intersections", intersections_json(input.result.num_pairs, outcome, input.seconds)},
+              {"iterations", iterations_json(outcome.stats)},
+              {"timing_seconds", timing_json(times)}};
+  if (!o.report.empty()) {
+    report["report"] = o.report;
+    write_json_report(report, o.report);
+  }
+  print_summary(std::cout, report);
+  return 0;
+}
+
+}  // namespace
+
+Subcommand register_reconstruct(CLI::App& parent) {
+  auto o = std::make_shared<ReconstructCmdOptions>();
+  CLI::App* app = parent.add_subcommand(
+      "reconstruct", "Rebuild a detail mesh over an edited base, by displacement volumes or vectors");
+  app->add_option("--detail", o->detail, "Detail mesh D (.obj, .off, .ply, .stl)")->required();
+  app->add_option("--base", o->base, "Base mesh S that D's detail is measured from")->required();
+  app->add_option("--edited-base", o->edited_base, "Edited base S': S's vertices moved, S's faces")
+      ->required();
+  app->add_option("--method", o->method,
+                  "volumes (prism volumes preserved) or vectors (normal displacements)")
+      ->check(CLI::IsMember({"volumes", "vectors"}))
+      ->capture_default_str();
+  app->add_option("-o,--output", o->output, "Reconstructed detail mesh to write (atomically)")->required();
+  app->add_option("--report", o->report, "Also write a JSON report (metrics, timings, iterations) here");
+  app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+  app->footer(
+      "Example:\n  strata reconstruct --detail detail.obj --base base.obj --edited-base edited_base.obj \\\n"
+      "      --method volumes -o out.obj --report report.json");
+  return {app, [o] { return run_reconstruct(*o); }};
+}
+
+}  // namespace strata::cli

@@ -1,0 +1,81 @@
+// `strata stats`: size, boundary, extent, volume and self-intersections of one mesh.
+#include <algorithm>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common.h"
+#include "strata/mesh_io.h"
+
+namespace strata::cli {
+
+namespace {
+
+struct StatsCmdOptions {
+  std::string mesh;
+  bool json = false;
+};
+
+//! Undirected edges used by exactly one face.
+std::size_t count_boundary_edges(const TriMesh& mesh) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(3 * mesh.faces.size());
+  for (const Face& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) edges.emplace_back(std::minmax(f[k], f[(k + 1) % 3]));
+  std::sort(edges.begin(), edges.end());
+  std::size_t boundary = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) ++boundary;
+    i = j;
+  }
+  return boundary;
+}
+
+int run_stats(const StatsCmdOptions& o) {
+  const NamedMesh m = read_named_mesh(o.mesh);
+  const std::size_t boundary = count_boundary_edges(m.mesh);
+  Stopwatch sw;
+  IntersectionOptions io;
+  const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces, io);
+  const double isect_seconds = sw.seconds();
+  const json r{{"mesh", m.name},
+               {"vertices", m.mesh.num_vertices()},
+               {"faces", m.mesh.num_faces()},
+               {"boundary_edges", boundary},
+               {"closed", boundary == 0},
+               {"bbox_diagonal", bbox_diagonal(m.mesh.vertices)},
+               {"signed_volume", signed_volume(m.mesh)},
+               {"self_intersecting_pairs", isect.num_pairs},
+               {"intersection_seconds", isect_seconds}};
+  if (o.json) {
+    std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
+    return 0;
+  }
+  std::cout << "mesh                     " << m.name << "\n"
+            << "vertices                 " << m.mesh.num_vertices() << "\n"
+            << "faces                    " << m.mesh.num_faces() << "\n"
+            << "boundary edges           " << boundary << (boundary == 0 ? " (closed)" : " (open)") << "\n"
+            << "bbox diagonal            " << r["bbox_diagonal"].get<double>() << "\n"
+            << "signed volume            " << r["signed_volume"].get<double>()
+            << (boundary == 0 ? "" : " (open mesh: not an enclosed volume)") << "\n"
+            << "self-intersecting pairs  " << isect.num_pairs << " (non-adjacent triangles, found in "
+            << fixed(isect_seconds, 3) << " s)" << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+Subcommand register_stats(CLI::App& parent) {
+  auto o = std::make_shared<StatsCmdOptions>();
+  CLI::App* app = parent.add_subcommand(
+      "stats", "Print a mesh's size, boundary, extent, volume and self-intersecting triangle pairs");
+  app->add_option("mesh", o->mesh, "Mesh file (.obj, .off, .ply, .stl)")->required();
+  app->add_flag("--json", o->json, "Print the statistics as JSON");
+  return {app, [o] { return run_stats(*o); }};
+}
+
+}  // namespace strata::cli

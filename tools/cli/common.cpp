@@ -1,0 +1,255 @@
+#include "common.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <utility>
+
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+
+namespace strata::cli {
+
+namespace fs = std::filesystem;
+
+void Log::phase(const std::string& text) const {
+  if (!quiet_) std::cerr << "strata: " << prefix_ << text << std::endl;
+}
+
+ProgressCallback Log::progress(const std::string& label) const {
+  if (quiet_) return {};
+  auto last = std::make_shared<int>(-1);
+  return [label = prefix_ + label, last](const std::string& phase, double fraction) {
+    const int percent = static_cast<int>(std::lround(100.0 * std::clamp(fraction, 0.0, 1.0)));
+    if (percent == *last) return;
+    *last = percent;
+    std::cerr << "strata: " << label << ": " << phase << " " << percent << "%" << std::endl;
+  };
+}
+
+const char* to_string(Method method) {
+  return method == Method::Volumes ? "volumes" : "vectors";
+}
+
+Method parse_method(const std::string& text) {
+  if (text == "volumes") return Method::Volumes;
+  if (text == "vectors") return Method::Vectors;
+  throw InvalidInput("unknown method '" + text + "' (expected 'volumes' or 'vectors')");
+}
+
+NamedMesh read_named_mesh(const std::string& path) {
+  NamedMesh m;
+  m.name = path;
+  m.mesh = read_mesh(path);  // its errors start with the path
+  return m;
+}
+
+namespace {
+
+std::string face_text(const Face& f) {
+  return "(" + std::to_string(f[0]) + "," + std::to_string(f[1]) + "," + std::to_string(f[2]) + ")";
+}
+
+}  // namespace
+
+void check_same_connectivity(const NamedMesh& base, const NamedMesh& edited) {
+  const std::string what = "the edited base must have the base's connectivity (same vertices and faces)";
+  if (edited.mesh.num_vertices() != base.mesh.num_vertices())
+    throw InvalidInput(edited.name + ": edited base has " + std::to_string(edited.mesh.num_vertices()) +
+                       " vertices, base " + base.name + " has " + std::to_string(base.mesh.num_vertices()) +
+                       "; " + what);
+  if (edited.mesh.num_faces() != base.mesh.num_faces())
+    throw InvalidInput(edited.name + ": edited base has " + std::to_string(edited.mesh.num_faces()) +
+                       " faces, base " + base.name + " has " + std::to_string(base.mesh.num_faces()) + "; " +
+                       what);
+  for (int j = 0; j < base.mesh.num_faces(); ++j) {
+    const Face& a = base.mesh.faces[j];
+    const Face& b = edited.mesh.faces[j];
+    if (a != b)
+      throw InvalidInput(edited.name + ": face " + std::to_string(j) + " of the edited base is " +
+                         face_text(b) + ", in base " + base.name + " it is " + face_text(a) + "; " + what);
+  }
+}
+
+void check_output_path(const std::string& path) {
+  if (path.empty()) throw IoError("output path is empty");
+  const fs::path p(path);
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) throw IoError(path + ": is a directory, expected a file name");
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
+}
+
+bool same_file_name(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec), ec);
+  const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+  return pa.lexically_normal() == pb.lexically_normal();
+}
+
+void check_mesh_output_path(const std::string& path) {
+  check_output_path(path);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::vector<std::string> supported = supported_mesh_extensions();
+  if (std::find(supported.begin(), supported.end(), ext) == supported.end()) {
+    std::string list;
+    for (const std::string& s : supported) list += (list.empty() ? "" : ", ") + s;
+    throw IoError(path + ": unsupported mesh file extension '" + ext + "' (supported: " + list + ")");
+  }
+}
+
+void ensure_directory(const std::string& dir) {
+  if (dir.empty()) throw IoError("output directory name is empty");
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError(dir + ": cannot create directory: " + ec.message());
+  if (!fs::is_directory(dir, ec)) throw IoError(dir + ": exists and is not a directory");
+}
+
+cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triangles, double bend_degrees) {
+  if (triangles < 0) throw InvalidInput("--triangles must be >= 0, got " + std::to_string(triangles));
+  cases::CylinderCaseOptions o;
+  o.detail = kind;
+  o.target_detail_triangles = triangles;
+  o.bend_degrees = bend_degrees;
+  return o;
+}
+
+TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  TimedIntersections t;
+  Stopwatch sw;
+  IntersectionOptions o;
+  o.collect_pairs = true;
+  t.result = find_self_intersections(vertices, faces, o);
+  t.seconds = sw.seconds();
+  return t;
+}
+
+MethodOutcome run_method(Method method, const ReconstructionInputs& in, const ReconstructOptions& options,
+                         const Log& log) {
+  const DetailEncoding& encoding = in.encoding;
+  const std::vector<Vec3>& edited_base = in.edited_base;
+  MethodOutcome out;
+  out.method = method;
+  BaseFrames frames;
+  if (method == Method::Volumes) {
+    Stopwatch sw;
+    log.phase(std::string(to_string(method)) + ": building the multigrid hierarchy (" +
+              std::to_string(encoding.detail_faces.size()) + " prisms)");
+    VolumeReconstructor reconstructor(encoding, options);
+    out.times.setup = sw.seconds();
+    log.phase(std::string(to_string(method)) + ": solving for the prism volumes");
+    ReconstructResult r = reconstructor.reconstruct(edited_base);
+    out.times.frames = r.stats.seconds_frames;
+    out.times.solve = r.stats.seconds_solve;
+    out.positions = std::move(r.positions);
+    out.stats = std::move(r.stats);
+    // The metrics need the base frames; the reconstructor evaluates its own privately.
+    Stopwatch mw;
+    frames = evaluate_base_frames(encoding, edited_base);
+    out.times.metrics += mw.seconds();
+  } else {
+    log.phase(std::string(to_string(method)) + ": displacing along the edited base's normals");
+    Stopwatch sw;
+    frames = evaluate_base_frames(encoding, edited_base);
+    out.times.frames = sw.seconds();
+    sw.restart();
+    out.positions = reconstruct_vectors(encoding, frames);
+    out.times.solve = sw.seconds();
+  }
+  log.phase(std::string(to_string(method)) + ": measuring prism volumes and self-intersections");
+  Stopwatch mw;
+  out.volume = volume_metrics(encoding, frames, out.positions);
+  const TimedIntersections after = find_intersections(out.positions, encoding.detail_faces);
+  out.output_pairs = after.result.num_pairs;
+  out.new_pairs = count_new_intersections(in.input_intersections, after.result);
+  out.intersection_seconds = after.seconds;
+  out.times.metrics += mw.seconds();
+  return out;
+}
+
+json mesh_json(const TriMesh& mesh, const std::string& name) {
+  return json{{"name", name}, {"vertices", mesh.num_vertices()}, {"faces", mesh.num_faces()}};
+}
+
+json encoding_json(const EncodeReport& r) {
+  return json{{"vertices", r.num_vertices},
+              {"projected", r.num_projected},
+              {"fallback", r.num_fallback},
+              {"ambiguous", r.num_ambiguous},
+              {"max_tangential_offset", r.max_tangential_offset},
+              {"seconds", r.seconds}};
+}
+
+json volume_metrics_json(const VolumeMetrics& m) {
+  return json{{"max_relative_error", m.max_relative_error},
+              {"rms_relative_error", m.rms_relative_error},
+              {"total_volume_change", m.total_volume_change},
+              {"total_target_volume", m.total_target},
+              {"total_volume", m.total_volume},
+              {"mean_abs_target_volume", m.mean_abs_target}};
+}
+
+json intersections_json(std::size_t input_pairs, const MethodOutcome& o, double input_seconds) {
+  return json{{"input_pairs", input_pairs},
+              {"output_pairs", o.output_pairs},
+              {"new_pairs", o.new_pairs},
+              {"input_seconds", input_seconds},
+              {"output_seconds", o.intersection_seconds}};
+}
+
+json iterations_json(const std::optional<ReconstructStats>& stats) {
+  if (!stats) return nullptr;
+  const ReconstructStats& s = *stats;
+  return json{{"levels", s.levels},
+              {"level_vertices", s.level_vertices},
+              {"level_faces", s.level_faces},
+              {"cycles", s.cycles},
+              {"finest_cycles_per_scale", s.finest_cycles_per_scale},
+              {"volume_sweeps", s.volume_sweeps},
+              {"regularization_sweeps", s.regularization_sweeps},
+              {"cg_iterations", s.cg_iterations},
+              {"factorizations", s.factorizations},
+              {"final_sweeps", s.final_sweeps},
+              {"constraint_updates", s.constraint_updates},
+              {"solver_max_relative_error", s.max_relative_error},
+              {"solver_rms_relative_error", s.rms_relative_error},
+              {"converged", s.converged}};
+}
+
+json timing_json(const PhaseTimes& t) {
+  return json{{"read", t.read},
+              {"encode", t.encode},
+              {"setup", t.setup},
+              {"frames", t.frames},
+              {"solve", t.solve},
+              {"metrics", t.metrics},
+              {"write", t.write},
+              {"reconstruction", t.reconstruction()},
+              {"total", t.read + t.encode + t.setup + t.frames + t.solve + t.metrics + t.write}};
+}
+
+void write_json_report(const json& report, const std::string& path) {
+  // Replace invalid UTF-8 (e.g. in a file name) instead of throwing.
+  write_text_file_atomically(path, report.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
+}
+
+std::string sci(double value, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*e", digits, value);
+  return buf;
+}
+
+std::string fixed(double value, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, value);
+  return buf;
+}
+
+}  // namespace strata::cli

@@ -1,0 +1,168 @@
+//! \file common.h
+//! Shared pieces of the `strata` command-line tool: subcommand registration, progress lines on
+//! stderr, timing, the reconstruction pipeline both `reconstruct` and `demo` run, and the JSON
+//! blocks of their reports (so that the two reports have the same schema).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "paper_cases.h"
+#include "strata/encoding.h"
+#include "strata/intersections.h"
+#include "strata/mesh.h"
+#include "strata/metrics.h"
+#include "strata/reconstruction.h"
+
+namespace strata::cli {
+
+using json = nlohmann::json;
+
+//! What a subcommand's registration gives back: run() is called after a successful parse when the
+//! subcommand was selected, and returns the process exit code. It may throw strata::Error.
+struct Subcommand {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+// Each subcommand registers its options (held in a struct owned by the returned closure).
+Subcommand register_reconstruct(CLI::App& parent);
+Subcommand register_stats(CLI::App& parent);
+Subcommand register_generate(CLI::App& parent);
+Subcommand register_demo(CLI::App& parent);
+
+//! Wall-clock seconds since construction (or the last restart()).
+class Stopwatch {
+ public:
+  Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+  void restart() { t0_ = std::chrono::steady_clock::now(); }
+
+ private:
+  std::chrono::steady_clock::time_point t0_;
+};
+
+//! Phase and progress lines on stderr ("strata: <text>"); silent when quiet.
+class Log {
+ public:
+  //! \p prefix starts every line after "strata: " (e.g. "bumps: ").
+  explicit Log(bool quiet = false, std::string prefix = {}) : quiet_(quiet), prefix_(std::move(prefix)) {}
+  //! The same log with \p prefix appended to the prefix.
+  Log nested(const std::string& prefix) const { return Log(quiet_, prefix_ + prefix); }
+  void phase(const std::string& text) const;
+  //! A callback for ReconstructOptions::progress that prints "<label>: <phase> NN%" when the
+  //! percentage changes (nothing when quiet).
+  ProgressCallback progress(const std::string& label) const;
+  bool quiet() const { return quiet_; }
+
+ private:
+  bool quiet_;
+  std::string prefix_;
+};
+
+//! The two reconstruction methods the CLI compares.
+enum class Method { Volumes, Vectors };
+const char* to_string(Method method);
+//! "volumes" or "vectors"; throws InvalidInput for anything else.
+Method parse_method(const std::string& text);
+
+//! A mesh and the name it is known by in messages (its path, or a generated case's name).
+struct NamedMesh {
+  TriMesh mesh;
+  std::string name;
+};
+
+//! read_mesh(path) with the path in the name.
+NamedMesh read_named_mesh(const std::string& path);
+
+//! Throws InvalidInput unless \p edited has exactly \p base's connectivity (vertex count and face
+//! list), naming both meshes and the first difference.
+void check_same_connectivity(const NamedMesh& base, const NamedMesh& edited);
+
+//! Throws IoError unless \p path can be created: its directory exists and \p path is not a
+//! directory. Checked before a long computation so that a typo fails at once.
+void check_output_path(const std::string& path);
+//! Whether \p a and \p b name the same file (after making them absolute and normal).
+bool same_file_name(const std::string& a, const std::string& b);
+//! Same as check_output_path, and the extension must be one write_mesh supports.
+void check_mesh_output_path(const std::string& path);
+
+//! Creates \p dir (and its parents) if needed; throws IoError if that fails or it is not a directory.
+void ensure_directory(const std::string& dir);
+
+//! Options of a paper case (Fig. 6) with \p triangles detail triangles (0: the case's default
+//! resolution) and the given bend angle.
+cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triangles, double bend_degrees);
+
+//! Self-intersecting pairs of one mesh, with all pairs collected (for count_new_intersections).
+struct TimedIntersections {
+  IntersectionResult result;
+  double seconds = 0.0;
+};
+TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+
+//! Wall-clock seconds of the phases of one reconstruction (0 for a phase the method lacks).
+struct PhaseTimes {
+  double read = 0.0;     //!< reading (or generating) the three meshes
+  double encode = 0.0;   //!< encode_detail
+  double setup = 0.0;    //!< building the multigrid hierarchy (volumes only)
+  double frames = 0.0;   //!< evaluating the base points on the edited base
+  double solve = 0.0;    //!< the multigrid solve, or the vector displacement
+  double metrics = 0.0;  //!< volume metrics and self-intersection counts
+  double write = 0.0;    //!< writing the output mesh(es)
+  //! Reconstruction proper: setup + frames + solve.
+  double reconstruction() const { return setup + frames + solve; }
+};
+
+//! Everything one method produced over one edited base, and how well it did.
+struct MethodOutcome {
+  Method method = Method::Volumes;
+  std::vector<Vec3> positions;
+  VolumeMetrics volume;
+  std::size_t output_pairs = 0;
+  std::size_t new_pairs = 0;
+  double intersection_seconds = 0.0;      //!< of the output only (the input's is counted once per case)
+  std::optional<ReconstructStats> stats;  //!< volumes only
+  PhaseTimes times;                       //!< setup, frames, solve, metrics filled in here
+};
+
+//! What every method runs on: one encoded detail, one edited base.
+struct ReconstructionInputs {
+  const DetailEncoding& encoding;
+  const std::vector<Vec3>& edited_base;           //!< the edited base's vertices (the base's connectivity)
+  const IntersectionResult& input_intersections;  //!< the input detail's own, with pairs collected
+};
+
+//! Runs \p method on \p in, then measures the prism volumes and the self-intersections that are new
+//! against the input detail's. \p options configures the volumes method (its progress callback is
+//! used as is).
+MethodOutcome run_method(Method method, const ReconstructionInputs& in, const ReconstructOptions& options,
+                         const Log& log);
+
+// JSON blocks shared by the reports of `reconstruct` and `demo`.
+json mesh_json(const TriMesh& mesh, const std::string& name);
+json encoding_json(const EncodeReport& report);
+json volume_metrics_json(const VolumeMetrics& metrics);
+//! {"input_pairs", "output_pairs", "new_pairs", "seconds"}.
+json intersections_json(std::size_t input_pairs, const MethodOutcome& outcome, double input_seconds);
+//! ReconstructStats as JSON; null for the vectors method (no iterations).
+json iterations_json(const std::optional<ReconstructStats>& stats);
+json timing_json(const PhaseTimes& times);
+
+//! Writes \p report (pretty-printed, newline-terminated) to \p path atomically.
+void write_json_report(const json& report, const std::string& path);
+
+//! printf-style "%.*e" / "%.*f" formatting helpers for the human summaries.
+std::string sci(double value, int digits = 2);
+std::string fixed(double value, int digits = 2);
+
+}  // namespace strata::cli

@@ -1,0 +1,44 @@
+// The `strata` command-line tool: parses the command line, runs one subcommand and turns every
+// error into a one-line message and an exit code (0 ok, 1 error, 2 usage error).
+#include <exception>
+#include <iostream>
+#include <new>
+#include <vector>
+
+#include "common.h"
+#include "strata/exceptions.h"
+
+int main(int argc, char** argv) {
+  using namespace strata::cli;
+  CLI::App app{
+      "strata: multiresolution detail of scanned surfaces with displacement volumes.\n"
+      "Encodes a detail mesh over a base mesh and rebuilds it over an edited base,\n"
+      "by displacement volumes (prism volumes preserved) or by displacement vectors.",
+      "strata"};
+  app.require_subcommand(1);
+  app.get_formatter()->column_width(34);
+
+  try {
+    const std::vector<Subcommand> commands = {register_reconstruct(app), register_stats(app),
+                                              register_generate(app), register_demo(app)};
+    app.parse(argc, argv);
+    for (const Subcommand& c : commands)
+      if (c.app->parsed()) return c.run();
+    std::cerr << "strata: error: no subcommand given" << std::endl;
+    return 2;
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    const auto selected = app.get_subcommands();
+    std::cerr << "strata: error: " << e.what() << "\n"
+              << "Run 'strata" << (selected.empty() ? "" : " " + selected.front()->get_name())
+              << " --help' for usage." << std::endl;
+    return 2;
+  } catch (const strata::Error& e) {
+    std::cerr << "strata: error: " << e.what() << std::endl;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "strata: error: out of memory" << std::endl;
+  } catch (const std::exception& e) {
+    std::cerr << "strata: error: " << e.what() << std::endl;
+  }
+  return 1;
+}
