@@ -1155,6 +1155,17 @@ void write_obj(const TriMesh& m, ChunkedWriter& w) {
   }
 }
 
+// "3 a b c\n": a triangle in OFF's and ASCII PLY's face syntax (0-based).
+void write_face_line(ChunkedWriter& w, const Face& f) {
+  w.text("3 ");
+  w.integer(f[0]);
+  w.text(" ");
+  w.integer(f[1]);
+  w.text(" ");
+  w.integer(f[2]);
+  w.text("\n");
+}
+
 void write_off(const TriMesh& m, ChunkedWriter& w) {
   w.text("OFF\n" + std::to_string(m.num_vertices()) + " " + std::to_string(m.num_faces()) + " 0\n");
   for (const Vec3& p : m.vertices) {
@@ -1163,13 +1174,7 @@ void write_off(const TriMesh& m, ChunkedWriter& w) {
     w.maybe_flush();
   }
   for (const Face& f : m.faces) {
-    w.text("3 ");
-    w.integer(f[0]);
-    w.text(" ");
-    w.integer(f[1]);
-    w.text(" ");
-    w.integer(f[2]);
-    w.text("\n");
+    write_face_line(w, f);
     w.maybe_flush();
   }
 }
@@ -1195,13 +1200,7 @@ void write_ply(const TriMesh& m, ChunkedWriter& w, bool binary) {
       w.binary_le(static_cast<uint8_t>(3));
       for (int i : f) w.binary_le(static_cast<int32_t>(i));
     } else {
-      w.text("3 ");
-      w.integer(f[0]);
-      w.text(" ");
-      w.integer(f[1]);
-      w.text(" ");
-      w.integer(f[2]);
-      w.text("\n");
+      write_face_line(w, f);
     }
     w.maybe_flush();
   }

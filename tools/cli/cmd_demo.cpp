@@ -98,15 +98,10 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
     edited = read_named_mesh(src.edited_base_path);
   }
   shared.read = sw.seconds();
-  check_same_connectivity(base, edited);
-
-  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) +
-            " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
-  sw.restart();
-  const DetailEncoding encoding = encode_detail(detail.mesh, base.mesh);
-  shared.encode = sw.seconds();
-  log.phase("counting self-intersections of the input detail");
-  const TimedIntersections input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
+  const EncodedInput in = encode_input(detail, base, edited, log);
+  const DetailEncoding& encoding = in.encoding;
+  const TimedIntersections& input = in.input;
+  shared.encode = in.encode_seconds;
   shared.metrics = input.seconds;
 
   const fs::path dir(o.out_dir);

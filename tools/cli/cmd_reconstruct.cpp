@@ -78,16 +78,10 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   const NamedMesh base = read_named_mesh(o.base);
   const NamedMesh edited = read_named_mesh(o.edited_base);
   times.read = sw.seconds();
-  check_same_connectivity(base, edited);
-
-  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) +
-            " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
-  sw.restart();
-  const DetailEncoding encoding = encode_detail(detail.mesh, base.mesh);
-  times.encode = sw.seconds();
-
-  log.phase("counting self-intersections of the input detail");
-  const TimedIntersections input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
+  const EncodedInput in = encode_input(detail, base, edited, log);
+  const DetailEncoding& encoding = in.encoding;
+  const TimedIntersections& input = in.input;
+  times.encode = in.encode_seconds;
 
   ReconstructOptions options;
   options.progress = log.progress(to_string(method));

@@ -131,6 +131,19 @@ TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const s
   return t;
 }
 
+EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited, const Log& log) {
+  check_same_connectivity(base, edited);
+  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) + " vertices) over the base (" +
+            std::to_string(base.mesh.num_faces()) + " faces)");
+  EncodedInput e;
+  Stopwatch sw;
+  e.encoding = encode_detail(detail.mesh, base.mesh);
+  e.encode_seconds = sw.seconds();
+  log.phase("counting self-intersections of the input detail");
+  e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
+  return e;
+}
+
 MethodOutcome run_method(Method method, const ReconstructionInputs& in, const ReconstructOptions& options,
                          const Log& log) {
   const DetailEncoding& encoding = in.encoding;

@@ -110,6 +110,17 @@ struct TimedIntersections {
 };
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
 
+//! What reconstruct and demo share before the methods run: the detail encoded over the base and
+//! the input detail's own intersections.
+struct EncodedInput {
+  DetailEncoding encoding;
+  TimedIntersections input;
+  double encode_seconds = 0.0;
+};
+//! Checks that \p edited has \p base's connectivity, encodes \p detail over \p base and counts
+//! the detail's self-intersections, logging each phase.
+EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited, const Log& log);
+
 //! Wall-clock seconds of the phases of one reconstruction (0 for a phase the method lacks).
 struct PhaseTimes {
   double read = 0.0;     //!< reading (or generating) the three meshes
