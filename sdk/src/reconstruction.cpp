@@ -328,7 +328,8 @@ class VolumeReconstructor::Impl {
   }
 
   // Listing 1 for one volume scale h: every level from the coarsest to the finest, each solved by
-  // cycles of n volume sweeps and m regularization sweeps, then prolongated to the next level.
+  // cycles of (at most) n volume steps and m regularization sweeps, then prolongated to the next
+  // level.
   void multigrid_pass(State& s, double h, double final_tol, bool coarse_only, ReconstructStats& st,
                       std::vector<double>& V) const {
     s.P0 = s.P;

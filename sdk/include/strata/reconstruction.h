@@ -43,7 +43,7 @@ struct ReconstructOptions {
   int volume_iterations = 5;
   //! m: regularization sweeps per cycle.
   int regularization_iterations = 2;
-  //! Cycles (n volume sweeps, then m regularization sweeps) per level and volume scale at most.
+  //! Cycles (volume steps, then m regularization sweeps) per level and volume scale at most.
   int max_cycles = 3;
   //! Cycles at most on the finest level at full volume scale, where the regularization settles
   //! the final shape.
@@ -89,7 +89,7 @@ struct ReconstructStats {
   std::vector<int> level_faces;      //!< prism count per level, coarsest first
   int volume_sweeps = 0;             //!< Gauss-Newton volume steps over all levels and scales
   int regularization_sweeps = 0;     //!< regularization sweeps over all levels and scales
-  int cycles = 0;                    //!< multigrid cycles (n + m sweeps) over all levels and scales
+  int cycles = 0;                    //!< cycles (volume steps + regularization) over all levels and scales
   int final_sweeps = 0;              //!< exact Gauss-Newton polish steps on the finest level
   std::vector<int> finest_cycles_per_scale;
   double max_relative_error = 0.0;   //!< on the finest level at the end
@@ -100,7 +100,7 @@ struct ReconstructStats {
   long long step_halvings = 0;      //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;     //!< numeric Cholesky factorizations (direct step solver)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
-  long long constraint_updates = 0;  //!< prism constraints visited by volume sweeps (for throughput)
+  long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };
 
 //! Reconstructed detail positions and the statistics of the solve.
