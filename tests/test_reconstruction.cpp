@@ -97,12 +97,12 @@ TEST(Reconstruction, UneditedBaseGivesBackTheDetailFromTheCleanStart) {
 }
 
 TEST(Reconstruction, CuboidRoundTripStaysWithinItsCurrentBound) {
-  // Regression bound, not the 0.5% target: sharp corners at the open tube ends come back to
-  // within about 1.8% of the diagonal today (see the README).
+  // Regression bound, not the 0.5% target: the square's sharp corners (the largest offsets)
+  // come back to within about 0.9% of the diagonal at this resolution today (see the README).
   const cases::CylinderCase c = make_case(cases::DetailKind::Cuboid, 8000);
   const DetailEncoding e = encode_detail(c.detail, c.base);
   const ReconstructResult r = VolumeReconstructor(e).reconstruct(c.base.vertices);
-  EXPECT_LE(max_distance(r.positions, c.detail.vertices), 0.02 * bbox_diagonal(c.detail.vertices));
+  EXPECT_LE(max_distance(r.positions, c.detail.vertices), 0.012 * bbox_diagonal(c.detail.vertices));
 }
 
 TEST(Reconstruction, RigidMotionOfTheBaseMovesTheResultRigidly) {

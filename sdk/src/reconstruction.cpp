@@ -28,6 +28,7 @@ struct Level {
   double mean_abs_target = 0.0;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
   std::vector<double> weights;
+  std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
   std::vector<int> inserted, ring_offsets, ring_vertices;
   // Pattern of J J^T (prisms sharing a vertex), kept for every Gauss-Newton step: row j holds
   // (prism k, corner of the shared vertex in j, corner in k), one entry per shared vertex; a
@@ -199,6 +200,11 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < L.faces.size(); ++j)
       for (int c = 0; c < 3; ++c) lf[j][c] = local[L.faces[j][c]];
     const internal::Adjacency adj = internal::build_adjacency(nv, lf);
+    L.boundary.assign(nv, 0);
+    const std::vector<std::array<int, 3>> fn = internal::face_neighbors(nv, lf);
+    for (std::size_t j = 0; j < lf.size(); ++j)
+      for (int e = 0; e < 3; ++e)
+        if (fn[j][e] < 0) L.boundary[lf[j][e]] = L.boundary[lf[j][(e + 1) % 3]] = 1;
     build_jj_pattern(lf, adj, L);
     if (finest) {
       // The encoding's own weights (the finest level's vertex ids are the original ones).
@@ -577,7 +583,10 @@ class VolumeReconstructor::Impl {
       const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
       Vec3 lap = avg_t - s.tdev[k];
       lap -= lap.dot(n) * n;
-      s.P[i] = s.Q[i] + hgt * n + s.R[i] + s.tdev[k] + lt * lap;
+      // On the boundary the one-sided Laplacian cannot hold the tangential deviation, which then
+      // drifts; it is held at zero there (the detail's open edge keeps its rest offset).
+      const Vec3 t = L.boundary[k] ? Vec3(Vec3::Zero()) : Vec3(s.tdev[k] + lt * lap);
+      s.P[i] = s.Q[i] + hgt * n + s.R[i] + t;
     }
   }
 

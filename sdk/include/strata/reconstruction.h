@@ -48,7 +48,8 @@ struct ReconstructOptions {
   //! Cycles at most on the finest level at full volume scale, where the regularization settles
   //! the final shape.
   int final_max_cycles = 10;
-  //! Damping of the tangential Laplacian of the displacements (section 4.2).
+  //! Damping of the tangential Laplacian of the displacements (section 4.2); on boundary vertices
+  //! the tangential deviation is held at zero.
   double tangential_lambda = 0.5;
   //! Damping of the displacement-length filter d -> d + lambda f Laplacian(d / f) (section 4.2).
   double length_lambda = 0.5;
