@@ -45,26 +45,4 @@ double prism_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& 
   return prism_volume_gradient(p0, p1, p2, q0, q1, q2).volume;
 }
 
-Vec3 prism_vertex_gradient(const Vec3& pa, const Vec3& pb, const Vec3& pc, const Vec3& qa, const Vec3& qb,
-                           const Vec3& qc) {
-  const Vec3 Pb = pb - pa, Pc = pc - pa, Qa = qa - pa, Qb = qb - pa, Qc = qc - pa;
-  const Vec3 Pa = Vec3::Zero();
-  // Top triangle (pa,pb,pc): d/dpa = pb x pc (relative coordinates: the gradient of a
-  // translation-invariant volume does not depend on the origin).
-  Vec3 g = Pb.cross(Pc);
-  // Quad over edge (a,b): pa is its first corner.
-  {
-    const Vec3 c = 0.25 * (Pa + Pb + Qa + Qb);
-    const Vec3 gc = Qa.cross(Qb) + Qb.cross(Pb) + Pb.cross(Pa) + Pa.cross(Qa);
-    g += c.cross(Pb) + Qa.cross(c) + 0.25 * gc;
-  }
-  // Quad over edge (c,a): pa is its second corner.
-  {
-    const Vec3 c = 0.25 * (Pc + Pa + Qc + Qa);
-    const Vec3 gc = Qc.cross(Qa) + Qa.cross(Pa) + Pa.cross(Pc) + Pc.cross(Qc);
-    g += c.cross(Qa) + Pc.cross(c) + 0.25 * gc;
-  }
-  return g / 6.0;
-}
-
 }  // namespace strata

@@ -384,34 +384,32 @@ class VolumeReconstructor::Impl {
     return c + 1;
   }
 
-  // Volume steps (at most volume_iterations) until the max relative error is at most tol.
-  void project(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+  // Volume steps until the max relative error is at most tol, at most max_steps of them; exact
+  // (factorized) steps when `direct`. Returns the steps taken; V holds the final volumes.
+  int project(const Level& L, State& s, double h, double tol, int max_steps, bool direct, ReconstructStats& st,
+              std::vector<double>& V) const {
     compute_volumes(L, s, V);
     double err = relative_error(L, h, V, nullptr);
-    for (int it = 0; it < opt_.volume_iterations && err > tol; ++it) {
-      const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
-                          static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
-      gauss_newton_step(L, s, h, direct, st);
-      ++st.volume_sweeps;
-      compute_volumes(L, s, V);
+    int steps = 0;
+    for (; steps < max_steps && err > tol; ++steps) {
+      gauss_newton_step(L, s, h, direct, st, V);
       err = relative_error(L, h, V, nullptr);
     }
+    st.volume_sweeps += steps;
+    return steps;
+  }
+
+  // During the cycles: inexact steps, unless the level is small or the options ask for exact ones.
+  int project(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+    const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
+                        static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
+    return project(L, s, h, tol, opt_.volume_iterations, direct, st, V);
   }
 
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
   // tolerance holds: the volume terms get all the weight at the end (section 4.2).
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
-    compute_volumes(L, s, V);
-    double err = relative_error(L, 1.0, V, nullptr);
-    int steps = 0;
-    while (err > tol && steps < opt_.max_final_steps) {
-      gauss_newton_step(L, s, 1.0, true, st);
-      ++steps;
-      compute_volumes(L, s, V);
-      err = relative_error(L, 1.0, V, nullptr);
-    }
-    st.final_sweeps += steps;
-    st.volume_sweeps += steps;
+    st.final_sweeps += project(L, s, 1.0, tol, opt_.max_final_steps, true, st, V);
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
@@ -440,7 +438,8 @@ class VolumeReconstructor::Impl {
   // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
   // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
   // the projection of the current positions onto the linearized constraint set.
-  void gauss_newton_step(const Level& L, State& s, double h, bool direct, ReconstructStats& st) const {
+  void gauss_newton_step(const Level& L, State& s, double h, bool direct, ReconstructStats& st,
+                         std::vector<double>& V) const {
     GnScratch& w = s.gn;
     const std::size_t m = L.faces.size();
     w.grad.resize(m);
@@ -479,8 +478,9 @@ class VolumeReconstructor::Impl {
     }
     double alpha = 1.0;
     for (int i : L.verts) s.P[i] += w.delta[i];
-    for (int halvings = 0; halvings < 4; ++halvings) {
-      if (residual_norm2(L, s, h) <= rr0) break;
+    for (int halvings = 0;; ++halvings) {
+      compute_volumes(L, s, V);
+      if (halvings == 4 || residual_norm2(L, h, V) <= rr0) break;
       alpha *= 0.5;
       for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
       ++st.step_halvings;
@@ -488,14 +488,10 @@ class VolumeReconstructor::Impl {
     st.constraint_updates += static_cast<long long>(m);
   }
 
-  // sum_j (h V*_j - V_j)^2 at the current positions.
-  static double residual_norm2(const Level& L, const State& s, double h) {
+  // sum_j (h V*_j - V_j)^2.
+  static double residual_norm2(const Level& L, double h, const std::vector<double>& V) {
     double rr = 0.0;
-    for (std::size_t j = 0; j < L.faces.size(); ++j) {
-      const Face& f = L.faces[j];
-      const double r = h * L.targets[j] - prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      rr += r * r;
-    }
+    for (std::size_t j = 0; j < V.size(); ++j) rr += (h * L.targets[j] - V[j]) * (h * L.targets[j] - V[j]);
     return rr;
   }
 

@@ -31,10 +31,4 @@ struct PrismVolumeGradient {
 PrismVolumeGradient prism_volume_gradient(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& q0,
                                           const Vec3& q1, const Vec3& q2);
 
-//! Gradient of the prism volume with respect to its top vertex pa alone, for a prism whose corners
-//! are given in cyclic order starting at a: (pa,pb,pc) on top, (qa,qb,qc) below. Cheaper than
-//! prism_volume_gradient when one vertex moves (the solver's inner loop).
-Vec3 prism_vertex_gradient(const Vec3& pa, const Vec3& pb, const Vec3& pc, const Vec3& qa, const Vec3& qb,
-                           const Vec3& qc);
-
 }  // namespace strata
