@@ -69,6 +69,7 @@ struct State {
   std::vector<double> rho;   // regularization scratch: d/f per level vertex
   std::vector<Vec3> tdev;    // regularization scratch: tangential deviation per level vertex
   std::vector<Vec3> before;  // positions before a regularization round
+  std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
   GnScratch gn;
 };
 
@@ -119,6 +120,7 @@ class VolumeReconstructor::Impl {
     if (!start) {
       // Section 4.1: the clean configuration p' = q', then growing volume scales.
       s.P = s.Q;
+      place_pinned(s);
       const int k = std::max(1, opt_.volume_scales);
       for (int sc = 0; sc < k; ++sc) {
         const double h = static_cast<double>(sc + 1) / k;
@@ -130,6 +132,7 @@ class VolumeReconstructor::Impl {
         throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
                            std::to_string(enc_.num_detail_vertices()) + " vertices");
       s.P = *start;
+      place_pinned(s);
       if (warm->coarse_levels_only) {
         multigrid_pass(s, 1.0, warm->tolerance, true, st, V);
       } else {
@@ -171,6 +174,9 @@ class VolumeReconstructor::Impl {
         static_cast<int>(enc_.base_rest_points.size()) != n || enc_.target_volumes.size() != nf ||
         static_cast<int>(enc_.weight_offsets.size()) != n + 1)
       throw InvalidInput("encoding arrays have inconsistent sizes");
+    if (!enc_.pinned.empty() && static_cast<int>(enc_.pinned.size()) != n)
+      throw InvalidInput("encoding has " + std::to_string(enc_.pinned.size()) + " pinned flags for " +
+                         std::to_string(n) + " detail vertices");
     for (const Face& f : enc_.detail_faces)
       for (int v : f)
         if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
@@ -327,6 +333,16 @@ class VolumeReconstructor::Impl {
     }
     s.dRho.assign(n, 0.0);
     s.dT.assign(n, Vec3::Zero());
+    if (!enc_.pinned.empty()) s.pinned_at = reconstruct_vectors(enc_, fr);
+  }
+
+  bool pinned(int i) const { return !enc_.pinned.empty() && enc_.pinned[i]; }
+
+  // Pinned vertices sit where displacement vectors put them, whatever the start.
+  void place_pinned(State& s) const {
+    if (enc_.pinned.empty()) return;
+    for (std::size_t i = 0; i < s.P.size(); ++i)
+      if (enc_.pinned[i]) s.P[i] = s.pinned_at[i];
   }
 
   void report(const char* phase, double f) const {
@@ -449,7 +465,7 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      for (int c = 0; c < 3; ++c) w.grad[j][c] = g.grad[c];
+      for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
       rr += w.r[j] * w.r[j];
     }
@@ -575,6 +591,7 @@ class VolumeReconstructor::Impl {
         avg_t += L.weights[t] * s.tdev[L.nb[t]];
       }
       const int i = L.verts[k];
+      if (pinned(i)) continue;
       const Vec3& n = s.N[i];
       const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
       Vec3 lap = avg_t - s.tdev[k];
@@ -598,6 +615,7 @@ class VolumeReconstructor::Impl {
     }
     for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
       const int i = fine.inserted[k];
+      if (pinned(i)) continue;
       const int b = fine.ring_offsets[k], e = fine.ring_offsets[k + 1];
       double rho = 0.0;
       Vec3 t = Vec3::Zero();

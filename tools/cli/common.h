@@ -37,6 +37,7 @@ Subcommand register_reconstruct(CLI::App& parent);
 Subcommand register_stats(CLI::App& parent);
 Subcommand register_generate(CLI::App& parent);
 Subcommand register_demo(CLI::App& parent);
+Subcommand register_deform(CLI::App& parent);
 
 //! Wall-clock seconds since construction (or the last restart()).
 class Stopwatch {

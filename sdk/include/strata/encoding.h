@@ -67,6 +67,10 @@ struct DetailEncoding {
   std::vector<int> weight_neighbors;
   std::vector<double> weights;
 
+  //! Optional, empty or one flag per detail vertex: pinned vertices are placed like displacement
+  //! vectors (reconstruct_vectors()) and never moved by the volume reconstruction. Regional
+  //! editing pins the vertices outside the modifiable region, so that only the region is solved.
+  std::vector<char> pinned;
   EncodeReport report;
 
   int num_detail_vertices() const { return static_cast<int>(base_points.size()); }

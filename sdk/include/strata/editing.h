@@ -1,0 +1,191 @@
+//! \file editing.h
+//! The modeling framework of the paper's section 5, after Kobbelt et al. 1998: a modifiable
+//! region and a handle are selected on a mesh; the region is decomposed into a smooth base (a
+//! thin-plate fairing) and its detail (displacement volumes or vectors); a transformation of the
+//! handle is blended over the region's base; the detail is rebuilt over the edited base.
+//!
+//! Typical use (one selection, any number of transforms):
+//! \code
+//!   strata::RegionEditor editor(mesh, select_vertices(mesh.vertices, region),
+//!                               select_vertices(mesh.vertices, handle));
+//!   strata::EditResult r = editor.apply(EditTransform::rotation(axis, 90.0, pivot));
+//!   // or, interactively:
+//!   editor.begin_drag();
+//!   for (double a : angles) show(editor.update_drag(EditTransform::rotation(axis, a, pivot)));
+//!   strata::EditResult final_result = editor.end_drag();
+//! \endcode
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "strata/encoding.h"
+#include "strata/mesh.h"
+#include "strata/metrics.h"
+#include "strata/reconstruction.h"
+
+namespace strata {
+
+//! A vertex selection, evaluated on vertex positions (or given as indices).
+struct Selection {
+  enum class Kind {
+    Sphere,     //!< |x - center| <= radius
+    Halfspace,  //!< (x - point) . normal >= 0: the side the normal points to
+    Box,        //!< min <= x <= max, componentwise
+    Vertices,   //!< an explicit index list
+  };
+  Kind kind = Kind::Sphere;
+  Vec3 center = Vec3::Zero();
+  double radius = 0.0;
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  Vec3 min = Vec3::Zero();
+  Vec3 max = Vec3::Zero();
+  std::vector<int> indices;
+
+  static Selection sphere(const Vec3& center, double radius);
+  static Selection halfspace(const Vec3& point, const Vec3& normal);
+  static Selection box(const Vec3& min, const Vec3& max);
+  static Selection vertices(std::vector<int> indices);
+};
+
+//! One flag per vertex of \p positions: whether \p selection contains it.
+//! \throw InvalidInput if the selection is malformed (non-finite or negative radius, zero normal,
+//! min > max, an index out of range for positions.size()).
+std::vector<char> select_vertices(const std::vector<Vec3>& positions, const Selection& selection);
+
+//! An affine map about a pivot: x -> pivot + linear (x - pivot) + translation. The editing
+//! operator blends it over the region: a vertex with blend value s gets the rotation part of
+//! `linear` (its polar decomposition) with s times the angle, the stretch part interpolated
+//! linearly from the identity, and s times the translation. So a 90-degree rotation bends a limb
+//! like an elbow instead of shearing it.
+struct EditTransform {
+  Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
+  Vec3 translation = Vec3::Zero();
+  Vec3 pivot = Vec3::Zero();
+
+  //! A rotation by \p degrees about \p axis through \p pivot, then a translation.
+  //! \throw InvalidInput if the axis is zero or a value is not finite.
+  static EditTransform rotation(const Vec3& axis, double degrees, const Vec3& pivot, const Vec3& translation = Vec3::Zero());
+  //! The full map applied to \p x.
+  Vec3 apply(const Vec3& x) const;
+  //! The map blended with weight \p s (0: identity, 1: the full map).
+  //! \pre linear has a positive determinant (checked by RegionEditor, which throws InvalidInput).
+  Vec3 apply_blended(const Vec3& x, double s) const;
+};
+
+//! Options of RegionEditor, with their defaults.
+struct EditOptions {
+  //! Reconstruct the detail by displacement volumes (the paper) or by displacement vectors along
+  //! the base normals (the baseline every figure compares with).
+  enum class Method { Volumes, Vectors };
+  Method method = Method::Volumes;
+  //! The handle's base is the handle low-pass filtered: detail of wavelengths below about this
+  //! many mean edge lengths (of the region) is removed from it, coarser shape kept.
+  double handle_smoothing = 30.0;
+  //! Handle vertices within this many edges of the blended part are solved with it; the handle's
+  //! other vertices move rigidly with their base (placed like displacement vectors, which is
+  //! exact there) and are not solved.
+  int handle_solved_rings = 3;
+  //! Encoding of the region's detail over its faired base.
+  EncodeOptions encode;
+  //! Reconstruction of the region's detail (exact solves: apply() and end_drag()).
+  ReconstructOptions reconstruct;
+  //! Interactive steps (update_drag()): volumes on the coarse levels only, the finest level by
+  //! regularization (section 5). The tolerance applies to the coarse levels.
+  WarmStartOptions drag{true, 1e-2};
+  //! Tolerance of the exact solve at the end of a drag (warm-started from the last drag step).
+  double end_drag_tolerance = 1e-4;
+};
+
+//! Timings of one edit, in seconds.
+struct EditTimes {
+  double decompose = 0.0;  //!< constructor: fairing and blend field (one factorization)
+  double encode = 0.0;     //!< constructor: encoding the region's detail over its base
+  double setup = 0.0;      //!< the volume reconstructor's multigrid hierarchy (first use only)
+  double edit = 0.0;       //!< blending the transform over the base
+  double solve = 0.0;      //!< reconstruction of the region's detail
+};
+
+//! The result of an edit: the whole mesh's new vertex positions (vertices outside the region keep
+//! theirs exactly) and how well the region's prisms kept their volumes.
+struct EditResult {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> base_positions;  //!< the edited base, whole mesh
+  VolumeMetrics volume;              //!< over the region's prisms
+  ReconstructStats stats;            //!< volumes only (zero for vectors)
+  EditTimes times;
+};
+
+//! Decomposition and editing of one region of a mesh (paper, section 5). The constructor
+//! decomposes: the region is faired by minimizing the thin-plate energy (bi-Laplacian,
+//! x^T L M^-1 L x with clamped cotangent L and barycentric areas M) with the rest of the mesh held
+//! as the boundary condition, so the base is tangent-continuous with it; the handle is softly
+//! pulled towards its own shape (EditOptions::handle_smoothing), so that a limb's end keeps its
+//! form in the base instead of being faired away. The blend field s is bi-harmonic on the region
+//! minus the handle, 0 on the rest and 1 on the handle. The detail of the prisms touching the
+//! region is encoded over that base; vertices outside the region are pinned, so only the region
+//! is solved.
+//!
+//! Not thread-safe: one drag at a time, one thread per object.
+class RegionEditor {
+ public:
+  //! \p region and \p handle hold one flag per vertex of \p mesh; the handle is taken as the
+  //! region vertices it flags.
+  //! \pre mesh is a valid triangle mesh (validate_mesh()).
+  //! \throw InvalidInput if the flags do not match the vertex count, the region or the handle is
+  //! empty, the handle is the whole region, the region is the whole mesh, or a connected part
+  //! of the region touches neither the fixed rest nor the handle (its fairing is undetermined).
+  //! \throw SolverError if the fairing system cannot be factorized.
+  RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
+               EditOptions options = {});
+  ~RegionEditor();
+  RegionEditor(RegionEditor&&) noexcept;
+  RegionEditor& operator=(RegionEditor&&) noexcept;
+
+  const TriMesh& mesh() const;
+  //! The faired base: the mesh's connectivity, region positions faired, others unchanged.
+  const std::vector<Vec3>& base() const;
+  //! The blend field s per mesh vertex (0 outside the region, 1 on the handle).
+  const std::vector<double>& blend() const;
+  const std::vector<int>& region_vertices() const;
+  const std::vector<int>& handle_vertices() const;
+  //! Number of prisms solved: the faces with at least one region vertex.
+  int region_faces() const;
+  //! The region's detail encoding (submesh indices; see region_submesh_vertices()).
+  const DetailEncoding& encoding() const;
+  //! Mesh vertex id of each submesh vertex of the encoding.
+  const std::vector<int>& region_submesh_vertices() const;
+  const EditOptions& options() const;
+  double decompose_seconds() const;
+  double encode_seconds() const;
+
+  //! The base with \p transform blended over the region.
+  //! \throw InvalidInput if the transform is not finite or its linear part is singular or
+  //! reflecting.
+  std::vector<Vec3> edited_base(const EditTransform& transform) const;
+
+  //! The exact edit from the clean start (volume scaling, the whole multigrid), with the
+  //! options' method.
+  //! \throw as edited_base(); SolverError if the reconstruction fails.
+  EditResult apply(const EditTransform& transform) const;
+
+  //! Starts a drag from the unedited mesh.
+  void begin_drag();
+  //! One interactive step: warm-started from the previous step, no volume scaling, volumes on the
+  //! coarse levels only (section 5). Returns the whole mesh's positions.
+  //! \throw InvalidInput if no drag is active, or as edited_base().
+  const std::vector<Vec3>& update_drag(const EditTransform& transform);
+  //! Ends the drag with the exact solve on the last transform, warm-started from the last step.
+  //! \throw InvalidInput if no drag is active.
+  EditResult end_drag();
+  bool dragging() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace strata

@@ -1,0 +1,165 @@
+#include "strata/edit_script.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "strata/exceptions.h"
+
+namespace strata {
+namespace {
+
+using json = nlohmann::json;
+
+// Parsing context: the file name and the JSON path of the value being read, for messages.
+struct Ctx {
+  const std::string& name;
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw InvalidInput(name + ": " + where + ": " + what);
+  }
+};
+
+void check_keys(const Ctx& c, const std::string& where, const json& j, const std::set<std::string>& allowed) {
+  if (!j.is_object()) c.fail(where, "expected an object");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!allowed.count(it.key())) c.fail(where, "unknown key \"" + it.key() + "\"");
+}
+
+const json& required(const Ctx& c, const std::string& where, const json& j, const char* key) {
+  if (!j.contains(key)) c.fail(where, std::string("missing \"") + key + "\"");
+  return j.at(key);
+}
+
+double number(const Ctx& c, const std::string& where, const json& j) {
+  if (!j.is_number()) c.fail(where, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) c.fail(where, "not a finite number");
+  return v;
+}
+
+Vec3 vec3(const Ctx& c, const std::string& where, const json& j) {
+  if (!j.is_array() || j.size() != 3) c.fail(where, "expected three numbers [x, y, z]");
+  return Vec3(number(c, where + "[0]", j[0]), number(c, where + "[1]", j[1]), number(c, where + "[2]", j[2]));
+}
+
+Selection selection(const Ctx& c, const std::string& where, const json& j) {
+  check_keys(c, where, j, {"sphere", "halfspace", "box", "vertices"});
+  if (j.size() != 1) c.fail(where, "expected exactly one of sphere, halfspace, box, vertices");
+  const auto it = j.begin();
+  const std::string w = where + "." + it.key();
+  const json& v = it.value();
+  if (it.key() == "sphere") {
+    check_keys(c, w, v, {"center", "radius"});
+    const double r = number(c, w + ".radius", required(c, w, v, "radius"));
+    if (r < 0) c.fail(w + ".radius", "must not be negative");
+    return Selection::sphere(vec3(c, w + ".center", required(c, w, v, "center")), r);
+  }
+  if (it.key() == "halfspace") {
+    check_keys(c, w, v, {"point", "normal"});
+    const Vec3 n = vec3(c, w + ".normal", required(c, w, v, "normal"));
+    if (!(n.norm() > 0)) c.fail(w + ".normal", "must not be zero");
+    return Selection::halfspace(vec3(c, w + ".point", required(c, w, v, "point")), n);
+  }
+  if (it.key() == "box") {
+    check_keys(c, w, v, {"min", "max"});
+    const Vec3 lo = vec3(c, w + ".min", required(c, w, v, "min"));
+    const Vec3 hi = vec3(c, w + ".max", required(c, w, v, "max"));
+    if ((lo.array() > hi.array()).any()) c.fail(w, "min exceeds max");
+    return Selection::box(lo, hi);
+  }
+  if (!v.is_array()) c.fail(w, "expected a list of vertex indices");
+  std::vector<int> idx;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (!v[k].is_number_integer() || v[k].get<long long>() < 0 || v[k].get<long long>() > 2147483647LL)
+      c.fail(w + "[" + std::to_string(k) + "]", "expected a non-negative vertex index");
+    idx.push_back(static_cast<int>(v[k].get<long long>()));
+  }
+  return Selection::vertices(std::move(idx));
+}
+
+EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
+  check_keys(c, where, j, {"rotate", "scale", "matrix", "translate", "pivot"});
+  EditTransform t;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(), M = Eigen::Matrix3d::Identity(), S = Eigen::Matrix3d::Identity();
+  if (j.contains("pivot")) t.pivot = vec3(c, where + ".pivot", j["pivot"]);
+  if (j.contains("rotate")) {
+    const std::string w = where + ".rotate";
+    const json& r = j["rotate"];
+    check_keys(c, w, r, {"axis", "degrees", "pivot"});
+    const Vec3 axis = vec3(c, w + ".axis", required(c, w, r, "axis"));
+    if (!(axis.norm() > 0)) c.fail(w + ".axis", "must not be zero");
+    const double deg = number(c, w + ".degrees", required(c, w, r, "degrees"));
+    if (r.contains("pivot")) {
+      if (j.contains("pivot")) c.fail(w + ".pivot", "give the pivot once (here or in the transform)");
+      t.pivot = vec3(c, w + ".pivot", r["pivot"]);
+    }
+    R = Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+  }
+  if (j.contains("scale")) {
+    const json& s = j["scale"];
+    const std::string w = where + ".scale";
+    const Vec3 f = s.is_array() ? vec3(c, w, s) : Vec3::Constant(number(c, w, s));
+    if (!(f.minCoeff() > 0)) c.fail(w, "scale factors must be positive");
+    S = f.asDiagonal();
+  }
+  if (j.contains("matrix")) {
+    const json& m = j["matrix"];
+    const std::string w = where + ".matrix";
+    if (!m.is_array() || m.size() != 3) c.fail(w, "expected three rows of three numbers");
+    for (int r = 0; r < 3; ++r) M.row(r) = vec3(c, w + "[" + std::to_string(r) + "]", m[r]).transpose();
+    if (!(M.determinant() > 1e-12)) c.fail(w, "must have a positive determinant (no reflection, not singular)");
+  }
+  if (j.contains("translate")) t.translation = vec3(c, where + ".translate", j["translate"]);
+  t.linear = R * M * S;
+  return t;
+}
+
+EditStep step(const Ctx& c, const std::string& where, const json& j) {
+  check_keys(c, where, j, {"region", "handle", "transform"});
+  EditStep e;
+  e.region = selection(c, where + ".region", required(c, where, j, "region"));
+  e.handle = selection(c, where + ".handle", required(c, where, j, "handle"));
+  e.transform = transform(c, where + ".transform", required(c, where, j, "transform"));
+  return e;
+}
+
+}  // namespace
+
+EditScript parse_edit_script(const std::string& text, const std::string& name) {
+  const Ctx c{name};
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InvalidInput(name + ": not valid JSON: " + e.what());
+  }
+  EditScript script;
+  const json* list = &j;
+  std::string where = "edits";
+  if (j.is_object() && j.contains("edits")) {
+    check_keys(c, "top level", j, {"edits"});
+    list = &j["edits"];
+  } else if (j.is_object()) {
+    script.edits.push_back(step(c, "edit", j));
+    return script;
+  }
+  if (!list->is_array()) c.fail(where, "expected an edit object or a list of edits");
+  if (list->empty()) c.fail(where, "the list of edits is empty");
+  for (std::size_t k = 0; k < list->size(); ++k)
+    script.edits.push_back(step(c, where + "[" + std::to_string(k) + "]", (*list)[k]));
+  return script;
+}
+
+EditScript read_edit_script(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path + ": cannot open the edit script");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw IoError(path + ": cannot read the edit script");
+  return parse_edit_script(ss.str(), path);
+}
+
+}  // namespace strata

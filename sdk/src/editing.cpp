@@ -1,0 +1,522 @@
+#include "strata/editing.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <Eigen/SparseCore>
+#include <chrono>
+#include <functional>
+#include <cmath>
+#include <string>
+
+#include "internal/topology.h"
+#include "strata/exceptions.h"
+
+namespace strata {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+bool finite(const Vec3& v) { return v.allFinite(); }
+
+// An EditTransform split once into what the blend interpolates: the rotation of the polar
+// decomposition linear = R S as axis and angle, the symmetric stretch S and the translation.
+class BlendedMap {
+ public:
+  explicit BlendedMap(const EditTransform& t) : t_(t) {
+    if (!t.linear.allFinite() || !finite(t.translation) || !finite(t.pivot))
+      throw InvalidInput("edit transform has a non-finite value");
+    const double det = t.linear.determinant();
+    if (!(det > 1e-12)) throw InvalidInput("edit transform is singular or a reflection (determinant " + std::to_string(det) + ")");
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(t.linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
+    stretch_ = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
+    rotation_ = Eigen::AngleAxisd(R);
+  }
+  Vec3 apply(const Vec3& x, double s) const {
+    if (s == 1.0) return t_.apply(x);
+    const Eigen::Matrix3d S = Eigen::Matrix3d::Identity() + s * (stretch_ - Eigen::Matrix3d::Identity());
+    const Eigen::AngleAxisd r(s * rotation_.angle(), rotation_.axis());
+    return t_.pivot + r * (S * (x - t_.pivot)) + s * t_.translation;
+  }
+
+ private:
+  EditTransform t_;
+  Eigen::Matrix3d stretch_;
+  Eigen::AngleAxisd rotation_;
+};
+
+}  // namespace
+
+Selection Selection::sphere(const Vec3& center, double radius) {
+  Selection s;
+  s.kind = Kind::Sphere;
+  s.center = center;
+  s.radius = radius;
+  return s;
+}
+Selection Selection::halfspace(const Vec3& point, const Vec3& normal) {
+  Selection s;
+  s.kind = Kind::Halfspace;
+  s.point = point;
+  s.normal = normal;
+  return s;
+}
+Selection Selection::box(const Vec3& min, const Vec3& max) {
+  Selection s;
+  s.kind = Kind::Box;
+  s.min = min;
+  s.max = max;
+  return s;
+}
+Selection Selection::vertices(std::vector<int> indices) {
+  Selection s;
+  s.kind = Kind::Vertices;
+  s.indices = std::move(indices);
+  return s;
+}
+
+std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& sel) {
+  std::vector<char> out(x.size(), 0);
+  switch (sel.kind) {
+    case Selection::Kind::Sphere: {
+      if (!finite(sel.center) || !std::isfinite(sel.radius) || sel.radius < 0)
+        throw InvalidInput("sphere selection needs a finite center and a non-negative radius");
+      const double r2 = sel.radius * sel.radius;
+      for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.center).squaredNorm() <= r2;
+      break;
+    }
+    case Selection::Kind::Halfspace: {
+      if (!finite(sel.point) || !finite(sel.normal) || !(sel.normal.norm() > 0))
+        throw InvalidInput("halfspace selection needs a finite point and a non-zero normal");
+      for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.point).dot(sel.normal) >= 0;
+      break;
+    }
+    case Selection::Kind::Box: {
+      if (!finite(sel.min) || !finite(sel.max) || (sel.min.array() > sel.max.array()).any())
+        throw InvalidInput("box selection needs finite min <= max");
+      for (std::size_t i = 0; i < x.size(); ++i)
+        out[i] = (x[i].array() >= sel.min.array()).all() && (x[i].array() <= sel.max.array()).all();
+      break;
+    }
+    case Selection::Kind::Vertices:
+      for (int v : sel.indices) {
+        if (v < 0 || v >= static_cast<int>(x.size()))
+          throw InvalidInput("vertex selection index " + std::to_string(v) + " is out of range (the mesh has " +
+                             std::to_string(x.size()) + " vertices)");
+        out[v] = 1;
+      }
+      break;
+  }
+  return out;
+}
+
+EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Vec3& pivot, const Vec3& translation) {
+  if (!finite(axis) || !std::isfinite(degrees) || !finite(pivot) || !finite(translation))
+    throw InvalidInput("rotation has a non-finite value");
+  if (!(axis.norm() > 0)) throw InvalidInput("rotation axis is zero");
+  EditTransform t;
+  t.linear = Eigen::AngleAxisd(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+  t.pivot = pivot;
+  t.translation = translation;
+  return t;
+}
+
+Vec3 EditTransform::apply(const Vec3& x) const { return pivot + linear * (x - pivot) + translation; }
+
+Vec3 EditTransform::apply_blended(const Vec3& x, double s) const { return BlendedMap(*this).apply(x, s); }
+
+class RegionEditor::Impl {
+ public:
+  Impl(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle, EditOptions o)
+      : mesh_(mesh), opt_(std::move(o)) {
+    const int n = mesh.num_vertices();
+    if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
+      throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) + ")");
+    const auto t0 = Clock::now();
+    in_region_.assign(n, 0);
+    in_handle_.assign(n, 0);
+    for (int i = 0; i < n; ++i) {
+      if (!region[i]) continue;
+      in_region_[i] = 1;
+      region_.push_back(i);
+      if (handle[i]) {
+        in_handle_[i] = 1;
+        handle_.push_back(i);
+      }
+    }
+    if (region_.empty()) throw InvalidInput("the region selects no vertex");
+    if (handle_.empty()) throw InvalidInput("the handle selects no vertex of the region");
+    if (handle_.size() == region_.size()) throw InvalidInput("the handle is the whole region: nothing to blend");
+    if (static_cast<int>(region_.size()) == n) throw InvalidInput("the region is the whole mesh: nothing is held fixed");
+    decompose();
+    decompose_seconds_ = seconds_since(t0);
+    const auto t1 = Clock::now();
+    encode();
+    encode_seconds_ = seconds_since(t1);
+  }
+
+  std::vector<Vec3> edited_base(const EditTransform& t) const {
+    const BlendedMap map(t);
+    std::vector<Vec3> out = base_;
+    for (int i : region_) out[i] = map.apply(base_[i], s_[i]);
+    return out;
+  }
+
+  EditResult apply(const EditTransform& t) const {
+    EditResult res;
+    auto t0 = Clock::now();
+    res.base_positions = edited_base(t);
+    const std::vector<Vec3> sub_base = gather(res.base_positions);
+    res.times.edit = seconds_since(t0);
+    t0 = Clock::now();
+    std::vector<Vec3> sub;
+    if (opt_.method == EditOptions::Method::Volumes) {
+      res.times.setup = ensure_reconstructor();
+      t0 = Clock::now();
+      ReconstructResult r = rec_->reconstruct(sub_base);
+      sub = std::move(r.positions);
+      res.stats = std::move(r.stats);
+    } else {
+      sub = reconstruct_vectors(enc_, sub_base);
+    }
+    res.times.solve = seconds_since(t0);
+    finish(sub, sub_base, res);
+    return res;
+  }
+
+  void begin_drag() {
+    drag_sub_ = enc_.detail_rest;
+    drag_positions_ = mesh_.vertices;
+    drag_transform_ = EditTransform{};
+    dragging_ = true;
+    if (opt_.method == EditOptions::Method::Volumes) ensure_reconstructor();
+  }
+
+  const std::vector<Vec3>& update_drag(const EditTransform& t) {
+    if (!dragging_) throw InvalidInput("update_drag() without begin_drag()");
+    const std::vector<Vec3> sub_base = gather(edited_base(t));
+    if (opt_.method == EditOptions::Method::Volumes)
+      drag_sub_ = rec_->reconstruct_from(sub_base, drag_sub_, opt_.drag).positions;
+    else
+      drag_sub_ = reconstruct_vectors(enc_, sub_base);
+    drag_transform_ = t;
+    scatter(drag_sub_, drag_positions_);
+    return drag_positions_;
+  }
+
+  EditResult end_drag() {
+    if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
+    dragging_ = false;
+    EditResult res;
+    auto t0 = Clock::now();
+    res.base_positions = edited_base(drag_transform_);
+    const std::vector<Vec3> sub_base = gather(res.base_positions);
+    res.times.edit = seconds_since(t0);
+    t0 = Clock::now();
+    std::vector<Vec3> sub;
+    if (opt_.method == EditOptions::Method::Volumes) {
+      WarmStartOptions exact;
+      exact.coarse_levels_only = false;
+      exact.tolerance = opt_.end_drag_tolerance;
+      ReconstructResult r = rec_->reconstruct_from(sub_base, drag_sub_, exact);
+      sub = std::move(r.positions);
+      res.stats = std::move(r.stats);
+    } else {
+      sub = reconstruct_vectors(enc_, sub_base);
+    }
+    res.times.solve = seconds_since(t0);
+    finish(sub, sub_base, res);
+    return res;
+  }
+
+  const TriMesh& mesh() const { return mesh_; }
+  const std::vector<Vec3>& base() const { return base_; }
+  const std::vector<double>& blend() const { return s_; }
+  const std::vector<int>& region() const { return region_; }
+  const std::vector<int>& handle() const { return handle_; }
+  const DetailEncoding& encoding() const { return enc_; }
+  const std::vector<int>& sub_vertices() const { return sub_vertices_; }
+  const EditOptions& options() const { return opt_; }
+  double decompose_seconds() const { return decompose_seconds_; }
+  double encode_seconds() const { return encode_seconds_; }
+  bool dragging() const { return dragging_; }
+
+ private:
+  // The base: the thin-plate energy x^T L M^-1 L x over the region, the rest of the mesh held,
+  // plus a soft pull (w M) of the handle towards its own positions, a low-pass filter that keeps
+  // the handle's shape but not its detail (a hard handle would make the base as rough as the
+  // scan right where the bend is). The blend field: the same operator on the region minus the
+  // handle, s = 1 held on the handle and 0 on the rest.
+  void decompose() {
+    const int n = mesh_.num_vertices();
+    const std::vector<Vec3>& x = mesh_.vertices;
+    const internal::Adjacency adj = internal::build_adjacency(n, mesh_.faces);
+    std::vector<int> region_id(n, -1), free_id(n, -1);
+    std::vector<int> free;
+    for (std::size_t k = 0; k < region_.size(); ++k) {
+      const int i = region_[k];
+      region_id[i] = static_cast<int>(k);
+      if (!in_handle_[i]) {
+        free_id[i] = static_cast<int>(free.size());
+        free.push_back(i);
+      }
+    }
+    check_components(adj, free_id, free);
+
+    // Clamped cotangent weights on the edges (a small floor keeps every edge connected, so the
+    // systems stay definite on meshes with obtuse triangles), barycentric vertex areas.
+    std::vector<double> w(adj.neighbors.size(), 0.0);
+    std::vector<double> area(n, 0.0);
+    auto slot = [&](int v, int u) {
+      const auto b = adj.neighbors.begin() + adj.neighbor_offsets[v];
+      const auto e = adj.neighbors.begin() + adj.neighbor_offsets[v + 1];
+      return static_cast<std::size_t>(std::lower_bound(b, e, u) - adj.neighbors.begin());
+    };
+    double edge_sum = 0.0;
+    int edge_count = 0;
+    for (const Face& f : mesh_.faces) {
+      const double a = triangle_area_normal(x[f[0]], x[f[1]], x[f[2]]).norm() / 2;
+      for (int c = 0; c < 3; ++c) {
+        area[f[c]] += a / 3;
+        const int o = f[c], p = f[(c + 1) % 3], q = f[(c + 2) % 3];
+        if (region_id[o] >= 0) {
+          edge_sum += (x[p] - x[o]).norm();
+          ++edge_count;
+        }
+        const Vec3 ea = x[p] - x[o], eb = x[q] - x[o];
+        const double sn = ea.cross(eb).norm();
+        if (!(sn > 0)) continue;
+        const double cot = 0.5 * ea.dot(eb) / sn;
+        w[slot(p, q)] += cot;
+        w[slot(q, p)] += cot;
+      }
+    }
+    double mean_w = 0.0, mean_a = 0.0;
+    for (double& v : w) mean_w += (v = std::max(v, 0.0));
+    for (double a : area) mean_a += a;
+    mean_w = w.empty() ? 1.0 : mean_w / w.size();
+    mean_a /= n;
+    for (double& v : w) v += 1e-6 * mean_w;
+    for (double& a : area) a = std::max(a, 1e-9 * mean_a);
+    std::vector<double> diag(n, 0.0);
+    for (int v = 0; v < n; ++v)
+      for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) diag[v] += w[t];
+    // Filter response w / (w + k^4) for a mode of wavenumber k (Q ~ M Laplacian^2).
+    const double wavelength = opt_.handle_smoothing * (edge_count ? edge_sum / edge_count : 1.0);
+    const double pull = std::pow(2 * M_PI / wavelength, 4);
+
+    // Rows of Q = L M^-1 L for the unknowns: Q_ij = sum_k L_ik L_kj / M_k over k in {i} and i's
+    // neighbours; held columns j go to the right-hand side.
+    auto assemble = [&](const std::vector<int>& unknowns, const std::vector<int>& id, int cols,
+                        const std::function<void(int, int, double, Eigen::MatrixXd&)>& held, Eigen::MatrixXd& rhs) {
+      const int m = static_cast<int>(unknowns.size());
+      std::vector<Eigen::Triplet<double>> trip;
+      trip.reserve(static_cast<std::size_t>(m) * 50);
+      rhs = Eigen::MatrixXd::Zero(m, cols);
+      auto add_row_k = [&](int r, int k, double lik) {
+        const double c = lik / area[k];
+        auto add = [&](int j, double lkj) {
+          if (id[j] >= 0)
+            trip.emplace_back(r, id[j], c * lkj);
+          else
+            held(r, j, c * lkj, rhs);
+        };
+        add(k, diag[k]);
+        for (int t = adj.neighbor_offsets[k]; t < adj.neighbor_offsets[k + 1]; ++t) add(adj.neighbors[t], -w[t]);
+      };
+      for (int r = 0; r < m; ++r) {
+        const int i = unknowns[r];
+        add_row_k(r, i, diag[i]);
+        for (int t = adj.neighbor_offsets[i]; t < adj.neighbor_offsets[i + 1]; ++t) add_row_k(r, adj.neighbors[t], -w[t]);
+      }
+      return trip;
+    };
+    auto solve = [](int m, std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs, const char* what) {
+      Eigen::SparseMatrix<double> Q(m, m);
+      Q.setFromTriplets(trip.begin(), trip.end());
+      Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(Q);
+      if (llt.info() != Eigen::Success) throw SolverError(std::string("the region's ") + what + " system could not be factorized");
+      Eigen::MatrixXd sol = llt.solve(rhs);
+      if (llt.info() != Eigen::Success || !sol.allFinite()) throw SolverError(std::string("the region's ") + what + " solve failed");
+      return sol;
+    };
+
+    Eigen::MatrixXd rhs;
+    std::vector<Eigen::Triplet<double>> trip = assemble(
+        region_, region_id, 3, [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs);
+    for (int i : handle_) {
+      const int r = region_id[i];
+      trip.emplace_back(r, r, pull * area[i]);
+      rhs.row(r) += pull * area[i] * x[i].transpose();
+    }
+    const Eigen::MatrixXd faired = solve(static_cast<int>(region_.size()), trip, rhs, "fairing");
+    base_ = x;
+    for (std::size_t k = 0; k < region_.size(); ++k) base_[region_[k]] = faired.row(static_cast<Eigen::Index>(k)).transpose();
+
+    trip = assemble(
+        free, free_id, 1, [&](int r, int j, double v, Eigen::MatrixXd& b) { if (in_handle_[j]) b(r, 0) -= v; }, rhs);
+    const Eigen::MatrixXd blend = solve(static_cast<int>(free.size()), trip, rhs, "blend field");
+    s_.assign(n, 0.0);
+    for (int i : handle_) s_[i] = 1.0;
+    for (std::size_t k = 0; k < free.size(); ++k) s_[free[k]] = blend(static_cast<Eigen::Index>(k), 0);
+  }
+
+  // Every connected part of the free vertices must touch a held vertex (fixed rest or handle);
+  // otherwise its fairing has no boundary condition.
+  void check_components(const internal::Adjacency& adj, const std::vector<int>& free_id, const std::vector<int>& free) const {
+    std::vector<char> seen(free.size(), 0);
+    std::vector<int> stack;
+    for (std::size_t start = 0; start < free.size(); ++start) {
+      if (seen[start]) continue;
+      bool anchored = false;
+      seen[start] = 1;
+      stack.assign(1, free[start]);
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
+          const int u = adj.neighbors[t];
+          if (free_id[u] < 0) {
+            anchored = true;
+          } else if (!seen[free_id[u]]) {
+            seen[free_id[u]] = 1;
+            stack.push_back(u);
+          }
+        }
+      }
+      if (!anchored)
+        throw InvalidInput("a connected part of the region (vertex " + std::to_string(free[start]) +
+                           ") touches neither the fixed rest of the mesh nor the handle");
+    }
+  }
+
+  // The region's prisms: every face with a region vertex. Its vertices outside the region have
+  // zero displacement (the base is the mesh there) and are pinned.
+  void encode() {
+    const int n = mesh_.num_vertices();
+    std::vector<int> sub_id(n, -1);
+    TriMesh detail, base;
+    for (const Face& f : mesh_.faces) {
+      if (!in_region_[f[0]] && !in_region_[f[1]] && !in_region_[f[2]]) continue;
+      Face g;
+      for (int c = 0; c < 3; ++c) {
+        int& id = sub_id[f[c]];
+        if (id < 0) {
+          id = static_cast<int>(sub_vertices_.size());
+          sub_vertices_.push_back(f[c]);
+        }
+        g[c] = id;
+      }
+      detail.faces.push_back(g);
+    }
+    base.faces = detail.faces;
+    for (int v : sub_vertices_) {
+      detail.vertices.push_back(mesh_.vertices[v]);
+      base.vertices.push_back(base_[v]);
+    }
+    if (detail.faces.empty()) throw InvalidInput("the region has no face");
+    enc_ = encode_detail(detail, base, opt_.encode);
+    // The handle moves rigidly, and so does its detail: its vertices farther than a few rings
+    // from the blended part are placed by the (then exact) vector rule, not solved.
+    const std::vector<int> depth = handle_depth(opt_.handle_solved_rings + 1);
+    enc_.pinned.resize(sub_vertices_.size());
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
+      const int v = sub_vertices_[k];
+      enc_.pinned[k] = !in_region_[v] || depth[v] > opt_.handle_solved_rings;
+    }
+  }
+
+  // Edge distance of each vertex from the nearest vertex outside the handle, capped at cap.
+  std::vector<int> handle_depth(int cap) const {
+    const int n = mesh_.num_vertices();
+    const internal::Adjacency adj = internal::build_adjacency(n, mesh_.faces);
+    std::vector<int> depth(n, cap), frontier, next;
+    for (int i = 0; i < n; ++i)
+      if (!in_handle_[i]) {
+        depth[i] = 0;
+        frontier.push_back(i);
+      }
+    for (int d = 1; d < cap && !frontier.empty(); ++d) {
+      next.clear();
+      for (int v : frontier)
+        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
+          const int u = adj.neighbors[t];
+          if (depth[u] > d) {
+            depth[u] = d;
+            next.push_back(u);
+          }
+        }
+      frontier.swap(next);
+    }
+    return depth;
+  }
+
+  double ensure_reconstructor() const {
+    if (rec_) return 0.0;
+    const auto t0 = Clock::now();
+    rec_ = std::make_unique<VolumeReconstructor>(enc_, opt_.reconstruct);
+    return seconds_since(t0);
+  }
+
+  std::vector<Vec3> gather(const std::vector<Vec3>& whole) const {
+    std::vector<Vec3> out(sub_vertices_.size());
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) out[k] = whole[sub_vertices_[k]];
+    return out;
+  }
+
+  // Region vertices take the solution; all others keep the mesh's positions exactly.
+  void scatter(const std::vector<Vec3>& sub, std::vector<Vec3>& whole) const {
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k)
+      if (in_region_[sub_vertices_[k]]) whole[sub_vertices_[k]] = sub[k];
+  }
+
+  void finish(const std::vector<Vec3>& sub, const std::vector<Vec3>& sub_base, EditResult& res) const {
+    res.times.decompose = decompose_seconds_;
+    res.times.encode = encode_seconds_;
+    res.positions = mesh_.vertices;
+    scatter(sub, res.positions);
+    res.volume = volume_metrics(enc_, evaluate_base_frames(enc_, sub_base), sub);
+  }
+
+  TriMesh mesh_;
+  EditOptions opt_;
+  std::vector<char> in_region_, in_handle_;
+  std::vector<int> region_, handle_;
+  std::vector<Vec3> base_;
+  std::vector<double> s_;
+  std::vector<int> sub_vertices_;
+  DetailEncoding enc_;
+  mutable std::unique_ptr<VolumeReconstructor> rec_;
+  double decompose_seconds_ = 0.0, encode_seconds_ = 0.0;
+  bool dragging_ = false;
+  std::vector<Vec3> drag_sub_, drag_positions_;
+  EditTransform drag_transform_;
+};
+
+RegionEditor::RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
+                           EditOptions options)
+    : impl_(std::make_unique<Impl>(mesh, region, handle, std::move(options))) {}
+RegionEditor::~RegionEditor() = default;
+RegionEditor::RegionEditor(RegionEditor&&) noexcept = default;
+RegionEditor& RegionEditor::operator=(RegionEditor&&) noexcept = default;
+const TriMesh& RegionEditor::mesh() const { return impl_->mesh(); }
+const std::vector<Vec3>& RegionEditor::base() const { return impl_->base(); }
+const std::vector<double>& RegionEditor::blend() const { return impl_->blend(); }
+const std::vector<int>& RegionEditor::region_vertices() const { return impl_->region(); }
+const std::vector<int>& RegionEditor::handle_vertices() const { return impl_->handle(); }
+int RegionEditor::region_faces() const { return static_cast<int>(impl_->encoding().detail_faces.size()); }
+const DetailEncoding& RegionEditor::encoding() const { return impl_->encoding(); }
+const std::vector<int>& RegionEditor::region_submesh_vertices() const { return impl_->sub_vertices(); }
+const EditOptions& RegionEditor::options() const { return impl_->options(); }
+double RegionEditor::decompose_seconds() const { return impl_->decompose_seconds(); }
+double RegionEditor::encode_seconds() const { return impl_->encode_seconds(); }
+std::vector<Vec3> RegionEditor::edited_base(const EditTransform& t) const { return impl_->edited_base(t); }
+EditResult RegionEditor::apply(const EditTransform& t) const { return impl_->apply(t); }
+void RegionEditor::begin_drag() { impl_->begin_drag(); }
+const std::vector<Vec3>& RegionEditor::update_drag(const EditTransform& t) { return impl_->update_drag(t); }
+EditResult RegionEditor::end_drag() { return impl_->end_drag(); }
+bool RegionEditor::dragging() const { return impl_->dragging(); }
+
+}  // namespace strata
