@@ -20,6 +20,7 @@ struct DeformCmdOptions {
   std::string output;
   std::string base_output;  // empty: not written
   std::string report;       // empty: no report
+  double smoothing = 0.25;
   bool quiet = false;
 };
 
@@ -63,6 +64,7 @@ int run_deform(const DeformCmdOptions& o) {
   const TimedIntersections input_pairs = find_intersections(input.mesh.vertices, input.mesh.faces);
 
   EditOptions options;
+  options.smoothing_fraction = o.smoothing;
   options.method = method == Method::Volumes ? EditOptions::Method::Volumes : EditOptions::Method::Vectors;
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
@@ -167,6 +169,11 @@ Subcommand register_deform(CLI::App& parent) {
   app->add_option("-o,--output", o->output, "Edited mesh to write (atomically)")->required();
   app->add_option("--write-base", o->base_output, "Also write the edited smooth base here");
   app->add_option("--report", o->report, "Also write a JSON report (metrics, sizes, timings) here");
+  app->add_option("--smoothing", o->smoothing,
+                  "Base cut-off wavelength as a fraction of the region's size: shape longer than this stays in "
+                  "the smooth base, shorter becomes detail")
+      ->check(CLI::Range(1e-3, 100.0))
+      ->capture_default_str();
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->footer("Example:\n  strata deform scan.off --edit bend.json --method volumes -o bent.obj --report report.json");
   return {app, [o] { return run_deform(*o); }};

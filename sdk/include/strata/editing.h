@@ -82,9 +82,11 @@ struct EditOptions {
   //! the base normals (the baseline every figure compares with).
   enum class Method { Volumes, Vectors };
   Method method = Method::Volumes;
-  //! The handle's base is the handle low-pass filtered: detail of wavelengths below about this
-  //! many mean edge lengths (of the region) is removed from it, coarser shape kept.
-  double handle_smoothing = 30.0;
+  //! Shape features longer than about this wavelength (world units) stay in the base, shorter
+  //! ones become detail. 0 (default): smoothing_fraction times the region's bounding-box diagonal.
+  double smoothing_wavelength = 0.0;
+  //! The cut-off wavelength relative to the region's size when smoothing_wavelength is 0.
+  double smoothing_fraction = 0.25;
   //! Handle vertices within this many edges of the blended part are solved with it; the handle's
   //! other vertices move rigidly with their base (placed like displacement vectors, which is
   //! exact there) and are not solved.
@@ -96,8 +98,6 @@ struct EditOptions {
   //! Interactive steps (update_drag()): volumes on the coarse levels only, the finest level by
   //! regularization (section 5). The tolerance applies to the coarse levels.
   WarmStartOptions drag{true, 1e-2};
-  //! Tolerance of the exact solve at the end of a drag (warm-started from the last drag step).
-  double end_drag_tolerance = 1e-4;
 };
 
 //! Timings of one edit, in seconds.
@@ -120,14 +120,14 @@ struct EditResult {
 };
 
 //! Decomposition and editing of one region of a mesh (paper, section 5). The constructor
-//! decomposes: the region is faired by minimizing the thin-plate energy (bi-Laplacian,
-//! x^T L M^-1 L x with clamped cotangent L and barycentric areas M) with the rest of the mesh held
-//! as the boundary condition, so the base is tangent-continuous with it; the handle is softly
-//! pulled towards its own shape (EditOptions::handle_smoothing), so that a limb's end keeps its
-//! form in the base instead of being faired away. The blend field s is bi-harmonic on the region
-//! minus the handle, 0 on the rest and 1 on the handle. The detail of the prisms touching the
-//! region is encoded over that base; vertices outside the region are pinned, so only the region
-//! is solved.
+//! decomposes by low-pass filtering the region: the base minimizes the thin-plate energy
+//! (bi-Laplacian, x^T L M^-1 L x with clamped cotangent L and barycentric areas M) plus a pull
+//! towards the mesh (EditOptions::smoothing_wavelength sets the cut-off), with the rest of the
+//! mesh held as the boundary condition, so the base is tangent-continuous with it. (Pure fairing
+//! would neck a limb in and make its thickness "detail".) The blend field s is bi-harmonic on the
+//! region minus the handle, 0 on the rest and 1 on the handle. The detail of the prisms touching
+//! the region is encoded over that base; vertices outside the region are pinned, so only the
+//! region is solved, and so are handle vertices away from the blended part (they move rigidly).
 //!
 //! Not thread-safe: one drag at a time, one thread per object.
 class RegionEditor {
@@ -178,7 +178,8 @@ class RegionEditor {
   //! coarse levels only (section 5). Returns the whole mesh's positions.
   //! \throw InvalidInput if no drag is active, or as edited_base().
   const std::vector<Vec3>& update_drag(const EditTransform& transform);
-  //! Ends the drag with the exact solve on the last transform, warm-started from the last step.
+  //! Ends the drag with the exact solve on the last transform: apply(), from the clean start.
+  //! (Warm-started exact solves drift into folds over long drags.)
   //! \throw InvalidInput if no drag is active.
   EditResult end_drag();
   bool dragging() const;

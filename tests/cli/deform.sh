@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# `strata deform`: an elbow bend of a generated bumpy cylinder by volumes and by vectors, the JSON
+# report's fields and figures; then bad edit scripts and bad selections, each a clear error
+# naming the script, a non-zero exit and no output file.
+# Usage: bash deform.sh <path-to-strata> <tests/data dir>
+set -euo pipefail
+STRATA=${1:?usage: deform.sh <path-to-strata> <tests/data dir>}
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+
+"$STRATA" generate --case bumps --triangles 8000 --out-dir "$TMP/case" >/dev/null
+MESH="$TMP/case/detail.obj"
+cat >"$TMP/bend.json" <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 3.5], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 90, "pivot": [1.2, 0, 2.5]}}}
+JSON
+for m in volumes vectors; do
+  "$STRATA" deform "$MESH" --edit "$TMP/bend.json" --method "$m" -o "$TMP/$m.obj" --write-base "$TMP/base_$m.obj" \
+    --report "$TMP/$m.json" >"$TMP/$m.stdout" 2>"$TMP/$m.stderr"
+  grep -q "intersections" "$TMP/$m.stdout" || { echo "FAIL: no summary for $m" >&2; exit 1; }
+  "$STRATA" stats "$TMP/$m.obj" >/dev/null
+done
+
+python3 - "$TMP" <<'PY'
+import json, sys
+tmp = sys.argv[1]
+errors = []
+for method in ("volumes", "vectors"):
+    r = json.load(open(f"{tmp}/{method}.json"))
+    e = r["edits"][0]
+    for key in ("region_vertices", "handle_vertices", "region_faces", "encoding", "volume_metrics", "timing_seconds", "iterations"):
+        if key not in e:
+            errors.append(f"{method}: edits[0] lacks {key}")
+    for key in ("select", "decompose", "encode", "setup", "edit", "solve", "metrics"):
+        if key not in e["timing_seconds"]:
+            errors.append(f"{method}: no timing of {key}")
+    if not (0 < e["handle_vertices"] < e["region_vertices"]):
+        errors.append(f"{method}: sizes {e['handle_vertices']} / {e['region_vertices']}")
+    if method == "volumes":
+        vm = e["volume_metrics"]
+        if not (vm["max_relative_error"] <= 1e-3 and vm["rms_relative_error"] <= 1e-4):
+            errors.append(f"volumes: prism errors {vm['max_relative_error']} / {vm['rms_relative_error']}")
+        if r["intersections"]["new_pairs"] != 0:
+            errors.append(f"volumes: {r['intersections']['new_pairs']} new pairs")
+    else:
+        if e["iterations"] is not None:
+            errors.append("vectors: iterations should be null")
+        if not e["volume_metrics"]["max_relative_error"] > 1.0:
+            errors.append("vectors: volumes unexpectedly kept")
+if errors:
+    print("\n".join("FAIL: " + x for x in errors), file=sys.stderr)
+    sys.exit(1)
+PY
+
+# Bad scripts and selections: exit 1, the script's name and the problem on stderr, no output.
+expect_error() {  # <name> <expected text> <script text>
+  printf '%s' "$3" >"$TMP/$1.json"
+  rm -f "$TMP/out.obj"
+  if "$STRATA" deform "$MESH" --edit "$TMP/$1.json" -o "$TMP/out.obj" -q >/dev/null 2>"$TMP/err"; then
+    echo "FAIL: $1 accepted" >&2; exit 1
+  fi
+  grep -q "$1.json" "$TMP/err" || { echo "FAIL: $1: message does not name the script: $(cat "$TMP/err")" >&2; exit 1; }
+  grep -q "$2" "$TMP/err" || { echo "FAIL: $1: expected '$2' in: $(cat "$TMP/err")" >&2; exit 1; }
+  [ ! -e "$TMP/out.obj" ] || { echo "FAIL: $1 left an output file" >&2; exit 1; }
+  ls "$TMP" | grep -q '\.tmp' && { echo "FAIL: $1 left a temporary file" >&2; exit 1; }
+  return 0
+}
+H='"handle": {"halfspace": {"point": [0, 0, 3.5], "normal": [0, 0, 1]}}'
+R='"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1]}}'
+T='"transform": {"rotate": {"axis": [0, 1, 0], "degrees": 90}}'
+expect_error truncated "not valid JSON" "{$R, $H, \"transform\": {\"rot"
+expect_error typo 'unknown key "rotat"' "{$R, $H, \"transform\": {\"rotat\": {}}}"
+expect_error empty_region "region selects no vertex" "{\"region\": {\"sphere\": {\"center\": [50, 0, 0], \"radius\": 1}}, $H, $T}"
+expect_error empty_handle "handle selects no vertex" "{$R, \"handle\": {\"sphere\": {\"center\": [50, 0, 0], \"radius\": 1}}, $T}"
+expect_error whole_handle "handle is the whole region" "{$R, \"handle\": {\"halfspace\": {\"point\": [0, 0, 1], \"normal\": [0, 0, 1]}}, $T}"
+expect_error whole_mesh "whole mesh" "{\"region\": {\"box\": {\"min\": [-9, -9, -9], \"max\": [9, 9, 9]}}, $H, $T}"
+expect_error bad_index "out of range" "{$R, \"handle\": {\"vertices\": [99999999]}, $T}"
+expect_error zero_axis "must not be zero" "{$R, $H, \"transform\": {\"rotate\": {\"axis\": [0, 0, 0], \"degrees\": 90}}}"
+rm -f "$TMP/out.obj"
+if "$STRATA" deform "$MESH" --edit "$TMP/missing.json" -o "$TMP/out.obj" -q 2>"$TMP/err"; then
+  echo "FAIL: missing script accepted" >&2; exit 1
+fi
+grep -q "missing.json" "$TMP/err" || { echo "FAIL: missing script not named" >&2; exit 1; }
+echo "deform: ok"
