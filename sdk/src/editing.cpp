@@ -150,10 +150,11 @@ class RegionEditor::Impl {
     if (handle_.empty()) throw InvalidInput("the handle selects no vertex of the region");
     if (handle_.size() == region_.size()) throw InvalidInput("the handle is the whole region: nothing to blend");
     if (static_cast<int>(region_.size()) == n) throw InvalidInput("the region is the whole mesh: nothing is held fixed");
-    decompose();
+    const internal::Adjacency adj = internal::build_adjacency(n, mesh.faces);
+    decompose(adj);
     decompose_seconds_ = seconds_since(t0);
     const auto t1 = Clock::now();
-    encode();
+    encode(adj);
     encode_seconds_ = seconds_since(t1);
   }
 
@@ -235,10 +236,9 @@ class RegionEditor::Impl {
   // low-pass filter, w / (w + k^4) for a mode of wavenumber k, that keeps the limb's shape and
   // removes the detail. The blend field: the same operator without the pull on the region minus
   // the handle, s = 1 held on the handle and 0 on the rest.
-  void decompose() {
+  void decompose(const internal::Adjacency& adj) {
     const int n = mesh_.num_vertices();
     const std::vector<Vec3>& x = mesh_.vertices;
-    const internal::Adjacency adj = internal::build_adjacency(n, mesh_.faces);
     std::vector<int> region_id(n, -1), free_id(n, -1);
     std::vector<int> free;
     for (std::size_t k = 0; k < region_.size(); ++k) {
@@ -253,38 +253,20 @@ class RegionEditor::Impl {
 
     // Clamped cotangent weights on the edges (a small floor keeps every edge connected, so the
     // systems stay definite on meshes with obtuse triangles), barycentric vertex areas.
-    std::vector<double> w(adj.neighbors.size(), 0.0);
+    std::vector<double> w = internal::clamped_cotan_weights(x, mesh_.faces, adj);
     std::vector<double> area(n, 0.0);
-    auto slot = [&](int v, int u) {
-      const auto b = adj.neighbors.begin() + adj.neighbor_offsets[v];
-      const auto e = adj.neighbors.begin() + adj.neighbor_offsets[v + 1];
-      return static_cast<std::size_t>(std::lower_bound(b, e, u) - adj.neighbors.begin());
-    };
     for (const Face& f : mesh_.faces) {
       const double a = triangle_area_normal(x[f[0]], x[f[1]], x[f[2]]).norm() / 2;
-      for (int c = 0; c < 3; ++c) {
-        area[f[c]] += a / 3;
-        const int o = f[c], p = f[(c + 1) % 3], q = f[(c + 2) % 3];
-        const Vec3 ea = x[p] - x[o], eb = x[q] - x[o];
-        const double sn = ea.cross(eb).norm();
-        if (!(sn > 0)) continue;
-        const double cot = 0.5 * ea.dot(eb) / sn;
-        w[slot(p, q)] += cot;
-        w[slot(q, p)] += cot;
-      }
+      for (int v : f) area[v] += a / 3;
     }
     double mean_w = 0.0, mean_a = 0.0;
-    for (double& v : w) mean_w += (v = std::max(v, 0.0));
+    for (double v : w) mean_w += v;
     for (double a : area) mean_a += a;
     mean_w = w.empty() ? 1.0 : mean_w / w.size();
     mean_a /= n;
     for (double& v : w) v += 1e-6 * mean_w;
     for (double& a : area) a = std::max(a, 1e-9 * mean_a);
-    std::vector<char> on_boundary(n, 0);
-    const std::vector<std::array<int, 3>> fn = internal::face_neighbors(n, mesh_.faces);
-    for (std::size_t j = 0; j < fn.size(); ++j)
-      for (int e = 0; e < 3; ++e)
-        if (fn[j][e] < 0) on_boundary[mesh_.faces[j][e]] = on_boundary[mesh_.faces[j][(e + 1) % 3]] = 1;
+    const std::vector<char> on_boundary = internal::boundary_vertices(n, mesh_.faces);
     std::vector<double> diag(n, 0.0);
     for (int v = 0; v < n; ++v)
       for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) diag[v] += w[t];
@@ -386,7 +368,7 @@ class RegionEditor::Impl {
 
   // The region's prisms: every face with a region vertex. Its vertices outside the region have
   // zero displacement (the base is the mesh there) and are pinned.
-  void encode() {
+  void encode(const internal::Adjacency& adj) {
     const int n = mesh_.num_vertices();
     std::vector<int> sub_id(n, -1);
     TriMesh detail, base;
@@ -412,7 +394,7 @@ class RegionEditor::Impl {
     enc_ = encode_detail(detail, base, opt_.encode);
     // The handle moves rigidly, and so does its detail: its vertices farther than a few rings
     // from the blended part are placed by the (then exact) vector rule, not solved.
-    const std::vector<int> depth = handle_depth(opt_.handle_solved_rings + 1);
+    const std::vector<int> depth = handle_depth(adj, opt_.handle_solved_rings + 1);
     enc_.pinned.resize(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
@@ -421,9 +403,8 @@ class RegionEditor::Impl {
   }
 
   // Edge distance of each vertex from the nearest vertex outside the handle, capped at cap.
-  std::vector<int> handle_depth(int cap) const {
+  std::vector<int> handle_depth(const internal::Adjacency& adj, int cap) const {
     const int n = mesh_.num_vertices();
-    const internal::Adjacency adj = internal::build_adjacency(n, mesh_.faces);
     std::vector<int> depth(n, cap), frontier, next;
     for (int i = 0; i < n; ++i)
       if (!in_handle_[i]) {

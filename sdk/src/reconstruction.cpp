@@ -206,11 +206,7 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < L.faces.size(); ++j)
       for (int c = 0; c < 3; ++c) lf[j][c] = local[L.faces[j][c]];
     const internal::Adjacency adj = internal::build_adjacency(nv, lf);
-    L.boundary.assign(nv, 0);
-    const std::vector<std::array<int, 3>> fn = internal::face_neighbors(nv, lf);
-    for (std::size_t j = 0; j < lf.size(); ++j)
-      for (int e = 0; e < 3; ++e)
-        if (fn[j][e] < 0) L.boundary[lf[j][e]] = L.boundary[lf[j][(e + 1) % 3]] = 1;
+    L.boundary = internal::boundary_vertices(nv, lf);
     build_jj_pattern(lf, adj, L);
     if (finest) {
       // The encoding's own weights (the finest level's vertex ids are the original ones).

@@ -82,4 +82,12 @@ if "$STRATA" deform "$MESH" --edit "$TMP/missing.json" -o "$TMP/out.obj" -q 2>"$
   echo "FAIL: missing script accepted" >&2; exit 1
 fi
 grep -q "missing.json" "$TMP/err" || { echo "FAIL: missing script not named" >&2; exit 1; }
+# Two outputs on one file are refused before any work.
+for opt in "--report" "--write-base"; do
+  if "$STRATA" deform "$MESH" --edit "$TMP/bend.json" -o "$TMP/same.obj" $opt "$TMP/same.obj" -q 2>"$TMP/err"; then
+    echo "FAIL: $opt on the output's file accepted" >&2; exit 1
+  fi
+  grep -q "same file" "$TMP/err" || { echo "FAIL: $opt: $(cat "$TMP/err")" >&2; exit 1; }
+  [ ! -e "$TMP/same.obj" ] || { echo "FAIL: $opt left an output" >&2; exit 1; }
+done
 echo "deform: ok"

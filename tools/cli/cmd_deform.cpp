@@ -48,13 +48,7 @@ json edit_json(const RegionEditor& editor, const EditResult& r, double select_se
 int run_deform(const DeformCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
-  check_mesh_output_path(o.output);
-  if (!o.base_output.empty()) check_mesh_output_path(o.base_output);
-  if (!o.report.empty()) {
-    check_output_path(o.report);
-    if (same_file_name(o.report, o.output))
-      throw InvalidInput(o.report + ": the report would overwrite the output mesh; give them different names");
-  }
+  check_outputs(o.output, {o.base_output}, o.report);
   Stopwatch total;
   Stopwatch sw;
   log.phase("reading " + o.input + " and " + o.edit);

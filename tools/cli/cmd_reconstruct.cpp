@@ -63,13 +63,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
   // Fail on an unwritable destination before the (possibly long) computation.
-  check_mesh_output_path(o.output);
-  if (!o.report.empty()) {
-    check_output_path(o.report);
-    if (same_file_name(o.report, o.output))
-      throw InvalidInput(o.report +
-                         ": the report would overwrite the output mesh; give them different names");
-  }
+  check_outputs(o.output, {}, o.report);
 
   PhaseTimes times;
   log.phase("reading " + o.detail + ", " + o.base + ", " + o.edited_base);

@@ -92,6 +92,24 @@ bool same_file_name(const std::string& a, const std::string& b) {
   return pa.lexically_normal() == pb.lexically_normal();
 }
 
+void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes, const std::string& report) {
+  std::vector<std::string> all{output};
+  check_mesh_output_path(output);
+  for (const std::string& m : extra_meshes)
+    if (!m.empty()) {
+      check_mesh_output_path(m);
+      all.push_back(m);
+    }
+  if (!report.empty()) {
+    check_output_path(report);
+    all.push_back(report);
+  }
+  for (std::size_t a = 0; a < all.size(); ++a)
+    for (std::size_t b = a + 1; b < all.size(); ++b)
+      if (same_file_name(all[a], all[b]))
+        throw InvalidInput(all[b] + ": two outputs would be written to the same file; give them different names");
+}
+
 void check_mesh_output_path(const std::string& path) {
   check_output_path(path);
   std::string ext = fs::path(path).extension().string();

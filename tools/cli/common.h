@@ -97,6 +97,11 @@ bool same_file_name(const std::string& a, const std::string& b);
 //! Same as check_output_path, and the extension must be one write_mesh supports.
 void check_mesh_output_path(const std::string& path);
 
+//! check_mesh_output_path for \p output and each non-empty path of \p extra_meshes, and
+//! check_output_path for \p report unless empty; all of them must name different files.
+//! Called before a long computation so that a typo fails at once.
+void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes, const std::string& report);
+
 //! Creates \p dir (and its parents) if needed; throws IoError if that fails or it is not a directory.
 void ensure_directory(const std::string& dir);
 

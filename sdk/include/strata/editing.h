@@ -71,8 +71,9 @@ struct EditTransform {
   static EditTransform rotation(const Vec3& axis, double degrees, const Vec3& pivot, const Vec3& translation = Vec3::Zero());
   //! The full map applied to \p x.
   Vec3 apply(const Vec3& x) const;
-  //! The map blended with weight \p s (0: identity, 1: the full map).
-  //! \pre linear has a positive determinant (checked by RegionEditor, which throws InvalidInput).
+  //! The map blended with weight \p s (0: identity, 1: the full map). Decomposes the linear part
+  //! on every call (an SVD); RegionEditor decomposes once per transform for all vertices.
+  //! \throw InvalidInput if the map is not finite or its linear part is singular or reflecting.
   Vec3 apply_blended(const Vec3& x, double s) const;
 };
 

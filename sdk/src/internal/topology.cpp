@@ -59,8 +59,17 @@ std::vector<std::array<int, 3>> face_neighbors(int nv, const std::vector<Face>& 
   return out;
 }
 
-std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
-                                             const Adjacency& adj) {
+std::vector<char> boundary_vertices(int nv, const std::vector<Face>& faces) {
+  std::vector<char> out(nv, 0);
+  const std::vector<std::array<int, 3>> fn = face_neighbors(nv, faces);
+  for (std::size_t j = 0; j < faces.size(); ++j)
+    for (int e = 0; e < 3; ++e)
+      if (fn[j][e] < 0) out[faces[j][e]] = out[faces[j][(e + 1) % 3]] = 1;
+  return out;
+}
+
+std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
+                                          const Adjacency& adj) {
   std::vector<double> w(adj.neighbors.size(), 0.0);
   auto slot = [&](int v, int u) {
     const auto b = adj.neighbors.begin() + adj.neighbor_offsets[v];
@@ -78,10 +87,17 @@ std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const s
       w[slot(a, b)] += cot;
       w[slot(b, a)] += cot;
     }
+  for (double& v : w) v = std::max(v, 0.0);
+  return w;
+}
+
+std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
+                                             const Adjacency& adj) {
+  std::vector<double> w = clamped_cotan_weights(x, faces, adj);
   for (int v = 0; v < adj.num_vertices(); ++v) {
     const int b = adj.neighbor_offsets[v], e = adj.neighbor_offsets[v + 1];
     double sum = 0.0;
-    for (int k = b; k < e; ++k) sum += (w[k] = std::max(w[k], 0.0));
+    for (int k = b; k < e; ++k) sum += w[k];
     for (int k = b; k < e; ++k) w[k] = sum > 0.0 ? w[k] / sum : 1.0 / (e - b);
   }
   return w;

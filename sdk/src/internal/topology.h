@@ -25,6 +25,14 @@ Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces);
 //! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary).
 std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vector<Face>& faces);
 
+//! One flag per vertex: whether it lies on a boundary edge (an edge of one face only).
+std::vector<char> boundary_vertices(int num_vertices, const std::vector<Face>& faces);
+
+//! Cotangent weights (cot alpha + cot beta) / 2 of each vertex's neighbours, clamped to be
+//! non-negative. Aligned with Adjacency::neighbors.
+std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
+                                          const Adjacency& adj);
+
 //! Cotangent weights of each vertex's neighbours on the mesh (positions, faces), clamped to be
 //! non-negative and normalized to sum to 1 per vertex (uniform where all clamp to zero). Aligned
 //! with Adjacency::neighbors.
