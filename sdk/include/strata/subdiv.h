@@ -1,0 +1,207 @@
+//! \file subdiv.h
+//! Subdivision limit surfaces (OpenSubdiv) as base surfaces: a control cage with crease, corner
+//! and boundary tags, exact limit evaluation at (ptex face, u, v), tessellation, and the foot
+//! points of detail vertices on the limit surface (paper, section 3, with the limit surface as
+//! the smooth base S). OpenSubdiv's types stay inside the implementation.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata {
+
+//! A polygonal mesh (a control cage): faces of 3 or more corners, counter-clockwise seen from
+//! outside.
+struct PolyMesh {
+  std::vector<Vec3> vertices;
+  std::vector<std::vector<int>> faces;
+
+  int num_vertices() const { return static_cast<int>(vertices.size()); }
+  int num_faces() const { return static_cast<int>(faces.size()); }
+};
+
+//! Subdivision scheme of a cage.
+enum class SubdivScheme {
+  Auto,          //!< Loop for an all-triangle cage, Catmull-Clark otherwise
+  Loop,          //!< triangles only
+  CatmullClark,  //!< any polygons; non-quads are split into quad sub-faces (one ptex face each)
+};
+
+//! How the limit surface treats the cage's open boundary.
+enum class BoundaryRule {
+  EdgeOnly,       //!< boundary edges are sharp, boundary vertices of valence 2 stay smooth
+  EdgeAndCorner,  //!< also valence-2 boundary vertices are sharp corners
+};
+
+//! Sharpness tags of a cage (the semi-sharp creases of DeRose et al. 1998, as in OpenSubdiv).
+//! A sharpness of 10 or more is infinitely sharp.
+struct SubdivTags {
+  struct Crease {
+    int v0 = -1, v1 = -1;  //!< an edge of the cage, either direction
+    double sharpness = 10.0;
+  };
+  struct Corner {
+    int vertex = -1;
+    double sharpness = 10.0;
+  };
+  std::vector<Crease> creases;
+  std::vector<Corner> corners;
+};
+
+//! Options of a SubdivSurface, with their defaults.
+struct SubdivOptions {
+  SubdivScheme scheme = SubdivScheme::Auto;
+  BoundaryRule boundary = BoundaryRule::EdgeOnly;
+  //! Adaptive isolation depth of extraordinary vertices and creases. Gregory end caps close the
+  //! remaining irregular patches; 4 keeps them within round-off of the true limit on typical
+  //! cages (depth 2 leaves errors of ~1e-2 of an edge near extraordinary vertices).
+  int isolation_level = 4;
+};
+
+//! A point of the limit surface's parameter domain: a ptex face and (u, v) in it. Loop ptex faces
+//! are the cage's triangles with u, v >= 0, u + v <= 1 (corners 0, 1, 2 at (0,0), (1,0), (0,1));
+//! Catmull-Clark ptex faces are the unit square (quad corners 0..3 at (0,0), (1,0), (1,1), (0,1);
+//! sub-face k of a non-quad has its corner k at (0,0)).
+//! Because it refers to the cage's topology only, the same limit point exists on every edited
+//! cage: the exact correspondence between S and S'.
+struct LimitPoint {
+  int face = -1;
+  double u = 0.0, v = 0.0;
+};
+
+//! The limit surface at a point: position and first derivatives (and optionally second ones)
+//! with respect to the ptex face's (u, v). On the sub-faces of a non-quad (Catmull-Clark) these
+//! are half of OpenSubdiv's limit-stencil derivatives, which are taken with respect to the
+//! sub-face as a quadrant of its face.
+struct LimitSample {
+  Vec3 position = Vec3::Zero();
+  Vec3 du = Vec3::Zero(), dv = Vec3::Zero();
+  Vec3 duu = Vec3::Zero(), duv = Vec3::Zero(), dvv = Vec3::Zero();  //!< only if asked for
+  //! Unit normal du x dv (zero where the derivatives are parallel).
+  Vec3 normal() const;
+};
+
+//! A tessellation of the limit surface: a watertight triangle mesh whose vertices lie on the limit
+//! surface, with the limit point of each vertex, and each triangle's ptex face and the (u, v) of
+//! its corners in that face (a vertex on a ptex edge has its own (u, v) in each adjacent face).
+struct LimitTessellation {
+  TriMesh mesh;
+  std::vector<LimitPoint> vertex_points;
+  std::vector<int> face_ptex;
+  std::vector<std::array<Eigen::Vector2d, 3>> face_uv;
+};
+
+//! A control cage and its subdivision limit surface. Construction builds the topology and the
+//! patch table (adaptive refinement with Gregory end caps, double precision) once; moving the
+//! control points (a cage edit) only recomputes the patches' local points.
+//! Evaluation is thread-safe; set_control_points() is not (no evaluation may run meanwhile).
+class SubdivSurface {
+ public:
+  //! \pre nothing: the cage is validated.
+  //! \throw InvalidInput for an empty cage, non-finite coordinates, out-of-range or repeated face
+  //!        indices, a face of fewer than 3 corners, a non-triangle under Loop, a non-manifold or
+  //!        inconsistently oriented edge, a crease on a pair of vertices that is not a cage edge, a
+  //!        corner on a missing vertex, a negative sharpness, or an isolation level outside 1..10.
+  //! \throw SolverError if OpenSubdiv fails to build the topology or the patch table.
+  explicit SubdivSurface(const PolyMesh& cage, const SubdivTags& tags = {},
+                         const SubdivOptions& options = {});
+  ~SubdivSurface();
+  SubdivSurface(SubdivSurface&&) noexcept;
+  SubdivSurface& operator=(SubdivSurface&&) noexcept;
+
+  //! Loop or CatmullClark (never Auto).
+  SubdivScheme scheme() const;
+  const PolyMesh& cage() const;
+  const SubdivTags& tags() const;
+  const SubdivOptions& options() const;
+  int num_control_points() const;
+  int num_ptex_faces() const;
+  //! Corners of a ptex face's domain: 3 (Loop) or 4 (Catmull-Clark).
+  int ptex_corners() const;
+  //! The first ptex face of a cage face (a non-quad under Catmull-Clark has one per corner).
+  int first_ptex_face(int cage_face) const;
+
+  //! Moves the control points (the cage's connectivity and tags stay).
+  //! \throw InvalidInput on a count mismatch or non-finite coordinates.
+  void set_control_points(const std::vector<Vec3>& points);
+  const std::vector<Vec3>& control_points() const;
+
+  //! The limit surface at \p p; (u, v) outside the domain are clamped into it. With
+  //! \p second_derivatives the sample also holds duu, duv, dvv.
+  //! \throw InvalidInput if p.face is out of range or u, v are not finite.
+  LimitSample evaluate(const LimitPoint& p, bool second_derivatives = false) const;
+
+  //! The linear weights of the limit position (and du, dv) at \p p on the control points: the
+  //! limit stencil. Entries with equal indices are merged; the weights of the position sum to 1.
+  struct Stencil {
+    std::vector<int> indices;
+    std::vector<double> position, du, dv;
+  };
+  Stencil stencil(const LimitPoint& p) const;
+
+  //! Tessellates every ptex face into a grid of \p resolution segments per edge, watertight across
+  //! ptex faces. With non-quads under Catmull-Clark the resolution is rounded up to even and their
+  //! sub-faces get half of it (each covers half of its cage edges).
+  //! \throw InvalidInput if resolution < 1.
+  LimitTessellation tessellate(int resolution) const;
+
+  //! Where the adjacent ptex face continues edge \p edge of ptex face \p face (edges run from
+  //! corner k to corner k+1) at the edge's parameter \p t in [0,1]: that face, its edge and the
+  //! parameter there; face = -1 on the surface's open boundary. An edge between a quad and the
+  //! sub-faces of a non-quad has a different neighbour on each half.
+  //! \throw InvalidInput if face or edge is out of range or t is not finite.
+  struct EdgeCrossing {
+    int face = -1, edge = -1;
+    double t = 0.0;
+  };
+  EdgeCrossing across_edge(int face, int edge, double t) const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+//! Options of project_to_limit(), with their defaults.
+struct ProjectOptions {
+  //! Segments per ptex edge of the tessellation that seeds each projection with its closest point.
+  int seed_resolution = 4;
+  //! Newton iterations at most per point (each ptex face crossing counts as one).
+  int max_iterations = 40;
+  //! Converged when |(p - S) . S_u| / (|p - S| |S_u|) and the same for S_v are at most this (the
+  //! foot point is orthogonal), or when |p - S| is below 1e-12 of the cage's bounding-box
+  //! diagonal (the point lies on the surface).
+  double orthogonality_tolerance = 1e-9;
+  //! Where the iteration stalls, the foot point still counts as converged if orthogonal to within
+  //! this: the Gregory end caps around extraordinary vertices meet their neighbours with tangent
+  //! planes that differ by up to ~1e-4 rad, and a foot point on such a seam is a true (kinked)
+  //! foot point. Must be >= orthogonality_tolerance.
+  double seam_tolerance = 1e-3;
+  //! Run over the points in parallel (TBB).
+  bool parallel = true;
+};
+
+//! The foot points of \p points on the limit surface, and how they were found.
+struct Projection {
+  std::vector<LimitPoint> points;
+  std::vector<char> converged;  //!< 1: Newton found an orthogonal foot point
+  int num_converged = 0;
+  int num_fallback = 0;  //!< not converged: the best point Newton reached (at least as close as the seed)
+  int max_iterations_used = 0;
+  double seconds = 0.0;
+};
+
+//! Projects each point onto the limit surface along the limit normal: the foot point S(u, v)
+//! where p - S is orthogonal to both tangents. Newton iterations on (u, v) (with the second
+//! derivatives, damped where the Hessian is not positive definite) start from the closest point
+//! on a tessellation and cross ptex-face boundaries. A point whose iteration does not converge
+//! (e.g. its foot point lies beyond an open boundary) keeps the closest point found and is counted
+//! as a fallback.
+//! \throw InvalidInput if a point is not finite or the options are out of range.
+Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3>& points,
+                            const ProjectOptions& options = {});
+
+}  // namespace strata

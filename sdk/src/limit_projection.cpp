@@ -1,0 +1,207 @@
+// Foot points on a subdivision limit surface (project_to_limit): a closest-point seed on a
+// tessellation, then damped Newton iterations on (u, v) that cross ptex-face edges.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+
+#include "internal/closest_point.h"
+#include "internal/ptex_domain.h"
+#include "strata/exceptions.h"
+#include "strata/subdiv.h"
+
+namespace strata {
+namespace {
+
+// The working state of one projection run; project() is const and thread-safe.
+class Projector {
+ public:
+  Projector(const SubdivSurface& s, const ProjectOptions& o)
+      : surface_(s),
+        opt_(o),
+        corners_(s.ptex_corners()),
+        tess_(s.tessellate(o.seed_resolution)),
+        tree_(tess_.mesh.vertices, tess_.mesh.faces),
+        on_surface_(1e-12 * bbox_diagonal(s.control_points())) {}
+
+  struct Result {
+    LimitPoint point;
+    bool converged = false;
+    int iterations = 0;
+  };
+
+  Result project(const Vec3& p) const {
+    const internal::TriangleTree::Hit hit = tree_.closest(p);
+    const auto& uv = tess_.face_uv[hit.face];
+    const Eigen::Vector2d seed = hit.bary[0] * uv[0] + hit.bary[1] * uv[1] + hit.bary[2] * uv[2];
+    Result r;
+    r.point = {tess_.face_ptex[hit.face], seed.x(), seed.y()};
+    internal::clamp_to_domain(corners_, r.point.u, r.point.v);
+    LimitSample s = surface_.evaluate(r.point, true);
+    Vec3 d = s.position - p;
+    double phi = d.squaredNorm();
+    double mu = 0.0;  // Levenberg-Marquardt damping, relative to the Hessian's diagonal
+    // Full Newton until a step fails; then Gauss-Newton (first derivatives only), which is slower
+    // but does not rely on second derivatives (poor near the end caps' corners).
+    bool newton = true;
+    for (; r.iterations < opt_.max_iterations; ++r.iterations) {
+      if (orthogonal(s, d)) {
+        r.converged = true;
+        return r;
+      }
+      const Eigen::Vector2d g(s.du.dot(d), s.dv.dot(d));
+      Eigen::Matrix2d H;
+      H << s.du.dot(s.du) + s.duu.dot(d), s.du.dot(s.dv) + s.duv.dot(d), s.du.dot(s.dv) + s.duv.dot(d),
+          s.dv.dot(s.dv) + s.dvv.dot(d);
+      if (!newton || !(H(0, 0) > 0 && H.determinant() > 0)) {
+        // Not a local minimum's basin (the distance's Hessian is indefinite): Gauss-Newton.
+        H << s.du.dot(s.du), s.du.dot(s.dv), s.du.dot(s.dv), s.dv.dot(s.dv);
+      }
+      H(0, 0) *= 1.0 + mu;
+      H(1, 1) *= 1.0 + mu;
+      const Eigen::Vector2d step = -H.ldlt().solve(g);
+      if (!step.allFinite()) break;
+      LimitPoint y;
+      LimitSample sy;
+      bool stuck = false;
+      if (!trial(r.point, s, step, p, y, sy, stuck)) {
+        if (stuck) break;  // pushed against an open boundary: no foot point inside
+        newton = false;
+        mu = mu == 0.0 ? 1e-3 : mu * 10.0;
+        if (mu > 1e8) break;
+        continue;
+      }
+      const Vec3 dy = sy.position - p;
+      const double phiy = dy.squaredNorm();
+      // Near the foot point phi changes by less than its round-off; such steps still count.
+      if (phiy <= phi * (1.0 + 1e-12) + on_surface_ * on_surface_) {
+        r.point = y;
+        s = sy;
+        d = dy;
+        phi = phiy;
+        mu *= 0.1;
+        if (mu < 1e-9) mu = 0.0;
+      } else {
+        newton = false;
+        mu = mu == 0.0 ? 1e-3 : mu * 10.0;
+        if (mu > 1e8) break;
+      }
+    }
+    // Stalled: accepted if orthogonal to within the seams' tangent jumps.
+    r.converged = orthogonal(s, d, opt_.seam_tolerance);
+    return r;
+  }
+
+ private:
+  bool orthogonal(const LimitSample& s, const Vec3& d) const {
+    return orthogonal(s, d, opt_.orthogonality_tolerance);
+  }
+  bool orthogonal(const LimitSample& s, const Vec3& d, double cosine) const {
+    const double dn = d.norm();
+    if (dn <= on_surface_) return true;
+    const double tol = cosine * dn, nu = s.du.norm(), nv = s.dv.norm();
+    // A degenerate parameterization (a vanishing derivative) proves nothing.
+    return nu > 0 && nv > 0 && std::abs(s.du.dot(d)) <= tol * nu && std::abs(s.dv.dot(d)) <= tol * nv;
+  }
+
+  // The point a Newton step leads to. A step that leaves the ptex face continues in the
+  // neighbour across the crossed edge: the rest of the step is carried over as the same 3D
+  // displacement, expressed in the neighbour's tangents (and stopped at its domain's border).
+  // Returns false if the step cannot be taken (stuck: it pushes out through an open boundary
+  // from the boundary itself).
+  bool trial(const LimitPoint& x, const LimitSample& s, const Eigen::Vector2d& step, const Vec3& p,
+             LimitPoint& y, LimitSample& sy, bool& stuck) const {
+    (void)p;
+    int edge = -1;
+    const double frac = internal::exit_fraction(corners_, x.u, x.v, step.x(), step.y(), edge);
+    if (edge < 0) {
+      y = {x.face, x.u + step.x(), x.v + step.y()};
+      internal::clamp_to_domain(corners_, y.u, y.v);
+      sy = surface_.evaluate(y, true);
+      return true;
+    }
+    double eu = x.u + frac * step.x(), ev = x.v + frac * step.y();
+    internal::clamp_to_domain(corners_, eu, ev);
+    const double t = std::clamp(internal::edge_param(corners_, edge, eu, ev), 0.0, 1.0);
+    const SubdivSurface::EdgeCrossing nb = surface_.across_edge(x.face, edge, t);
+    if (nb.face < 0) {
+      if (frac < 1e-12) {
+        stuck = true;
+        return false;
+      }
+      y = {x.face, eu, ev};
+      sy = surface_.evaluate(y, true);
+      return true;
+    }
+    const Eigen::Vector2d q = internal::edge_point(corners_, nb.edge, nb.t);
+    y = {nb.face, q.x(), q.y()};
+    sy = surface_.evaluate(y, true);
+    // The remaining step as a 3D displacement, then in the neighbour's parameters.
+    const Eigen::Vector2d rest = (1.0 - frac) * step;
+    const Vec3 D = rest.x() * s.du + rest.y() * s.dv;
+    Eigen::Matrix<double, 3, 2> T;
+    T.col(0) = sy.du;
+    T.col(1) = sy.dv;
+    const Eigen::Vector2d r2 = (T.transpose() * T).ldlt().solve(T.transpose() * D);
+    if (r2.allFinite()) {
+      int e2 = -1;
+      const double f2 = internal::exit_fraction(corners_, y.u, y.v, r2.x(), r2.y(), e2);
+      LimitPoint z{y.face, y.u + f2 * r2.x(), y.v + f2 * r2.y()};
+      internal::clamp_to_domain(corners_, z.u, z.v);
+      y = z;
+      sy = surface_.evaluate(y, true);
+    }
+    return true;
+  }
+
+  const SubdivSurface& surface_;
+  const ProjectOptions& opt_;
+  int corners_;
+  LimitTessellation tess_;
+  internal::TriangleTree tree_;
+  double on_surface_;
+};
+
+}  // namespace
+
+Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3>& points,
+                            const ProjectOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.seed_resolution < 1 || options.max_iterations < 1 || !(options.orthogonality_tolerance > 0) ||
+      !(options.seam_tolerance >= options.orthogonality_tolerance))
+    throw InvalidInput("projection options out of range");
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!points[i].allFinite())
+      throw InvalidInput("point " + std::to_string(i) + " to project has a non-finite coordinate");
+  Projection out;
+  const std::size_t n = points.size();
+  out.points.resize(n);
+  out.converged.assign(n, 0);
+  std::vector<int> iterations(n, 0);
+  const Projector proj(surface, options);
+  auto body = [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const Projector::Result r = proj.project(points[i]);
+      out.points[i] = r.point;
+      out.converged[i] = r.converged ? 1 : 0;
+      iterations[i] = r.iterations;
+    }
+  };
+  if (options.parallel) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  } else {
+    body(0, n);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    out.num_converged += out.converged[i];
+    out.max_iterations_used = std::max(out.max_iterations_used, iterations[i]);
+  }
+  out.num_fallback = static_cast<int>(n) - out.num_converged;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace strata

@@ -1,0 +1,511 @@
+// SubdivSurface: limit evaluation against OpenSubdiv's own limit stencils (the reference),
+// derivatives against finite differences, continuity across ptex edges, sharp creases,
+// tessellation and the projection of points onto the limit surface.
+#include <gtest/gtest.h>
+#include <opensubdiv/far/stencilTable.h>
+#include <opensubdiv/far/stencilTableFactory.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+#include "strata/subdiv.h"
+
+using namespace strata;
+namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
+
+namespace {
+
+PolyMesh cube_cage() {
+  PolyMesh m;
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0);
+  m.faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  return m;
+}
+
+// A cube whose top face is split into a pentagon and a triangle: non-quads under Catmull-Clark.
+PolyMesh cube_with_ngons() {
+  PolyMesh m = cube_cage();
+  m.vertices.emplace_back(0.0, 1.0, 1.0);  // 8: midpoint of edge (6,7)
+  m.faces[1] = {4, 5, 7, 8, 6};            // top: pentagon
+  m.faces[3] = {2, 6, 8, 7, 3};            // back: pentagon too (shares edges (6,8), (8,7))
+  return m;
+}
+
+// An octahedron with vertices of valence 4 and a slightly perturbed one: Loop with extraordinary
+// vertices (regular Loop valence is 6).
+PolyMesh octahedron() {
+  PolyMesh m;
+  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1.2}, {0.1, 0, -1}};
+  m.faces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  return m;
+}
+
+// An open triangle grid (a bumpy height field), n x n quads split into triangles.
+PolyMesh open_triangle_grid(int n) {
+  PolyMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.vertices.emplace_back(i, j, 0.3 * std::sin(i * 1.3) * std::cos(j * 0.7));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.faces.push_back({a, b, c});
+      m.faces.push_back({a, c, d});
+    }
+  return m;
+}
+
+// An open quad grid with a bump.
+PolyMesh open_quad_grid(int n) {
+  PolyMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.vertices.emplace_back(
+          i, j, 0.5 * std::exp(-((i - n / 2.0) * (i - n / 2.0) + (j - n / 2.0) * (j - n / 2.0)) / 4.0));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      m.faces.push_back({a, a + 1, a + n + 2, a + n + 1});
+    }
+  return m;
+}
+
+struct NamedCage {
+  const char* name;
+  PolyMesh cage;
+  SubdivTags tags;
+};
+
+std::vector<NamedCage> cages() {
+  SubdivTags semi;
+  semi.creases.push_back({0, 2, 2.5});
+  semi.creases.push_back({2, 3, 10.0});
+  semi.corners.push_back({7, 10.0});
+  return {{"cube", cube_cage(), {}},
+          {"cube_creased", cube_cage(), semi},
+          {"cube_with_ngons", cube_with_ngons(), {}},
+          {"octahedron", octahedron(), {}},
+          {"open_triangle_grid", open_triangle_grid(4), {}},
+          {"open_quad_grid", open_quad_grid(5), {}}};
+}
+
+std::vector<LimitPoint> random_points(const SubdivSurface& s, int per_face, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<LimitPoint> out;
+  for (int f = 0; f < s.num_ptex_faces(); ++f)
+    for (int k = 0; k < per_face; ++k) {
+      double u = U(rng), v = U(rng);
+      if (s.ptex_corners() == 3 && u + v > 1) {
+        u = 1 - u;
+        v = 1 - v;
+      }
+      out.push_back({f, u, v});
+    }
+  return out;
+}
+
+struct P3 {
+  double x[3];
+  void Clear(void* = nullptr) { x[0] = x[1] = x[2] = 0; }
+  void AddWithWeight(const P3& s, double w) {
+    for (int d = 0; d < 3; ++d) x[d] += w * s.x[d];
+  }
+};
+
+// OpenSubdiv's own limit stencils, built independently of SubdivSurface (the reference).
+void reference_limit(const NamedCage& c, const SubdivSurface& s, const std::vector<LimitPoint>& pts,
+                     std::vector<Vec3>& P, std::vector<Vec3>& Du, std::vector<Vec3>& Dv) {
+  std::vector<int> sizes, idx, crease_pairs, corner_ids;
+  std::vector<float> crease_w, corner_w;
+  for (const auto& f : c.cage.faces) {
+    sizes.push_back(static_cast<int>(f.size()));
+    idx.insert(idx.end(), f.begin(), f.end());
+  }
+  for (const auto& k : c.tags.creases) {
+    crease_pairs.insert(crease_pairs.end(), {k.v0, k.v1});
+    crease_w.push_back(static_cast<float>(k.sharpness));
+  }
+  for (const auto& k : c.tags.corners) {
+    corner_ids.push_back(k.vertex);
+    corner_w.push_back(static_cast<float>(k.sharpness));
+  }
+  Far::TopologyDescriptor d;
+  d.numVertices = c.cage.num_vertices();
+  d.numFaces = c.cage.num_faces();
+  d.numVertsPerFace = sizes.data();
+  d.vertIndicesPerFace = idx.data();
+  d.numCreases = static_cast<int>(crease_w.size());
+  d.creaseVertexIndexPairs = crease_pairs.data();
+  d.creaseWeights = crease_w.data();
+  d.numCorners = static_cast<int>(corner_w.size());
+  d.cornerVertexIndices = corner_ids.data();
+  d.cornerWeights = corner_w.data();
+  Sdc::Options so;
+  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_ONLY);
+  const auto type = s.scheme() == SubdivScheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK;
+  std::unique_ptr<Far::TopologyRefiner> ref(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(
+      d, Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Options(type, so)));
+  ASSERT_TRUE(ref);
+  Far::TopologyRefiner::AdaptiveOptions ao(4);
+  ao.useInfSharpPatch = true;
+  ref->RefineAdaptive(ao);
+  Far::StencilTableFactoryReal<double>::Options so2;
+  so2.generateOffsets = true;
+  so2.generateControlVerts = true;
+  so2.generateIntermediateLevels = true;
+  std::unique_ptr<const Far::StencilTableReal<double>> cv(
+      Far::StencilTableFactoryReal<double>::Create(*ref, so2));
+  // One location array per point keeps the output order equal to the input order.
+  std::vector<double> us, vs;
+  for (const auto& p : pts) {
+    us.push_back(p.u);
+    vs.push_back(p.v);
+  }
+  Far::LimitStencilTableFactoryReal<double>::LocationArrayVec locs;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    Far::LimitStencilTableFactoryReal<double>::LocationArray a;
+    a.ptexIdx = pts[i].face;
+    a.numLocations = 1;
+    a.s = &us[i];
+    a.t = &vs[i];
+    locs.push_back(a);
+  }
+  std::unique_ptr<const Far::LimitStencilTableReal<double>> lim(
+      Far::LimitStencilTableFactoryReal<double>::Create(*ref, locs, cv.get(), nullptr));
+  ASSERT_TRUE(lim);
+  ASSERT_EQ(lim->GetNumStencils(), static_cast<int>(pts.size()));
+  std::vector<P3> src(c.cage.num_vertices()), op(pts.size()), ou(pts.size()), ov(pts.size());
+  for (int i = 0; i < c.cage.num_vertices(); ++i)
+    for (int k = 0; k < 3; ++k) src[i].x[k] = c.cage.vertices[i][k];
+  lim->UpdateValues(src.data(), op.data());
+  lim->UpdateDerivs(src.data(), ou.data(), ov.data());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    P.emplace_back(op[i].x[0], op[i].x[1], op[i].x[2]);
+    Du.emplace_back(ou[i].x[0], ou[i].x[1], ou[i].x[2]);
+    Dv.emplace_back(ov[i].x[0], ov[i].x[1], ov[i].x[2]);
+  }
+}
+
+}  // namespace
+
+TEST(Subdiv, LimitMatchesOpenSubdivLimitStencils) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    std::vector<LimitPoint> pts = random_points(s, 12, 7);
+    // Corners and edge midpoints too, where patches meet and extraordinary vertices sit.
+    for (int f = 0; f < s.num_ptex_faces(); ++f) {
+      pts.push_back({f, 0.0, 0.0});
+      pts.push_back({f, 0.5, 0.0});
+      pts.push_back({f, 1.0, 0.0});
+    }
+    std::vector<Vec3> P, Du, Dv;
+    reference_limit(c, s, pts, P, Du, Dv);
+    // Sub-faces of non-quads: OpenSubdiv differentiates with respect to the face's quadrant.
+    std::vector<double> scale(s.num_ptex_faces(), 1.0);
+    for (int f = 0; f < c.cage.num_faces(); ++f)
+      if (static_cast<int>(c.cage.faces[f].size()) != s.ptex_corners())
+        for (std::size_t k = 0; k < c.cage.faces[f].size(); ++k) scale[s.first_ptex_face(f) + k] = 0.5;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const LimitSample x = s.evaluate(pts[i]);
+      const double c2 = scale[pts[i].face];
+      worst = std::max(
+          {worst, (x.position - P[i]).norm(), (x.du - c2 * Du[i]).norm(), (x.dv - c2 * Dv[i]).norm()});
+    }
+    EXPECT_LE(worst, 1e-12);
+  }
+}
+
+TEST(Subdiv, DerivativesMatchFiniteDifferences) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    const double h = 1e-5;
+    for (const LimitPoint& p : random_points(s, 3, 11)) {
+      // Stay inside the domain so that both sides of the difference lie on the same ptex face.
+      LimitPoint q = p;
+      q.u = 0.1 + 0.6 * q.u;
+      q.v = 0.1 + 0.6 * q.v;
+      if (s.ptex_corners() == 3 && q.u + q.v > 0.8) continue;
+      const LimitSample x = s.evaluate(q, true);
+      auto at = [&](double du, double dv) { return s.evaluate({q.face, q.u + du, q.v + dv}, true); };
+      const LimitSample up = at(h, 0), um = at(-h, 0), vp = at(0, h), vm = at(0, -h);
+      const double scale = 1.0 + x.du.norm() + x.dv.norm();
+      EXPECT_LE((x.du - (up.position - um.position) / (2 * h)).norm(), 1e-6 * scale);
+      EXPECT_LE((x.dv - (vp.position - vm.position) / (2 * h)).norm(), 1e-6 * scale);
+      const double scale2 = 1.0 + x.duu.norm() + x.dvv.norm() + x.duv.norm();
+      EXPECT_LE((x.duu - (up.du - um.du) / (2 * h)).norm(), 1e-5 * scale2);
+      EXPECT_LE((x.duv - (vp.du - vm.du) / (2 * h)).norm(), 1e-5 * scale2);
+      EXPECT_LE((x.dvv - (vp.dv - vm.dv) / (2 * h)).norm(), 1e-5 * scale2);
+    }
+  }
+}
+
+TEST(Subdiv, ContinuousAcrossPtexEdges) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    const int nc = s.ptex_corners();
+    int shared = 0, open = 0;
+    double worst = 0.0;
+    for (int f = 0; f < s.num_ptex_faces(); ++f)
+      for (int e = 0; e < nc; ++e) {
+        static const double tri[3][2][2] = {{{0, 0}, {1, 0}}, {{1, 0}, {0, 1}}, {{0, 1}, {0, 0}}};
+        static const double quad[4][2][2] = {
+            {{0, 0}, {1, 0}}, {{1, 0}, {1, 1}}, {{1, 1}, {0, 1}}, {{0, 1}, {0, 0}}};
+        auto point = [&](int face, int edge, double tt) {
+          const auto& a = nc == 3 ? tri[edge] : quad[edge];
+          return LimitPoint{face, a[0][0] + tt * (a[1][0] - a[0][0]), a[0][1] + tt * (a[1][1] - a[0][1])};
+        };
+        if (s.across_edge(f, e, 0.5).face < 0) {
+          ++open;
+          continue;
+        }
+        ++shared;
+        for (double t : {0.0, 0.13, 0.5, 0.77, 1.0}) {
+          const SubdivSurface::EdgeCrossing nb = s.across_edge(f, e, t);
+          ASSERT_GE(nb.face, 0);
+          // Crossing back leads to the same point.
+          const SubdivSurface::EdgeCrossing back = s.across_edge(nb.face, nb.edge, nb.t);
+          const Vec3 x = s.evaluate(point(f, e, t)).position;
+          const Vec3 y = s.evaluate(point(nb.face, nb.edge, nb.t)).position;
+          const Vec3 z = s.evaluate(point(back.face, back.edge, back.t)).position;
+          worst = std::max({worst, (x - y).norm(), (x - z).norm()});
+        }
+      }
+    EXPECT_GT(shared, 0);
+    EXPECT_LE(worst, 1e-12);
+    const bool closed = std::string(c.name).rfind("open", 0) != 0;
+    if (closed)
+      EXPECT_EQ(open, 0);
+    else
+      EXPECT_GT(open, 0);
+  }
+}
+
+TEST(Subdiv, StencilReproducesTheLimit) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    for (const LimitPoint& p : random_points(s, 2, 3)) {
+      const SubdivSurface::Stencil st = s.stencil(p);
+      Vec3 P = Vec3::Zero(), Du = Vec3::Zero(), Dv = Vec3::Zero();
+      double sum = 0.0, dsum = 0.0;
+      for (std::size_t k = 0; k < st.indices.size(); ++k) {
+        P += st.position[k] * c.cage.vertices[st.indices[k]];
+        Du += st.du[k] * c.cage.vertices[st.indices[k]];
+        Dv += st.dv[k] * c.cage.vertices[st.indices[k]];
+        sum += st.position[k];
+        dsum += st.du[k] + st.dv[k];
+      }
+      const LimitSample x = s.evaluate(p);
+      EXPECT_NEAR(sum, 1.0, 1e-12);
+      EXPECT_NEAR(dsum, 0.0, 1e-10);  // translating the cage does not change the derivatives
+      EXPECT_LE((P - x.position).norm(), 1e-12);
+      EXPECT_LE((Du - x.du).norm(), 1e-11);
+      EXPECT_LE((Dv - x.dv).norm(), 1e-11);
+    }
+  }
+}
+
+TEST(Subdiv, EditingTheCageMovesTheLimitLinearly) {
+  const PolyMesh cage = cube_with_ngons();
+  SubdivSurface s(cage);
+  const std::vector<LimitPoint> pts = random_points(s, 2, 5);
+  std::vector<Vec3> moved = cage.vertices;
+  moved[6] += Vec3(0.3, -0.2, 0.5);
+  std::vector<Vec3> before;
+  for (const auto& p : pts) before.push_back(s.evaluate(p).position);
+  s.set_control_points(moved);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const SubdivSurface::Stencil st = s.stencil(pts[i]);
+    double w6 = 0.0;
+    for (std::size_t k = 0; k < st.indices.size(); ++k)
+      if (st.indices[k] == 6) w6 = st.position[k];
+    EXPECT_LE((s.evaluate(pts[i]).position - before[i] - w6 * Vec3(0.3, -0.2, 0.5)).norm(), 1e-12);
+  }
+  EXPECT_THROW(s.set_control_points({Vec3::Zero()}), InvalidInput);
+}
+
+TEST(Subdiv, InfinitelySharpCreasesKeepTheCubesEdges) {
+  const PolyMesh cage = cube_cage();
+  SubdivTags sharp;
+  for (const auto& f : cage.faces)
+    for (std::size_t k = 0; k < f.size(); ++k)
+      if (f[k] < f[(k + 1) % 4]) sharp.creases.push_back({f[k], f[(k + 1) % 4], 10.0});
+  ASSERT_EQ(sharp.creases.size(), 12u);
+  const SubdivSurface creased(cage, sharp), smooth(cage);
+  auto edge_checks = [](const SubdivSurface& s, double& max_line_dist, double& min_normal_dot) {
+    max_line_dist = 0.0;
+    min_normal_dot = 1.0;
+    for (int f = 0; f < s.num_ptex_faces(); ++f)
+      for (double t : {0.1, 0.3, 0.5, 0.8}) {
+        // Edge 0 of each face (v = 0) lies on a cube edge; the neighbour shares it.
+        const LimitSample a = s.evaluate({f, t, 0.0});
+        const SubdivSurface::EdgeCrossing nb = s.across_edge(f, 0, t);
+        static const double quad[4][2][2] = {
+            {{0, 0}, {1, 0}}, {{1, 0}, {1, 1}}, {{1, 1}, {0, 1}}, {{0, 1}, {0, 0}}};
+        const auto& e = quad[nb.edge];
+        const LimitSample b =
+            s.evaluate({nb.face, e[0][0] + nb.t * (e[1][0] - e[0][0]), e[0][1] + nb.t * (e[1][1] - e[0][1])});
+        // Distance from the cube's edge line: two coordinates are +-1 on a cube edge.
+        std::array<double, 3> off{};
+        for (int d = 0; d < 3; ++d) off[d] = 1.0 - std::abs(a.position[d]);
+        std::sort(off.begin(), off.end());
+        max_line_dist = std::max(max_line_dist, std::hypot(off[0], off[1]));
+        min_normal_dot = std::min(min_normal_dot, a.normal().dot(b.normal()));
+      }
+  };
+  double dist = 0, dot = 0;
+  edge_checks(creased, dist, dot);
+  EXPECT_LE(dist, 1e-12);       // the limit runs along the cage's edges
+  EXPECT_NEAR(dot, 0.0, 1e-9);  // and the faces meet at 90 degrees there
+  edge_checks(smooth, dist, dot);
+  EXPECT_GT(dist, 0.1);         // without tags the cube rounds off
+  EXPECT_NEAR(dot, 1.0, 1e-9);  // with a continuous normal
+}
+
+TEST(Subdiv, TessellationIsWatertightAndOnTheSurface) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    for (int r : {1, 3, 6}) {
+      const LimitTessellation t = s.tessellate(r);
+      EXPECT_NO_THROW(validate_mesh(t.mesh, c.name));
+      if (std::string(c.name) != "cube_with_ngons") {
+        const int per = s.ptex_corners() == 4 ? 2 * r * r : r * r;
+        EXPECT_EQ(t.mesh.num_faces(), per * s.num_ptex_faces());
+      }
+      std::map<std::pair<int, int>, int> edges;
+      for (const Face& f : t.mesh.faces)
+        for (int k = 0; k < 3; ++k) ++edges[std::minmax(f[k], f[(k + 1) % 3])];
+      int boundary = 0;
+      for (const auto& e : edges) boundary += e.second == 1;
+      const bool closed = std::string(c.name).rfind("open", 0) != 0;
+      if (closed)
+        EXPECT_EQ(boundary, 0);
+      else
+        EXPECT_GT(boundary, 0);
+      for (std::size_t f = 0; f < t.mesh.faces.size(); f += 7)
+        for (int k = 0; k < 3; ++k) {
+          const LimitPoint p{t.face_ptex[f], t.face_uv[f][k].x(), t.face_uv[f][k].y()};
+          EXPECT_LE((s.evaluate(p).position - t.mesh.vertices[t.mesh.faces[f][k]]).norm(), 1e-12);
+        }
+    }
+    EXPECT_THROW(s.tessellate(0), InvalidInput);
+  }
+}
+
+TEST(Subdiv, ProjectionFindsTheFootPointAlongTheNormal) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    const SubdivSurface s(c.cage, c.tags);
+    // Points displaced from known limit points along the limit normal, by up to 5% of the size.
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> H(-0.1, 0.1);
+    std::vector<LimitPoint> truth_pts;
+    std::vector<Vec3> pts;
+    for (const LimitPoint& p : random_points(s, 20, 9)) {
+      LimitPoint q = p;  // away from the open boundary, where the foot point may lie outside
+      if (std::string(c.name).rfind("open", 0) == 0) {
+        q.u = 0.05 + 0.9 * q.u;
+        q.v = 0.05 + 0.9 * q.v;
+      }
+      const LimitSample x = s.evaluate(q);
+      truth_pts.push_back(q);
+      pts.push_back(x.position + H(rng) * x.normal());
+    }
+    ProjectOptions po;
+    const Projection pr = project_to_limit(s, pts, po);
+    ASSERT_EQ(pr.points.size(), pts.size());
+    EXPECT_EQ(pr.num_converged + pr.num_fallback, static_cast<int>(pts.size()));
+    EXPECT_GE(pr.num_converged, static_cast<int>(0.999 * pts.size()));
+    double worst_orth = 0.0, worst_excess = 0.0;
+    int same = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!pr.converged[i]) continue;
+      const LimitSample x = s.evaluate(pr.points[i]);
+      const Vec3 d = pts[i] - x.position;
+      worst_orth = std::max({worst_orth, std::abs(d.normalized().dot(x.du.normalized())),
+                             std::abs(d.normalized().dot(x.dv.normalized()))});
+      // The foot point found is the known one, or (near a vertex of high curvature, where foot
+      // points are not unique) one at least as close.
+      const Vec3 truth = s.evaluate(truth_pts[i]).position;
+      same += (x.position - truth).norm() <= 1e-8;
+      worst_excess = std::max(worst_excess, d.norm() - (pts[i] - truth).norm());
+    }
+    EXPECT_LE(worst_orth, po.seam_tolerance);
+    EXPECT_LE(worst_excess, 1e-9);
+    EXPECT_GE(same, static_cast<int>(0.97 * pts.size()));
+    // Sequential and parallel runs agree.
+    po.parallel = false;
+    const Projection seq = project_to_limit(s, pts, po);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      EXPECT_EQ(seq.points[i].face, pr.points[i].face);
+      EXPECT_EQ(seq.points[i].u, pr.points[i].u);
+    }
+  }
+}
+
+TEST(Subdiv, ProjectionCountsPointsBeyondTheOpenBoundary) {
+  const SubdivSurface s(open_quad_grid(4));
+  // Far outside the grid: the foot point would lie beyond the boundary.
+  const Projection pr = project_to_limit(s, {Vec3(-5, 2, 0), Vec3(2, 2, 3)});
+  EXPECT_EQ(pr.num_fallback, 1);
+  EXPECT_FALSE(pr.converged[0]);
+  EXPECT_TRUE(pr.converged[1]);
+}
+
+TEST(Subdiv, RejectsBadCages) {
+  auto msg = [](const PolyMesh& m, const SubdivTags& t = {}, const SubdivOptions& o = {}) -> std::string {
+    try {
+      SubdivSurface s(m, t, o);
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(msg(PolyMesh{}).find("no vertices or no faces"), std::string::npos);
+  PolyMesh m = cube_cage();
+  m.vertices[3].x() = std::nan("");
+  EXPECT_NE(msg(m).find("vertex 3 has a non-finite"), std::string::npos);
+  m = cube_cage();
+  m.faces[2][1] = 42;
+  EXPECT_NE(msg(m).find("index 42 out of range"), std::string::npos);
+  m = cube_cage();
+  m.faces[0] = {0, 2};
+  EXPECT_NE(msg(m).find("face 0 has 2 corners"), std::string::npos);
+  m = cube_cage();
+  m.faces[0] = {0, 2, 2, 1};
+  EXPECT_NE(msg(m).find("repeats vertex index 2"), std::string::npos);
+  m = cube_cage();
+  std::reverse(m.faces[1].begin(), m.faces[1].end());
+  EXPECT_NE(msg(m).find("same direction"), std::string::npos);
+  m = octahedron();
+  m.faces.push_back({0, 4, 5});  // a third face on edge (0,4)
+  EXPECT_NE(msg(m).find("non-manifold"), std::string::npos);
+  SubdivOptions loop;
+  loop.scheme = SubdivScheme::Loop;
+  EXPECT_NE(msg(cube_cage(), {}, loop).find("all-triangle"), std::string::npos);
+  SubdivTags t;
+  t.creases.push_back({0, 7, 10.0});  // a diagonal, not an edge
+  EXPECT_NE(msg(cube_cage(), t).find("not an edge"), std::string::npos);
+  t = {};
+  t.corners.push_back({8, 10.0});
+  EXPECT_NE(msg(cube_cage(), t).find("vertex 8"), std::string::npos);
+  SubdivOptions iso;
+  iso.isolation_level = 0;
+  EXPECT_NE(msg(cube_cage(), {}, iso).find("isolation level"), std::string::npos);
+  const SubdivSurface s(cube_cage());
+  EXPECT_THROW(s.evaluate({99, 0.5, 0.5}), InvalidInput);
+  EXPECT_THROW(s.evaluate({0, std::nan(""), 0.5}), InvalidInput);
+  EXPECT_THROW(project_to_limit(s, {Vec3(0, std::nan(""), 0)}), InvalidInput);
+}
