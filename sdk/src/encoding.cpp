@@ -1,5 +1,8 @@
 #include "strata/encoding.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,7 +16,9 @@
 namespace strata {
 namespace {
 
-double det3(const Vec3& a, const Vec3& b, const Vec3& c) { return a.dot(b.cross(c)); }
+double det3(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return a.dot(b.cross(c));
+}
 
 // Real roots of c0 + c1 t + c2 t^2 + c3 t^3 in [-T, T], found by splitting the interval at the
 // critical points (so each piece is monotone) and bisecting the pieces with a sign change. Robust
@@ -59,9 +64,12 @@ int cubic_roots_in(const double c[4], double T, double roots[3]) {
     for (int it = 0; it < 200 && hi - lo > 1e-15 * T; ++it) {
       const double mid = 0.5 * (lo + hi);
       const double fm = f(mid);
-      if (fm == 0.0) lo = hi = mid;
-      else if ((fm < 0) == (flo < 0)) lo = mid, flo = fm;
-      else hi = mid;
+      if (fm == 0.0)
+        lo = hi = mid;
+      else if ((fm < 0) == (flo < 0))
+        lo = mid, flo = fm;
+      else
+        hi = mid;
     }
     roots[nr++] = 0.5 * (lo + hi);
   }
@@ -83,7 +91,8 @@ void check_mesh(const TriMesh& m, const char* what) {
     if (!v.allFinite()) throw InvalidInput(std::string(what) + " mesh has a non-finite coordinate");
   for (const Face& f : m.faces)
     for (int v : f)
-      if (v < 0 || v >= m.num_vertices()) throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
+      if (v < 0 || v >= m.num_vertices())
+        throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
 }
 
 // Working state of one encode_detail() call.
@@ -147,7 +156,8 @@ class Encoder {
 
   // Solves for the points of face f whose interpolated normal passes through p (the roots t of
   // det[y1 - y0, y2 - y0, p - y0] = 0 with y_k = x_k + t n_k) and keeps the nearest one inside.
-  void test_face(int f, const Vec3& p, double T, int& found, double& best, Vec3& best_q, BasePoint& bp) const {
+  void test_face(int f, const Vec3& p, double T, int& found, double& best, Vec3& best_q,
+                 BasePoint& bp) const {
     const Face& F = base_.faces[f];
     const Vec3 &x0 = base_.vertices[F[0]], &n0 = normals_[F[0]];
     const Vec3 a1 = base_.vertices[F[1]] - x0, b1 = normals_[F[1]] - n0;
@@ -188,6 +198,39 @@ class Encoder {
   std::vector<int> ring_;
 };
 
+// What every encoding stores once its base points are known (sections 3 and 4.2): the base
+// points' rest positions, the displacement lengths and tangential offsets, the target volumes and
+// the regularization weights of the original detail.
+void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames& frames) {
+  const int n = detail.num_vertices();
+  e.base_rest_points = frames.points;
+  e.normal_offsets.resize(n);
+  e.tangential_offsets.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = detail.vertices[i] - frames.points[i];
+    const Vec3& nrm = frames.normals[i];
+    const Vec3& t = frames.tangents[i];
+    e.normal_offsets[i] = d.dot(nrm);
+    const Vec3 tang = d - e.normal_offsets[i] * nrm;
+    // Normal projections are parallel up to round-off: keep exact zeros for them, so the
+    // regularizer's rest state is exactly the paper's.
+    const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
+    e.tangential_offsets[i] =
+        projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
+    if (!projected) e.report.max_tangential_offset = std::max(e.report.max_tangential_offset, tang.norm());
+  }
+  e.target_volumes.resize(detail.faces.size());
+  for (std::size_t j = 0; j < detail.faces.size(); ++j) {
+    const Face& f = detail.faces[j];
+    e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
+                                       frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
+  }
+  const internal::Adjacency adj = internal::build_adjacency(n, detail.faces);
+  e.weight_offsets = adj.neighbor_offsets;
+  e.weight_neighbors = adj.neighbors;
+  e.weights = internal::normalized_cotan_weights(detail.vertices, detail.faces, adj);
+}
+
 }  // namespace
 
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
@@ -206,37 +249,39 @@ DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const E
     Encoder enc(base, options);
     for (int i = 0; i < n; ++i) e.base_points[i] = enc.project(i, detail.vertices[i], e.report);
   }
-  const BaseFrames frames = evaluate_base_frames(e, base.vertices);
-  e.base_rest_points = frames.points;
-  e.normal_offsets.resize(n);
-  e.tangential_offsets.resize(n);
-  for (int i = 0; i < n; ++i) {
-    const Vec3 d = detail.vertices[i] - frames.points[i];
-    const Vec3& nrm = frames.normals[i];
-    const Vec3& t = frames.tangents[i];
-    e.normal_offsets[i] = d.dot(nrm);
-    const Vec3 tang = d - e.normal_offsets[i] * nrm;
-    // Normal projections are parallel up to round-off: keep exact zeros for them, so the
-    // regularizer's rest state is exactly the paper's.
-    const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
-    e.tangential_offsets[i] = projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
-    if (!projected) e.report.max_tangential_offset = std::max(e.report.max_tangential_offset, tang.norm());
-  }
-  e.target_volumes.resize(detail.faces.size());
-  for (std::size_t j = 0; j < detail.faces.size(); ++j) {
-    const Face& f = detail.faces[j];
-    e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
-                                       frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
-  }
-  const internal::Adjacency adj = internal::build_adjacency(n, detail.faces);
-  e.weight_offsets = adj.neighbor_offsets;
-  e.weight_neighbors = adj.neighbors;
-  e.weights = internal::normalized_cotan_weights(detail.vertices, detail.faces, adj);
+  finish_encoding(e, detail, evaluate_base_frames(e, base.vertices));
+  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
+                             const ProjectOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
+  DetailEncoding e;
+  e.detail_faces = detail.faces;
+  e.detail_rest = detail.vertices;
+  e.base_num_vertices = base.num_control_points();
+  e.cage_faces = base.cage().faces;
+  e.cage_tags = base.tags();
+  e.cage_options = base.options();
+  e.cage_options.scheme = base.scheme();
+  const int n = detail.num_vertices();
+  e.report.num_vertices = n;
+  Projection pr = project_to_limit(base, detail.vertices, options);
+  e.limit_points = std::move(pr.points);
+  e.report.num_projected = pr.num_converged;
+  e.report.num_fallback = pr.num_fallback;
+  finish_encoding(e, detail, evaluate_base_frames(e, base));
   e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
 }
 
 BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>& x) {
+  if (e.over_limit_surface()) {
+    SubdivSurface surface = limit_surface_for(e, x);
+    return evaluate_base_frames(e, surface);
+  }
   if (static_cast<int>(x.size()) != e.base_num_vertices)
     throw InvalidInput("edited base has " + std::to_string(x.size()) + " vertices, the encoding's base has " +
                        std::to_string(e.base_num_vertices));
@@ -261,6 +306,55 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
     fr.normals[i] = nrm;
     fr.tangents[i] = t.normalized();
   }
+  return fr;
+}
+
+SubdivSurface limit_surface_for(const DetailEncoding& e, const std::vector<Vec3>& control_points) {
+  if (!e.over_limit_surface())
+    throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
+  if (static_cast<int>(control_points.size()) != e.base_num_vertices)
+    throw InvalidInput("edited cage has " + std::to_string(control_points.size()) +
+                       " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
+  PolyMesh cage;
+  cage.vertices = control_points;
+  cage.faces = e.cage_faces;
+  return SubdivSurface(cage, e.cage_tags, e.cage_options);
+}
+
+BaseFrames evaluate_base_frames(const DetailEncoding& e, const SubdivSurface& surface) {
+  if (!e.over_limit_surface())
+    throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
+  if (surface.num_control_points() != e.base_num_vertices)
+    throw InvalidInput("edited cage has " + std::to_string(surface.num_control_points()) +
+                       " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
+  const int n = e.num_detail_vertices();
+  BaseFrames fr;
+  fr.points.resize(n);
+  fr.normals.resize(n);
+  fr.tangents.resize(n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      LimitPoint lp = e.limit_points[i];
+      const LimitSample s = surface.evaluate(lp);
+      fr.points[i] = s.position;
+      Vec3 nrm = s.normal(), du = s.du;
+      if (nrm.squaredNorm() == 0.0) {
+        // A degenerate parameterization at this point (e.g. a valence-2 vertex): the frame of a
+        // point nudged towards the ptex face's middle.
+        const double c = surface.ptex_corners() == 3 ? 1.0 / 3.0 : 0.5;
+        lp.u += 1e-7 * (c - lp.u);
+        lp.v += 1e-7 * (c - lp.v);
+        const LimitSample s2 = surface.evaluate(lp);
+        nrm = s2.normal();
+        du = s2.du;
+      }
+      if (nrm.squaredNorm() == 0.0) nrm = Vec3::UnitZ();
+      Vec3 t = du - du.dot(nrm) * nrm;
+      if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
+      fr.normals[i] = nrm;
+      fr.tangents[i] = t.normalized();
+    }
+  });
   return fr;
 }
 

@@ -61,8 +61,26 @@ class Projector {
       }
       H(0, 0) *= 1.0 + mu;
       H(1, 1) *= 1.0 + mu;
-      const Eigen::Vector2d step = -H.ldlt().solve(g);
+      Eigen::Vector2d step = -H.ldlt().solve(g);
       if (!step.allFinite()) break;
+      {
+        // On an open boundary with the step pointing out: the foot point is constrained to the
+        // boundary curve, so take the 1D Newton step along the edge instead (the orthogonality
+        // along the boundary can still be met, e.g. for detail on the boundary).
+        int edge = -1;
+        const double frac = internal::exit_fraction(corners_, r.point.u, r.point.v, step.x(), step.y(), edge);
+        if (edge >= 0 && frac < 1e-12) {
+          double eu = r.point.u, ev = r.point.v;
+          const double t = internal::edge_param(corners_, edge, eu, ev);
+          if (surface_.across_edge(r.point.face, edge, t).face < 0) {
+            const Eigen::Vector2d dir =
+                internal::edge_point(corners_, edge, 1.0) - internal::edge_point(corners_, edge, 0.0);
+            const double ht = dir.dot(H * dir);
+            step = ht > 0 ? Eigen::Vector2d(-(g.dot(dir) / ht) * dir) : Eigen::Vector2d::Zero();
+            if (step.norm() < 1e-14) break;  // a fixed point on the boundary
+          }
+        }
+      }
       LimitPoint y;
       LimitSample sy;
       bool stuck = false;

@@ -19,10 +19,11 @@ std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vec
 }
 
 VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, const std::vector<Vec3>& p) {
-  const std::size_t n = e.base_points.size();
+  const std::size_t n = static_cast<std::size_t>(e.num_detail_vertices());
   if (p.size() != n || frames.points.size() != n)
-    throw InvalidInput("volume_metrics: expected " + std::to_string(n) + " detail positions and base points, got " +
-                       std::to_string(p.size()) + " and " + std::to_string(frames.points.size()));
+    throw InvalidInput("volume_metrics: expected " + std::to_string(n) +
+                       " detail positions and base points, got " + std::to_string(p.size()) + " and " +
+                       std::to_string(frames.points.size()));
   const std::vector<double> v = prism_volumes(e.detail_faces, p, frames.points);
   VolumeMetrics m;
   double sq = 0.0, mx = 0.0, abs_sum = 0.0;
@@ -41,7 +42,8 @@ VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, 
       m.rms_relative_error = std::sqrt(sq / v.size()) / m.mean_abs_target;
     }
   }
-  if (m.total_target != 0.0) m.total_volume_change = (m.total_volume - m.total_target) / std::abs(m.total_target);
+  if (m.total_target != 0.0)
+    m.total_volume_change = (m.total_volume - m.total_target) / std::abs(m.total_target);
   return m;
 }
 

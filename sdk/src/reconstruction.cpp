@@ -17,7 +17,9 @@ namespace strata {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 // One multigrid level: its prisms (in original vertex ids, so all levels share the position
 // arrays), per-level targets, adjacency and regularization weights (in level-local ids).
@@ -59,16 +61,16 @@ struct GnScratch {
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
 // the sweeps (one State per call, so calls share nothing but the levels' factorizations).
 struct State {
-  std::vector<Vec3> P;       // current detail positions
-  std::vector<Vec3> Q;       // base points on the edited base
-  std::vector<Vec3> N;       // unit normals at the base points
-  std::vector<Vec3> R;       // rest tangential offset, rotated into the edited base's frame
-  std::vector<Vec3> P0;      // positions at the start of the current multigrid pass
-  std::vector<double> dRho;  // prolongated change of d/f
-  std::vector<Vec3> dT;      // prolongated change of the tangential displacement
-  std::vector<double> rho;   // regularization scratch: d/f per level vertex
-  std::vector<Vec3> tdev;    // regularization scratch: tangential deviation per level vertex
-  std::vector<Vec3> before;  // positions before a regularization round
+  std::vector<Vec3> P;          // current detail positions
+  std::vector<Vec3> Q;          // base points on the edited base
+  std::vector<Vec3> N;          // unit normals at the base points
+  std::vector<Vec3> R;          // rest tangential offset, rotated into the edited base's frame
+  std::vector<Vec3> P0;         // positions at the start of the current multigrid pass
+  std::vector<double> dRho;     // prolongated change of d/f
+  std::vector<Vec3> dT;         // prolongated change of the tangential displacement
+  std::vector<double> rho;      // regularization scratch: d/f per level vertex
+  std::vector<Vec3> tdev;       // regularization scratch: tangential deviation per level vertex
+  std::vector<Vec3> before;     // positions before a regularization round
   std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
   GnScratch gn;
 };
@@ -99,15 +101,37 @@ class VolumeReconstructor::Impl {
     const int nl = static_cast<int>(h.levels.size());
     levels_.resize(nl);
     for (int l = 0; l < nl; ++l) make_level(h.levels[l], l == nl - 1, levels_[l]);
+    if (enc_.over_limit_surface()) {
+      std::vector<Vec3> rest(enc_.base_num_vertices, Vec3::Zero());
+      limit_ = std::make_unique<SubdivSurface>(limit_surface_for(enc_, rest));
+    }
     setup_seconds_ = seconds_since(t0);
   }
 
-  ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start, const WarmStartOptions* warm) const {
+  // The base frames on an edited base given by its vertices (or its cage's control points).
+  BaseFrames frames_for(const std::vector<Vec3>& base) const {
+    if (!limit_) return evaluate_base_frames(enc_, base);
+    limit_->set_control_points(base);  // keeps the patch table: only the patch points change
+    return evaluate_base_frames(enc_, *limit_);
+  }
+
+  ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start,
+                        const WarmStartOptions* warm) const {
+    const auto t0 = Clock::now();
+    const BaseFrames fr = frames_for(base);
+    const double seconds = seconds_since(t0);
+    ReconstructResult res = run(fr, start, warm);
+    res.stats.seconds_frames = seconds;
+    return res;
+  }
+
+  ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start,
+                        const WarmStartOptions* warm) const {
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
     State s;
-    init_state(base, s);
+    init_state(fr, s);
     st.seconds_frames = seconds_since(t0);
     t0 = Clock::now();
     const int nl = static_cast<int>(levels_.size());
@@ -139,7 +163,8 @@ class VolumeReconstructor::Impl {
         // The exact solve from a nearby start: the finest level only, so that a start which
         // already solves the problem stays put (coarse levels have their own targets).
         const Level& F = levels_.back();
-        st.finest_cycles_per_scale.push_back(solve_level(F, s, 1.0, warm->tolerance, opt_.final_max_cycles, st, V));
+        st.finest_cycles_per_scale.push_back(
+            solve_level(F, s, 1.0, warm->tolerance, opt_.final_max_cycles, st, V));
         polish(F, s, warm->tolerance, st, V);
       }
     }
@@ -180,13 +205,20 @@ class VolumeReconstructor::Impl {
     for (const Face& f : enc_.detail_faces)
       for (int v : f)
         if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
+    if (enc_.over_limit_surface() ? static_cast<int>(enc_.limit_points.size()) != n
+                                  : static_cast<int>(enc_.base_points.size()) != n)
+      throw InvalidInput(
+          "encoding has " +
+          std::to_string(enc_.over_limit_surface() ? enc_.limit_points.size() : enc_.base_points.size()) +
+          " base points for " + std::to_string(n) + " detail vertices");
     for (const BasePoint& b : enc_.base_points)
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
         opt_.regularization_iterations < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
         !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
-        opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
+        opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 ||
+        opt_.length_lambda < 0)
       throw InvalidInput("reconstruction options out of range");
   }
 
@@ -286,8 +318,8 @@ class VolumeReconstructor::Impl {
 
   // J J^T's values on the merged pattern for gradients g (dot products of the gradients of the
   // shared vertices), and the inverse diagonal.
-  static void jj_values(const Level& L, const std::vector<std::array<Vec3, 3>>& g, std::vector<double>& values,
-                        std::vector<double>& inv_diag) {
+  static void jj_values(const Level& L, const std::vector<std::array<Vec3, 3>>& g,
+                        std::vector<double>& values, std::vector<double>& inv_diag) {
     const std::size_t m = L.faces.size();
     values.assign(L.jj_col.size(), 0.0);
     for (std::size_t j = 0; j < m; ++j)
@@ -317,9 +349,15 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) val[L.jj_diag_slot[j]] += eps;
   }
 
-  void init_state(const std::vector<Vec3>& base, State& s) const {
-    const BaseFrames fr = evaluate_base_frames(enc_, base);
+  void init_state(const BaseFrames& fr, State& s) const {
     const int n = enc_.num_detail_vertices();
+    if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
+        static_cast<int>(fr.tangents.size()) != n)
+      throw InvalidInput("base frames have " + std::to_string(fr.points.size()) + " points, the detail has " +
+                         std::to_string(n) + " vertices");
+    for (int i = 0; i < n; ++i)
+      if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
+        throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
     s.Q = fr.points;
     s.N = fr.normals;
     s.R.resize(n);
@@ -398,8 +436,8 @@ class VolumeReconstructor::Impl {
 
   // Volume steps until the max relative error is at most tol, at most max_steps of them; exact
   // (factorized) steps when `direct`. Returns the steps taken; V holds the final volumes.
-  int project(const Level& L, State& s, double h, double tol, int max_steps, bool direct, ReconstructStats& st,
-              std::vector<double>& V) const {
+  int project(const Level& L, State& s, double h, double tol, int max_steps, bool direct,
+              ReconstructStats& st, std::vector<double>& V) const {
     compute_volumes(L, s, V);
     double err = relative_error(L, h, V, nullptr);
     int steps = 0;
@@ -412,7 +450,8 @@ class VolumeReconstructor::Impl {
   }
 
   // During the cycles: inexact steps, unless the level is small or the options ask for exact ones.
-  int project(const Level& L, State& s, double h, double tol, ReconstructStats& st, std::vector<double>& V) const {
+  int project(const Level& L, State& s, double h, double tol, ReconstructStats& st,
+              std::vector<double>& V) const {
     const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
                         static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
     return project(L, s, h, tol, opt_.volume_iterations, direct, st, V);
@@ -460,7 +499,8 @@ class VolumeReconstructor::Impl {
     double rr = 0.0;
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = L.faces[j];
-      const PrismVolumeGradient g = prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+      const PrismVolumeGradient g =
+          prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
       for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
       rr += w.r[j] * w.r[j];
@@ -514,7 +554,8 @@ class VolumeReconstructor::Impl {
     const std::size_t m = L.faces.size();
     assemble(L, w.values);
     L.llt->factorize(L.jj);
-    if (L.llt->info() != Eigen::Success) throw SolverError("Cholesky factorization of the volume step failed");
+    if (L.llt->info() != Eigen::Success)
+      throw SolverError("Cholesky factorization of the volume step failed");
     Eigen::Map<const Eigen::VectorXd> r(w.r.data(), static_cast<Eigen::Index>(m));
     const Eigen::VectorXd y = L.llt->solve(r);
     w.y.assign(y.data(), y.data() + m);
@@ -635,6 +676,9 @@ class VolumeReconstructor::Impl {
   std::vector<double> guarded_f_;
   double mean_abs_f_ = 0.0;
   std::vector<Level> levels_;
+  // Over a subdivision base: the cage's limit surface, kept so that a reconstruction from edited
+  // control points does not rebuild the patch table. Mutable like the levels' factorizations.
+  mutable std::unique_ptr<SubdivSurface> limit_;
   double setup_seconds_ = 0.0;
 };
 
@@ -647,14 +691,30 @@ VolumeReconstructor& VolumeReconstructor::operator=(VolumeReconstructor&&) noexc
 ReconstructResult VolumeReconstructor::reconstruct(const std::vector<Vec3>& edited_base) const {
   return impl_->run(edited_base, nullptr, nullptr);
 }
+ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_frames) const {
+  return impl_->run(edited_frames, nullptr, nullptr);
+}
+ReconstructResult VolumeReconstructor::reconstruct_from(const BaseFrames& edited_frames,
+                                                        const std::vector<Vec3>& start,
+                                                        const WarmStartOptions& warm) const {
+  return impl_->run(edited_frames, &start, &warm);
+}
 ReconstructResult VolumeReconstructor::reconstruct_from(const std::vector<Vec3>& edited_base,
                                                         const std::vector<Vec3>& start,
                                                         const WarmStartOptions& warm) const {
   return impl_->run(edited_base, &start, &warm);
 }
-const DetailEncoding& VolumeReconstructor::encoding() const { return impl_->encoding(); }
-const ReconstructOptions& VolumeReconstructor::options() const { return impl_->options(); }
-double VolumeReconstructor::setup_seconds() const { return impl_->setup_seconds(); }
-std::vector<int> VolumeReconstructor::level_vertex_counts() const { return impl_->level_vertex_counts(); }
+const DetailEncoding& VolumeReconstructor::encoding() const {
+  return impl_->encoding();
+}
+const ReconstructOptions& VolumeReconstructor::options() const {
+  return impl_->options();
+}
+double VolumeReconstructor::setup_seconds() const {
+  return impl_->setup_seconds();
+}
+std::vector<int> VolumeReconstructor::level_vertex_counts() const {
+  return impl_->level_vertex_counts();
+}
 
 }  // namespace strata

@@ -288,4 +288,29 @@ CylinderCase make_cylinder_case(const CylinderCaseOptions& o) {
   return out;
 }
 
+PolyMesh make_cylinder_cage(const CylinderCaseOptions& o, int segments) {
+  if (segments < 6)
+    throw InvalidInput("cylinder cage needs at least 6 segments, got " + std::to_string(segments));
+  if (!(o.radius > 0) || !(o.length > 0)) throw InvalidInput("cylinder cage: radius and length must be > 0");
+  const double seg = 2.0 * kPi * o.radius / segments;
+  const int rings = std::max(2, static_cast<int>(std::lround(o.length / seg))) + 1;
+  auto build = [&](double r) {
+    PolyMesh m;
+    for (int j = 0; j < rings; ++j)
+      for (int i = 0; i < segments; ++i) {
+        const double t = 2.0 * kPi * i / segments;
+        m.vertices.emplace_back(r * std::cos(t), r * std::sin(t), o.length * j / (rings - 1));
+      }
+    for (int j = 0; j + 1 < rings; ++j)
+      for (int i = 0; i < segments; ++i) {
+        const int a = j * segments + i, b = j * segments + (i + 1) % segments;
+        m.faces.push_back({a, b, b + segments, a + segments});  // counter-clockwise seen from outside
+      }
+    return m;
+  };
+  // The limit of a regular polygon of radius 1 has radius (2 + cos(2 pi / n)) / 3 at its vertices
+  // (the cubic B-spline's vertex rule); invert it.
+  return build(o.radius * 3.0 / (2.0 + std::cos(2.0 * kPi / segments)));
+}
+
 }  // namespace strata::cases

@@ -20,6 +20,7 @@
 #include <string_view>
 
 #include "strata/mesh.h"
+#include "strata/subdiv.h"
 
 namespace strata::cases {
 
@@ -108,5 +109,12 @@ Vec3 bend_point(const Vec3& p, const CylinderCaseOptions& options);
 //! The offset h > 0 of the analytic detail surface above the analytic cylinder at angle \p theta
 //! (radians) and height \p z: the detail point there is (R + h) * (cos theta, sin theta) at z.
 double detail_offset(const CylinderCaseOptions& options, double theta, double z);
+
+//! A Catmull-Clark control cage for the base cylinder S (issue 4: a limit surface as the base):
+//! an open tube of quads, \p segments around and rings about as far apart as the segments, with
+//! the ring radius scaled so that the limit surface passes through radius R at the cage's vertex
+//! angles. Its limit surface spans z in [0, length] (open-boundary rule EdgeOnly).
+//! \throws InvalidInput if segments < 6 or the options are out of range.
+PolyMesh make_cylinder_cage(const CylinderCaseOptions& options = {}, int segments = 16);
 
 }  // namespace strata::cases

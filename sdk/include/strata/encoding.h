@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "strata/mesh.h"
+#include "strata/subdiv.h"
 
 namespace strata {
 
@@ -34,9 +35,9 @@ struct EncodeOptions {
 //! What encode_detail() found, for reports.
 struct EncodeReport {
   int num_vertices = 0;
-  int num_projected = 0;  //!< base point found by the normal projection (p - q parallel to n(q))
-  int num_fallback = 0;   //!< no valid normal projection: the closest point on the base is used
-  int num_ambiguous = 0;  //!< several normal projections: the nearest one was taken
+  int num_projected = 0;               //!< base point found by the normal projection (p - q parallel to n(q))
+  int num_fallback = 0;                //!< no valid normal projection: the closest point on the base is used
+  int num_ambiguous = 0;               //!< several normal projections: the nearest one was taken
   double max_tangential_offset = 0.0;  //!< largest |tangential part of p - q| (fallbacks only)
   double seconds = 0.0;
 };
@@ -47,11 +48,20 @@ struct DetailEncoding {
   // coarse-level targets and weights).
   std::vector<Face> detail_faces;
   std::vector<Vec3> detail_rest;
-  // The base's connectivity: an edited base must have the same.
+  // The base's connectivity: an edited base must have the same. For a subdivision base,
+  // base_num_vertices is the cage's control point count and base_faces is empty.
   int base_num_vertices = 0;
   std::vector<Face> base_faces;
 
-  std::vector<BasePoint> base_points;  //!< q_i, one per detail vertex
+  //! q_i on a triangle-mesh base, one per detail vertex (empty over a subdivision base).
+  std::vector<BasePoint> base_points;
+  //! q_i on a subdivision limit surface, one per detail vertex (empty over a triangle base).
+  std::vector<LimitPoint> limit_points;
+  //! Over a subdivision base: the cage's faces, tags and options (an edited cage has the same);
+  //! with the edited control points they define the edited limit surface.
+  std::vector<std::vector<int>> cage_faces;
+  SubdivTags cage_tags;
+  SubdivOptions cage_options;
   std::vector<Vec3> base_rest_points;  //!< q_i's positions on the original base S
   //! Signed displacement length f_i = (p_i - q_i) . n(q_i) along the unit interpolated normal.
   std::vector<double> normal_offsets;
@@ -73,7 +83,9 @@ struct DetailEncoding {
   std::vector<char> pinned;
   EncodeReport report;
 
-  int num_detail_vertices() const { return static_cast<int>(base_points.size()); }
+  int num_detail_vertices() const { return static_cast<int>(detail_rest.size()); }
+  //! The base is a subdivision limit surface (limit_points), not a triangle mesh (base_points).
+  bool over_limit_surface() const { return !limit_points.empty(); }
 };
 
 //! Finds for each detail vertex p_i a base point q_i on \p base such that p_i - q_i is parallel
@@ -85,18 +97,42 @@ struct DetailEncoding {
 //! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates.
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
-//! Positions, unit interpolated normals and local frames of the base points on a base with the
-//! encoding's base connectivity.
+//! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
+//! foot point of the detail vertex on the limit surface along the limit normal
+//! (project_to_limit()), stored as (ptex face, u, v), which is exact on every edited cage. Then,
+//! as over a triangle base, the target volumes, displacement lengths and regularization weights.
+//! Projections that do not converge are counted as fallbacks in the report (num_fallback) and
+//! keep their tangential offset.
+//! \throw InvalidInput if the detail mesh is empty or has out-of-range indices or non-finite
+//!        coordinates, or the projection options are out of range.
+DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
+                             const ProjectOptions& options = {});
+
+//! Positions, unit normals and local frames of the base points on a base with the encoding's base
+//! connectivity.
 struct BaseFrames {
   std::vector<Vec3> points;    //!< q'_i
   std::vector<Vec3> normals;   //!< unit interpolated vertex normal at q'_i
   std::vector<Vec3> tangents;  //!< unit first tangent: the face's first edge, orthogonalized to the normal
 };
 
-//! Evaluates the base points of \p encoding on the base positions \p base_vertices.
+//! Evaluates the base points of \p encoding on the base positions \p base_vertices (the vertices of
+//! a triangle base, or the control points of a subdivision base's cage).
 //! \throw InvalidInput if base_vertices does not match the encoding's base vertex count or holds
 //! non-finite coordinates.
 BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
+
+//! Evaluates the limit base points of \p encoding on \p surface (the edited cage, with the
+//! encoding's cage topology): the limit position, the unit limit normal du x dv and the tangent du
+//! made orthogonal to it. Runs in parallel.
+//! \throw InvalidInput if the encoding is not over a limit surface or the control point count
+//!        differs from the encoding's.
+BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const SubdivSurface& surface);
+
+//! The limit surface of an encoding's cage with the control points \p control_points.
+//! \throw InvalidInput if the encoding is not over a limit surface, or as SubdivSurface's
+//!        constructor.
+SubdivSurface limit_surface_for(const DetailEncoding& encoding, const std::vector<Vec3>& control_points);
 
 //! The normal-displacement baseline (the paper's "displacement vectors"): each detail vertex is
 //! rebuilt as q'_i + f_i n'(q'_i) plus its stored tangential offset in the rotated local frame.

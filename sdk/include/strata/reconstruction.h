@@ -85,21 +85,21 @@ struct ReconstructOptions {
 
 //! Iteration counts and timings of one reconstruction.
 struct ReconstructStats {
-  int levels = 0;                    //!< multigrid levels used, finest included
-  std::vector<int> level_vertices;   //!< vertex count per level, coarsest first
-  std::vector<int> level_faces;      //!< prism count per level, coarsest first
-  int volume_sweeps = 0;             //!< Gauss-Newton volume steps over all levels and scales
-  int regularization_sweeps = 0;     //!< regularization sweeps over all levels and scales
-  int cycles = 0;                    //!< cycles (volume steps + regularization) over all levels and scales
-  int final_sweeps = 0;              //!< exact Gauss-Newton polish steps on the finest level
+  int levels = 0;                   //!< multigrid levels used, finest included
+  std::vector<int> level_vertices;  //!< vertex count per level, coarsest first
+  std::vector<int> level_faces;     //!< prism count per level, coarsest first
+  int volume_sweeps = 0;            //!< Gauss-Newton volume steps over all levels and scales
+  int regularization_sweeps = 0;    //!< regularization sweeps over all levels and scales
+  int cycles = 0;                   //!< cycles (volume steps + regularization) over all levels and scales
+  int final_sweeps = 0;             //!< exact Gauss-Newton polish steps on the finest level
   std::vector<int> finest_cycles_per_scale;
-  double max_relative_error = 0.0;   //!< on the finest level at the end
+  double max_relative_error = 0.0;  //!< on the finest level at the end
   double rms_relative_error = 0.0;
   bool converged = false;            //!< max_relative_error <= tolerance
   double seconds_frames = 0.0;       //!< evaluating the base points on the edited base
   double seconds_solve = 0.0;        //!< the multigrid solve
-  long long step_halvings = 0;      //!< Gauss-Newton steps halved by the backtracking line search
-  long long factorizations = 0;     //!< numeric Cholesky factorizations (direct step solver)
+  long long step_halvings = 0;       //!< Gauss-Newton steps halved by the backtracking line search
+  long long factorizations = 0;      //!< numeric Cholesky factorizations (direct step solver)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };
@@ -134,15 +134,23 @@ class VolumeReconstructor {
 
   //! Rebuilds the detail over the edited base: volume scaling from the clean start p' = q',
   //! multigrid cycles from the coarsest level to the finest on each scale (Listing 1).
-  //! \pre edited_base has the encoding's base connectivity (same vertex count).
+  //! \pre edited_base has the encoding's base connectivity (same vertex count); over a subdivision
+  //! base it holds the edited cage's control points.
   //! \throw InvalidInput on a vertex-count mismatch or non-finite coordinates; SolverError if the
   //! iteration produces non-finite positions.
   ReconstructResult reconstruct(const std::vector<Vec3>& edited_base) const;
+
+  //! The same over base frames evaluated by the caller (e.g. evaluate_base_frames() on a
+  //! SubdivSurface the application keeps and edits).
+  //! \throw InvalidInput if the frames do not have one finite entry per detail vertex.
+  ReconstructResult reconstruct(const BaseFrames& edited_frames) const;
 
   //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
   //! the interactive mode of section 5.
   //! \throw InvalidInput if start does not have one position per detail vertex.
   ReconstructResult reconstruct_from(const std::vector<Vec3>& edited_base, const std::vector<Vec3>& start,
+                                     const WarmStartOptions& warm = {}) const;
+  ReconstructResult reconstruct_from(const BaseFrames& edited_frames, const std::vector<Vec3>& start,
                                      const WarmStartOptions& warm = {}) const;
 
   const DetailEncoding& encoding() const;
