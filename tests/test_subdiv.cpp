@@ -509,3 +509,31 @@ TEST(Subdiv, RejectsBadCages) {
   EXPECT_THROW(s.evaluate({0, std::nan(""), 0.5}), InvalidInput);
   EXPECT_THROW(project_to_limit(s, {Vec3(0, std::nan(""), 0)}), InvalidInput);
 }
+
+TEST(Subdiv, LimitPointSetReevaluatesAfterCageEdits) {
+  for (const NamedCage& c : cages()) {
+    SCOPED_TRACE(c.name);
+    SubdivSurface s(c.cage, c.tags);
+    const std::vector<LimitPoint> pts = random_points(s, 5, 21);
+    const LimitPointSet set(s, pts);
+    ASSERT_EQ(set.size(), static_cast<int>(pts.size()));
+    // Far from the origin, so that single-precision weights on absolute coordinates would show.
+    std::vector<Vec3> moved = c.cage.vertices;
+    for (std::size_t i = 0; i < moved.size(); ++i)
+      moved[i] += Vec3(1000.0, -2000.0, 500.0) + 0.2 * Vec3(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(7.0 * i));
+    s.set_control_points(moved);
+    std::vector<Vec3> P, Du, Dv;
+    set.evaluate(s, P, Du, Dv);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const LimitSample x = s.evaluate(pts[i]);
+      worst = std::max({worst, (P[i] - x.position).norm(), (Du[i] - x.du).norm(), (Dv[i] - x.dv).norm()});
+    }
+    EXPECT_LE(worst, 1e-5);  // single-precision weights relative to the patch (size ~1)
+  }
+  const SubdivSurface cube(cube_cage()), other(cube_with_ngons());
+  const LimitPointSet set(cube, {{0, 0.5, 0.5}});
+  std::vector<Vec3> P, Du, Dv;
+  EXPECT_THROW(set.evaluate(other, P, Du, Dv), InvalidInput);
+  EXPECT_THROW(LimitPointSet(cube, {{99, 0.5, 0.5}}), InvalidInput);
+}

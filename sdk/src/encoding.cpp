@@ -321,42 +321,87 @@ SubdivSurface limit_surface_for(const DetailEncoding& e, const std::vector<Vec3>
   return SubdivSurface(cage, e.cage_tags, e.cage_options);
 }
 
-BaseFrames evaluate_base_frames(const DetailEncoding& e, const SubdivSurface& surface) {
+namespace {
+
+void check_limit_encoding(const DetailEncoding& e, const SubdivSurface& surface) {
   if (!e.over_limit_surface())
     throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
   if (surface.num_control_points() != e.base_num_vertices)
     throw InvalidInput("edited cage has " + std::to_string(surface.num_control_points()) +
                        " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
+}
+
+// Unit normals du x dv and tangents du (orthogonalized) from the base points' derivatives.
+void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const std::vector<Vec3>& du,
+                  const std::vector<Vec3>& dv, BaseFrames& fr);
+
+}  // namespace
+
+BaseFrames evaluate_base_frames(const DetailEncoding& e, const SubdivSurface& surface) {
+  check_limit_encoding(e, surface);
+  // Exact (double precision) evaluation per point: the encoding's rest frames come from here.
   const int n = e.num_detail_vertices();
   BaseFrames fr;
   fr.points.resize(n);
-  fr.normals.resize(n);
-  fr.tangents.resize(n);
+  std::vector<Vec3> du(n), dv(n);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
-      LimitPoint lp = e.limit_points[i];
-      const LimitSample s = surface.evaluate(lp);
-      fr.points[i] = s.position;
-      Vec3 nrm = s.normal(), du = s.du;
-      if (nrm.squaredNorm() == 0.0) {
+      const LimitSample x = surface.evaluate(e.limit_points[i]);
+      fr.points[i] = x.position;
+      du[i] = x.du;
+      dv[i] = x.dv;
+    }
+  });
+  limit_frames(e, surface, du, dv, fr);
+  return fr;
+}
+
+BaseFrames evaluate_base_frames(const DetailEncoding& e, const LimitPointSet& points,
+                                const SubdivSurface& surface) {
+  check_limit_encoding(e, surface);
+  const int n = e.num_detail_vertices();
+  if (points.size() != n)
+    throw InvalidInput("limit point set has " + std::to_string(points.size()) + " points, the encoding " +
+                       std::to_string(n));
+  BaseFrames fr;
+  std::vector<Vec3> du, dv;
+  points.evaluate(surface, fr.points, du, dv);
+  limit_frames(e, surface, du, dv, fr);
+  return fr;
+}
+
+namespace {
+
+void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const std::vector<Vec3>& du,
+                  const std::vector<Vec3>& dv, BaseFrames& fr) {
+  const int n = static_cast<int>(du.size());
+  fr.normals.resize(n);
+  fr.tangents.resize(n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      Vec3 nrm = du[i].cross(dv[i]);
+      Vec3 u = du[i];
+      if (!(nrm.norm() > 1e-300)) {
         // A degenerate parameterization at this point (e.g. a valence-2 vertex): the frame of a
         // point nudged towards the ptex face's middle.
+        LimitPoint lp = e.limit_points[i];
         const double c = surface.ptex_corners() == 3 ? 1.0 / 3.0 : 0.5;
         lp.u += 1e-7 * (c - lp.u);
         lp.v += 1e-7 * (c - lp.v);
         const LimitSample s2 = surface.evaluate(lp);
-        nrm = s2.normal();
-        du = s2.du;
+        nrm = s2.du.cross(s2.dv);
+        u = s2.du;
       }
-      if (nrm.squaredNorm() == 0.0) nrm = Vec3::UnitZ();
-      Vec3 t = du - du.dot(nrm) * nrm;
+      nrm = nrm.norm() > 1e-300 ? Vec3(nrm.normalized()) : Vec3(Vec3::UnitZ());
+      Vec3 t = u - u.dot(nrm) * nrm;
       if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
       fr.normals[i] = nrm;
       fr.tangents[i] = t.normalized();
     }
   });
-  return fr;
 }
+
+}  // namespace
 
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr) {
   const int n = e.num_detail_vertices();

@@ -104,6 +104,7 @@ class VolumeReconstructor::Impl {
     if (enc_.over_limit_surface()) {
       std::vector<Vec3> rest(enc_.base_num_vertices, Vec3::Zero());
       limit_ = std::make_unique<SubdivSurface>(limit_surface_for(enc_, rest));
+      limit_points_ = std::make_unique<LimitPointSet>(*limit_, enc_.limit_points);
     }
     setup_seconds_ = seconds_since(t0);
   }
@@ -112,7 +113,7 @@ class VolumeReconstructor::Impl {
   BaseFrames frames_for(const std::vector<Vec3>& base) const {
     if (!limit_) return evaluate_base_frames(enc_, base);
     limit_->set_control_points(base);  // keeps the patch table: only the patch points change
-    return evaluate_base_frames(enc_, *limit_);
+    return evaluate_base_frames(enc_, *limit_points_, *limit_);
   }
 
   ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start,
@@ -679,6 +680,7 @@ class VolumeReconstructor::Impl {
   // Over a subdivision base: the cage's limit surface, kept so that a reconstruction from edited
   // control points does not rebuild the patch table. Mutable like the levels' factorizations.
   mutable std::unique_ptr<SubdivSurface> limit_;
+  std::unique_ptr<LimitPointSet> limit_points_;  // the base points' patch weights
   double setup_seconds_ = 0.0;
 };
 

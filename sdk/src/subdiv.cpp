@@ -9,6 +9,8 @@
 #include <opensubdiv/far/stencilTableFactory.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -600,6 +602,60 @@ SubdivSurface::EdgeCrossing SubdivSurface::across_edge(int face, int edge, doubl
   if (face < 0 || face >= impl_->num_ptex_ || edge < 0 || edge >= impl_->corners_ || !std::isfinite(t))
     throw InvalidInput("ptex edge (" + vtx(face) + "," + vtx(edge) + ") out of range");
   return impl_->across(face, edge, std::clamp(t, 0.0, 1.0));
+}
+
+LimitPointSet::LimitPointSet(const SubdivSurface& surface, const std::vector<LimitPoint>& points) {
+  const SubdivSurface::Impl& S = *surface.impl_;
+  num_patch_points_ = static_cast<int>(S.points_.size());
+  offsets_.assign(points.size() + 1, 0);
+  index_.reserve(points.size() * 16);
+  wp_.reserve(points.size() * 16);
+  wu_.reserve(points.size() * 16);
+  wv_.reserve(points.size() * 16);
+  double wP[20], wDu[20], wDv[20];
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    S.check(points[i]);
+    const Far::ConstIndexArray cv = S.basis(points[i], wP, wDu, wDv, nullptr, nullptr, nullptr);
+    const double c = S.deriv_scale_[points[i].face];
+    for (int k = 0; k < cv.size(); ++k) {
+      index_.push_back(cv[k]);
+      wp_.push_back(static_cast<float>(wP[k]));
+      wu_.push_back(static_cast<float>(c * wDu[k]));
+      wv_.push_back(static_cast<float>(c * wDv[k]));
+    }
+    offsets_[i + 1] = static_cast<int>(index_.size());
+  }
+}
+
+void LimitPointSet::evaluate(const SubdivSurface& surface, std::vector<Vec3>& positions,
+                             std::vector<Vec3>& du, std::vector<Vec3>& dv) const {
+  const std::vector<Vec3>& P = surface.impl_->points_;
+  if (static_cast<int>(P.size()) != num_patch_points_)
+    throw InvalidInput("limit point set was built on a surface with " + vtx(num_patch_points_) +
+                       " patch points, this one has " + vtx(static_cast<int>(P.size())));
+  const int n = size();
+  positions.resize(n);
+  du.resize(n);
+  dv.resize(n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const int b = offsets_[i], e = offsets_[i + 1];
+      const Vec3 o = P[index_[b]];
+      // Sums of weights times (point - origin): the weights of the position sum to 1 and those
+      // of the derivatives to 0, so the origin drops out and single-precision weights lose
+      // nothing relative to the coordinates' magnitude.
+      Vec3 sp = Vec3::Zero(), su = Vec3::Zero(), sv = Vec3::Zero();
+      for (int k = b + 1; k < e; ++k) {
+        const Vec3 d = P[index_[k]] - o;
+        sp += static_cast<double>(wp_[k]) * d;
+        su += static_cast<double>(wu_[k]) * d;
+        sv += static_cast<double>(wv_[k]) * d;
+      }
+      positions[i] = o + sp;
+      du[i] = su;
+      dv[i] = sv;
+    }
+  });
 }
 
 }  // namespace strata

@@ -129,6 +129,12 @@ BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const std::vecto
 //!        differs from the encoding's.
 BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const SubdivSurface& surface);
 
+//! The same with the base points' patch weights computed once (a LimitPointSet over the
+//! encoding's limit_points): after a cage edit this is one sparse product per frame component.
+//! \throw InvalidInput as above, or if \p points does not hold one point per detail vertex.
+BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const LimitPointSet& points,
+                                const SubdivSurface& surface);
+
 //! The limit surface of an encoding's cage with the control points \p control_points.
 //! \throw InvalidInput if the encoding is not over a limit surface, or as SubdivSurface's
 //!        constructor.

@@ -161,8 +161,31 @@ class SubdivSurface {
   EdgeCrossing across_edge(int face, int edge, double t) const;
 
  private:
+  friend class LimitPointSet;
   class Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+//! Fixed limit points evaluated again after every cage edit (an encoding's base points): each
+//! point's patch and basis weights are found once, so a re-evaluation is one weighted sum over
+//! the patches' points per point, a sparse matrix-vector product. The weights are stored in single
+//! precision relative to each patch's first point (about 1e-7 of the patch size).
+class LimitPointSet {
+ public:
+  //! 	hrow InvalidInput if a point's face is out of range or its (u, v) is not finite.
+  LimitPointSet(const SubdivSurface& surface, const std::vector<LimitPoint>& points);
+  int size() const { return static_cast<int>(offsets_.size()) - 1; }
+  //! Positions and first derivatives of the points on \p surface, which must have the topology
+  //! the set was built on (e.g. the same SubdivSurface after set_control_points()). In parallel.
+  //! \throw InvalidInput if the surface's patch layout differs.
+  void evaluate(const SubdivSurface& surface, std::vector<Vec3>& positions, std::vector<Vec3>& du,
+                std::vector<Vec3>& dv) const;
+
+ private:
+  int num_patch_points_ = 0;
+  std::vector<int> offsets_;  // per point: its entries [offsets_[i], offsets_[i+1])
+  std::vector<int> index_;    // per entry: patch point; the first entry of a point is its origin
+  std::vector<float> wp_, wu_, wv_;
 };
 
 //! Options of project_to_limit(), with their defaults.
