@@ -309,25 +309,14 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
   return fr;
 }
 
-SubdivSurface limit_surface_for(const DetailEncoding& e, const std::vector<Vec3>& control_points) {
-  if (!e.over_limit_surface())
-    throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
-  if (static_cast<int>(control_points.size()) != e.base_num_vertices)
-    throw InvalidInput("edited cage has " + std::to_string(control_points.size()) +
-                       " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
-  PolyMesh cage;
-  cage.vertices = control_points;
-  cage.faces = e.cage_faces;
-  return SubdivSurface(cage, e.cage_tags, e.cage_options);
-}
-
 namespace {
 
-void check_limit_encoding(const DetailEncoding& e, const SubdivSurface& surface) {
+// The encoding is over a limit surface whose cage has \p control_points points.
+void check_limit_encoding(const DetailEncoding& e, int control_points) {
   if (!e.over_limit_surface())
     throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
-  if (surface.num_control_points() != e.base_num_vertices)
-    throw InvalidInput("edited cage has " + std::to_string(surface.num_control_points()) +
+  if (control_points != e.base_num_vertices)
+    throw InvalidInput("edited cage has " + std::to_string(control_points) +
                        " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
 }
 
@@ -337,8 +326,16 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
 
 }  // namespace
 
+SubdivSurface limit_surface_for(const DetailEncoding& e, const std::vector<Vec3>& control_points) {
+  check_limit_encoding(e, static_cast<int>(control_points.size()));
+  PolyMesh cage;
+  cage.vertices = control_points;
+  cage.faces = e.cage_faces;
+  return SubdivSurface(cage, e.cage_tags, e.cage_options);
+}
+
 BaseFrames evaluate_base_frames(const DetailEncoding& e, const SubdivSurface& surface) {
-  check_limit_encoding(e, surface);
+  check_limit_encoding(e, surface.num_control_points());
   // Exact (double precision) evaluation per point: the encoding's rest frames come from here.
   const int n = e.num_detail_vertices();
   BaseFrames fr;
@@ -358,7 +355,7 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const SubdivSurface& su
 
 BaseFrames evaluate_base_frames(const DetailEncoding& e, const LimitPointSet& points,
                                 const SubdivSurface& surface) {
-  check_limit_encoding(e, surface);
+  check_limit_encoding(e, surface.num_control_points());
   const int n = e.num_detail_vertices();
   if (points.size() != n)
     throw InvalidInput("limit point set has " + std::to_string(points.size()) + " points, the encoding " +

@@ -84,7 +84,7 @@ class Projector {
       LimitPoint y;
       LimitSample sy;
       bool stuck = false;
-      if (!trial(r.point, s, step, p, y, sy, stuck)) {
+      if (!trial(r.point, s, step, y, sy, stuck)) {
         if (stuck) break;  // pushed against an open boundary: no foot point inside
         newton = false;
         mu = mu == 0.0 ? 1e-3 : mu * 10.0;
@@ -129,9 +129,8 @@ class Projector {
   // displacement, expressed in the neighbour's tangents (and stopped at its domain's border).
   // Returns false if the step cannot be taken (stuck: it pushes out through an open boundary
   // from the boundary itself).
-  bool trial(const LimitPoint& x, const LimitSample& s, const Eigen::Vector2d& step, const Vec3& p,
-             LimitPoint& y, LimitSample& sy, bool& stuck) const {
-    (void)p;
+  bool trial(const LimitPoint& x, const LimitSample& s, const Eigen::Vector2d& step, LimitPoint& y,
+             LimitSample& sy, bool& stuck) const {
     int edge = -1;
     const double frac = internal::exit_fraction(corners_, x.u, x.v, step.x(), step.y(), edge);
     if (edge < 0) {

@@ -122,7 +122,7 @@ class VolumeReconstructor::Impl {
     const BaseFrames fr = frames_for(base);
     const double seconds = seconds_since(t0);
     ReconstructResult res = run(fr, start, warm);
-    res.stats.seconds_frames = seconds;
+    res.stats.seconds_frames += seconds;  // evaluating the frames, then preparing the state
     return res;
   }
 

@@ -93,8 +93,10 @@ class SubdivSurface::Impl {
       if (!cage_.vertices[v].allFinite())
         throw InvalidInput("cage vertex " + vtx(v) + " has a non-finite coordinate");
     bool all_triangles = true;
-    // Directed edges must be unique (consistent orientation), undirected ones shared by <= 2 faces.
-    std::unordered_map<std::uint64_t, int> directed, undirected;
+    // Undirected edges get ids and may be shared by at most 2 faces; directed ones must be unique
+    // (consistent orientation).
+    std::vector<int> edge_faces;
+    std::unordered_map<std::uint64_t, int> directed;
     for (int f = 0; f < cage_.num_faces(); ++f) {
       const std::vector<int>& c = cage_.faces[f];
       const int n = static_cast<int>(c.size());
@@ -109,23 +111,25 @@ class SubdivSurface::Impl {
           if (c[j] == c[k]) throw InvalidInput("cage face " + vtx(f) + " repeats vertex index " + vtx(c[k]));
       }
       for (int k = 0; k < n; ++k) {
-        const int a = c[k], b = c[(k + 1) % n];
-        if (++undirected[pair_key(a, b)] > 2)
-          throw InvalidInput("cage edge (" + vtx(std::min(a, b)) + "," + vtx(std::max(a, b)) +
+        const int a = std::min(c[k], c[(k + 1) % n]), b = std::max(c[k], c[(k + 1) % n]);
+        const auto [it, fresh] = edge_ids_.emplace(pair_key(a, b), static_cast<int>(edge_ends_.size()));
+        if (fresh) {
+          edge_ends_.push_back({a, b});
+          edge_faces.push_back(0);
+        }
+        if (++edge_faces[it->second] > 2)
+          throw InvalidInput("cage edge (" + vtx(a) + "," + vtx(b) +
                              ") is non-manifold: shared by more than 2 faces");
       }
     }
-    for (const std::vector<int>& c : cage_.faces) {
-      const std::size_t n = c.size();
-      for (std::size_t k = 0; k < n; ++k) {
-        const int a = c[k], b = c[(k + 1) % n];
-        const std::uint64_t d =
-            (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-        if (++directed[d] > 1)
+    for (const std::vector<int>& c : cage_.faces)
+      for (std::size_t k = 0; k < c.size(); ++k) {
+        const int a = c[k], b = c[(k + 1) % c.size()];
+        if (++directed[(static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+                       static_cast<std::uint32_t>(b)] > 1)
           throw InvalidInput("cage edge (" + vtx(a) + "," + vtx(b) +
                              ") is used twice in the same direction (faces are inconsistently oriented)");
       }
-    }
     scheme_ = opt_.scheme;
     if (scheme_ == SubdivScheme::Auto)
       scheme_ = all_triangles ? SubdivScheme::Loop : SubdivScheme::CatmullClark;
@@ -134,7 +138,7 @@ class SubdivSurface::Impl {
     for (const SubdivTags::Crease& c : tags_.creases) {
       if (!(c.sharpness >= 0))
         throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") has a negative sharpness");
-      if (c.v0 < 0 || c.v1 < 0 || c.v0 >= nv || c.v1 >= nv || !undirected.count(pair_key(c.v0, c.v1)))
+      if (c.v0 < 0 || c.v1 < 0 || c.v0 >= nv || c.v1 >= nv || !edge_ids_.count(pair_key(c.v0, c.v1)))
         throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") is not an edge of the cage");
     }
     for (const SubdivTags::Corner& c : tags_.corners) {
@@ -145,16 +149,6 @@ class SubdivSurface::Impl {
     }
     if (opt_.isolation_level < 1 || opt_.isolation_level > 10)
       throw InvalidInput("subdivision isolation level must be in 1..10, got " + vtx(opt_.isolation_level));
-    edge_ids_.reserve(undirected.size());
-    for (int f = 0; f < cage_.num_faces(); ++f) {
-      const std::vector<int>& c = cage_.faces[f];
-      for (std::size_t k = 0; k < c.size(); ++k) {
-        const std::uint64_t e = pair_key(c[k], c[(k + 1) % c.size()]);
-        if (edge_ids_.emplace(e, static_cast<int>(edge_ids_.size())).second)
-          edge_ends_.push_back(
-              {std::min(c[k], c[(k + 1) % c.size()]), std::max(c[k], c[(k + 1) % c.size()])});
-      }
-    }
   }
 
   void build_refiner() {
