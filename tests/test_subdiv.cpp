@@ -454,13 +454,29 @@ TEST(Subdiv, ProjectionFindsTheFootPointAlongTheNormal) {
   }
 }
 
-TEST(Subdiv, ProjectionCountsPointsBeyondTheOpenBoundary) {
+TEST(Subdiv, ProjectionOfPointsBeyondTheOpenBoundaryEndsOnTheBoundaryCurve) {
   const SubdivSurface s(open_quad_grid(4));
-  // Far outside the grid: the foot point would lie beyond the boundary.
-  const Projection pr = project_to_limit(s, {Vec3(-5, 2, 0), Vec3(2, 2, 3)});
-  EXPECT_EQ(pr.num_fallback, 1);
-  EXPECT_FALSE(pr.converged[0]);
-  EXPECT_TRUE(pr.converged[1]);
+  // Beyond the boundary x = 0 (no orthogonal foot point exists), and above the middle.
+  const std::vector<Vec3> pts = {Vec3(-5, 2.3, 0.4), Vec3(2, 2, 3)};
+  const Projection pr = project_to_limit(s, pts);
+  EXPECT_EQ(pr.num_converged, 2);
+  EXPECT_EQ(pr.num_fallback, 0);
+  EXPECT_EQ(pr.num_on_boundary, 1);
+  // The constrained foot point: on the boundary curve, p - S orthogonal to the curve, and no
+  // point of a fine tessellation of the boundary (or the surface) is closer.
+  const LimitSample x = s.evaluate(pr.points[0]);
+  const LimitTessellation t = s.tessellate(32);
+  double closest = 1e300;
+  for (const Vec3& y : t.mesh.vertices) closest = std::min(closest, (pts[0] - y).norm());
+  EXPECT_LE((pts[0] - x.position).norm(), closest + 1e-9);
+  EXPECT_LT((pts[0] - x.position).norm(), closest + 1e-3);
+  const bool on_domain_edge = pr.points[0].u <= 1e-12 || pr.points[0].u >= 1 - 1e-12 ||
+                              pr.points[0].v <= 1e-12 || pr.points[0].v >= 1 - 1e-12;
+  EXPECT_TRUE(on_domain_edge);
+  // The boundary x = 0 runs along the v or u direction of its ptex face; d is orthogonal to it.
+  const Vec3 d = (pts[0] - x.position).normalized();
+  EXPECT_LE(std::min(std::abs(d.dot(x.du.normalized())), std::abs(d.dot(x.dv.normalized()))), 1e-9);
+  EXPECT_NEAR(x.position.x(), 0.0, 0.2);
 }
 
 TEST(Subdiv, RejectsBadCages) {

@@ -29,6 +29,7 @@ class Projector {
   struct Result {
     LimitPoint point;
     bool converged = false;
+    bool on_boundary = false;
     int iterations = 0;
   };
 
@@ -43,19 +44,25 @@ class Projector {
     Vec3 d = s.position - p;
     double phi = d.squaredNorm();
     double mu = 0.0;  // Levenberg-Marquardt damping, relative to the Hessian's diagonal
-    // Full Newton until a step fails; then Gauss-Newton (first derivatives only), which is slower
-    // but does not rely on second derivatives (poor near the end caps' corners).
-    bool newton = true;
+    // Newton where the distance's Hessian is positive definite, else Gauss-Newton (first
+    // derivatives only); a failed step raises the Levenberg-Marquardt damping instead of giving up
+    // on Newton for good. Near a focal point (the surface curved about as tightly as the point is
+    // far) the distance is nearly flat and Gauss-Newton converges only linearly, too slowly for
+    // the iteration budget, while damped Newton keeps its quadratic convergence.
     for (; r.iterations < opt_.max_iterations; ++r.iterations) {
       if (orthogonal(s, d)) {
         r.converged = true;
+        return r;
+      }
+      if (boundary_foot(r.point, s, d, opt_.orthogonality_tolerance)) {
+        r.converged = r.on_boundary = true;
         return r;
       }
       const Eigen::Vector2d g(s.du.dot(d), s.dv.dot(d));
       Eigen::Matrix2d H;
       H << s.du.dot(s.du) + s.duu.dot(d), s.du.dot(s.dv) + s.duv.dot(d), s.du.dot(s.dv) + s.duv.dot(d),
           s.dv.dot(s.dv) + s.dvv.dot(d);
-      if (!newton || !(H(0, 0) > 0 && H.determinant() > 0)) {
+      if (!(H(0, 0) > 0 && H.determinant() > 0)) {
         // Not a local minimum's basin (the distance's Hessian is indefinite): Gauss-Newton.
         H << s.du.dot(s.du), s.du.dot(s.dv), s.du.dot(s.dv), s.dv.dot(s.dv);
       }
@@ -86,7 +93,6 @@ class Projector {
       bool stuck = false;
       if (!trial(r.point, s, step, y, sy, stuck)) {
         if (stuck) break;  // pushed against an open boundary: no foot point inside
-        newton = false;
         mu = mu == 0.0 ? 1e-3 : mu * 10.0;
         if (mu > 1e8) break;
         continue;
@@ -102,13 +108,13 @@ class Projector {
         mu *= 0.1;
         if (mu < 1e-9) mu = 0.0;
       } else {
-        newton = false;
         mu = mu == 0.0 ? 1e-3 : mu * 10.0;
         if (mu > 1e8) break;
       }
     }
     // Stalled: accepted if orthogonal to within the seams' tangent jumps.
     r.converged = orthogonal(s, d, opt_.seam_tolerance);
+    if (!r.converged) r.converged = r.on_boundary = boundary_foot(r.point, s, d, opt_.seam_tolerance);
     return r;
   }
 
@@ -122,6 +128,26 @@ class Projector {
     const double tol = cosine * dn, nu = s.du.norm(), nv = s.dv.norm();
     // A degenerate parameterization (a vanishing derivative) proves nothing.
     return nu > 0 && nv > 0 && std::abs(s.du.dot(d)) <= tol * nu && std::abs(s.dv.dot(d)) <= tol * nv;
+  }
+
+  // Whether x, on an open boundary edge of the surface, is the constrained closest point there
+  // (the Karush-Kuhn-Tucker conditions): p - S is orthogonal to the boundary curve's tangent and
+  // moving into the surface does not bring S closer. It is the foot point of a detail vertex
+  // beyond the surface's open boundary, which has no orthogonal foot point inside.
+  bool boundary_foot(const LimitPoint& x, const LimitSample& s, const Vec3& d, double cosine) const {
+    for (int e = 0; e < corners_; ++e) {
+      if (!internal::on_edge(corners_, e, x.u, x.v)) continue;
+      const double t = std::clamp(internal::edge_param(corners_, e, x.u, x.v), 0.0, 1.0);
+      if (surface_.across_edge(x.face, e, t).face >= 0) continue;
+      const Eigen::Vector2d a =
+          internal::edge_point(corners_, e, 1.0) - internal::edge_point(corners_, e, 0.0);
+      const Eigen::Vector2d n = internal::inward_normal(corners_, e);
+      const Vec3 along = a.x() * s.du + a.y() * s.dv, inward = n.x() * s.du + n.y() * s.dv;
+      const double dn = d.norm(), na = along.norm();
+      // d = S - p: moving inward changes |d|^2 at the rate 2 d . inward.
+      if (na > 0 && std::abs(along.dot(d)) <= cosine * na * dn && inward.dot(d) >= 0.0) return true;
+    }
+    return false;
   }
 
   // The point a Newton step leads to. A step that leaves the ptex face continues in the
@@ -197,6 +223,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
   out.points.resize(n);
   out.converged.assign(n, 0);
   std::vector<int> iterations(n, 0);
+  std::vector<char> on_boundary(n, 0);
   const Projector proj(surface, options);
   auto body = [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
@@ -204,6 +231,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
       out.points[i] = r.point;
       out.converged[i] = r.converged ? 1 : 0;
       iterations[i] = r.iterations;
+      on_boundary[i] = r.on_boundary ? 1 : 0;
     }
   };
   if (options.parallel) {
@@ -214,6 +242,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
   }
   for (std::size_t i = 0; i < n; ++i) {
     out.num_converged += out.converged[i];
+    out.num_on_boundary += on_boundary[i];
     out.max_iterations_used = std::max(out.max_iterations_used, iterations[i]);
   }
   out.num_fallback = static_cast<int>(n) - out.num_converged;

@@ -172,7 +172,7 @@ class SubdivSurface {
 //! precision relative to each patch's first point (about 1e-7 of the patch size).
 class LimitPointSet {
  public:
-  //! 	hrow InvalidInput if a point's face is out of range or its (u, v) is not finite.
+  //! \throw InvalidInput if a point's face is out of range or its (u, v) is not finite.
   LimitPointSet(const SubdivSurface& surface, const std::vector<LimitPoint>& points);
   int size() const { return static_cast<int>(offsets_.size()) - 1; }
   //! Positions and first derivatives of the points on \p surface, which must have the topology
@@ -210,8 +210,11 @@ struct ProjectOptions {
 //! The foot points of \p points on the limit surface, and how they were found.
 struct Projection {
   std::vector<LimitPoint> points;
-  std::vector<char> converged;  //!< 1: Newton found an orthogonal foot point
+  std::vector<char> converged;  //!< 1: Newton found an orthogonal (or boundary) foot point
   int num_converged = 0;
+  //! Of the converged points, those whose foot point is the closest point on an open boundary
+  //! curve of the surface (the point lies beyond the boundary; p - S is orthogonal to the curve).
+  int num_on_boundary = 0;
   int num_fallback = 0;  //!< not converged: the best point Newton reached (at least as close as the seed)
   int max_iterations_used = 0;
   double seconds = 0.0;
@@ -220,9 +223,10 @@ struct Projection {
 //! Projects each point onto the limit surface along the limit normal: the foot point S(u, v)
 //! where p - S is orthogonal to both tangents. Newton iterations on (u, v) (with the second
 //! derivatives, damped where the Hessian is not positive definite) start from the closest point
-//! on a tessellation and cross ptex-face boundaries. A point whose iteration does not converge
-//! (e.g. its foot point lies beyond an open boundary) keeps the closest point found and is counted
-//! as a fallback.
+//! on a tessellation and cross ptex-face boundaries. A point beyond an open boundary, which has no
+//! orthogonal foot point, converges to the closest point of the boundary curve (counted in
+//! num_on_boundary). A point whose iteration does not converge keeps the closest point found and
+//! is counted as a fallback.
 //! \throw InvalidInput if a point is not finite or the options are out of range.
 Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3>& points,
                             const ProjectOptions& options = {});

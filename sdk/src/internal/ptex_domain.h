@@ -48,6 +48,19 @@ inline double edge_param(int corners, int e, double u, double v) {
   return e == 0 ? u : e == 1 ? v : e == 2 ? 1.0 - u : 1.0 - v;
 }
 
+//! Whether (u, v) lies on edge e of the domain, to within \p tol in the parameters.
+inline bool on_edge(int corners, int e, double u, double v, double tol = 1e-12) {
+  if (corners == 3) return e == 0 ? v <= tol : e == 1 ? u + v >= 1.0 - tol : u <= tol;
+  return e == 0 ? v <= tol : e == 1 ? u >= 1.0 - tol : e == 2 ? v >= 1.0 - tol : u <= tol;
+}
+
+//! The unit normal of edge e pointing into the domain (edges run counter-clockwise, so it is the
+//! edge direction turned left).
+inline Eigen::Vector2d inward_normal(int corners, int e) {
+  const Eigen::Vector2d d = edge_point(corners, e, 1.0) - edge_point(corners, e, 0.0);
+  return Eigen::Vector2d(-d.y(), d.x()).normalized();
+}
+
 //! Where the segment from (u, v) (inside the domain) along (du, dv) first leaves the domain:
 //! the fraction s in [0, 1) of the step and the edge it crosses, or s = 1 and edge -1 if the
 //! whole step stays inside.
