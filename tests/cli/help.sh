@@ -13,6 +13,10 @@ for sub in reconstruct stats generate demo; do
   grep -q "Usage: strata $sub" <<<"$sub_out" || fail "strata $sub --help prints no usage line"
 done
 
+grep -q "cage" <<<"$out" || fail "strata --help does not list 'cage'"
+sub_out=$("$STRATA" cage fit --help) || fail "strata cage fit --help exited non-zero"
+grep -q "Usage: strata cage fit" <<<"$sub_out" || fail "strata cage fit --help prints no usage line"
+
 set +e
 "$STRATA" >/dev/null 2>&1; rc=$?
 [ "$rc" -eq 2 ] || fail "strata without a subcommand exited $rc, expected 2"

@@ -38,6 +38,7 @@ Subcommand register_stats(CLI::App& parent);
 Subcommand register_generate(CLI::App& parent);
 Subcommand register_demo(CLI::App& parent);
 Subcommand register_deform(CLI::App& parent);
+Subcommand register_cage(CLI::App& parent);
 
 //! Wall-clock seconds since construction (or the last restart()).
 class Stopwatch {
@@ -100,7 +101,8 @@ void check_mesh_output_path(const std::string& path);
 //! check_mesh_output_path for \p output and each non-empty path of \p extra_meshes, and
 //! check_output_path for \p report unless empty; all of them must name different files.
 //! Called before a long computation so that a typo fails at once.
-void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes, const std::string& report);
+void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes,
+                   const std::string& report);
 
 //! Creates \p dir (and its parents) if needed; throws IoError if that fails or it is not a directory.
 void ensure_directory(const std::string& dir);
@@ -125,7 +127,8 @@ struct EncodedInput {
 };
 //! Checks that \p edited has \p base's connectivity, encodes \p detail over \p base and counts
 //! the detail's self-intersections, logging each phase.
-EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited, const Log& log);
+EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited,
+                          const Log& log);
 
 //! Wall-clock seconds of the phases of one reconstruction (0 for a phase the method lacks).
 struct PhaseTimes {

@@ -20,8 +20,8 @@ int main(int argc, char** argv) {
 
   try {
     const std::vector<Subcommand> commands = {register_reconstruct(app), register_stats(app),
-                                              register_generate(app), register_demo(app),
-                                              register_deform(app)};
+                                              register_generate(app),    register_demo(app),
+                                              register_deform(app),      register_cage(app)};
     app.parse(argc, argv);
     for (const Subcommand& c : commands)
       if (c.app->parsed()) return c.run();
