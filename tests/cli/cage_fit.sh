@@ -28,5 +28,28 @@ for k in ("read", "smooth", "decimate", "fit", "write"):
     assert r["timing"][k] >= 0, k
 PY
 grep -q "^cage " summary.txt || fail "no summary printed"
+
+# deform over the fitted cage's limit surface: the selections pick cage vertices
+cat >bend.json <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 1.6], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 2.8], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 30, "pivot": [0, 0, 1.6]}}}
+JSON
+"$STRATA" deform case/detail.obj --edit bend.json --base subdiv --cage cage.obj --method vectors -o bent.obj \
+  --write-base bent_cage.obj --report deform.json -q >/dev/null || fail "deform --base subdiv failed"
+python3 - <<'PY' || fail "deform --base subdiv report check failed"
+import json
+r = json.load(open("deform.json"))
+assert r["base"] == "subdiv" and r["cage"]["fitted"] is False, r["cage"]
+e = r["edits"][0]
+assert e["region_vertices"] > e["handle_vertices"] > 0, e
+assert 0 < e["region_faces"] < r["input"]["faces"], e
+PY
+[ -s bent_cage.obj ] || fail "no edited cage written"
+cmp -s cage.obj bent_cage.obj && fail "the edited cage equals the cage"
+if "$STRATA" deform case/detail.obj --edit bend.json --cage cage.obj -o x.obj 2>err.txt; then
+  fail "--cage without --base subdiv was accepted"
+fi
+grep -q "need --base subdiv" err.txt || fail "no clear message for --cage without --base subdiv"
 ls -A | grep -q '\.tmp' && fail "temporary file left behind"
 echo "cage_fit: all checks passed"

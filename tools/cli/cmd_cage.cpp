@@ -5,8 +5,8 @@
 
 #include "common.h"
 #include "strata/cage_fit.h"
+#include "strata/cage_io.h"
 #include "strata/exceptions.h"
-#include "strata/mesh_io.h"
 
 namespace strata::cli {
 
@@ -19,14 +19,6 @@ struct CageFitCmdOptions {
   CageFitOptions fit;
   bool quiet = false;
 };
-
-TriMesh to_tri_mesh(const PolyMesh& cage) {
-  TriMesh m;
-  m.vertices = cage.vertices;
-  m.faces.reserve(cage.faces.size());
-  for (const auto& f : cage.faces) m.faces.push_back({f[0], f[1], f[2]});
-  return m;
-}
 
 int run_cage_fit(const CageFitCmdOptions& o) {
   check_outputs(o.output, {}, o.report);
@@ -44,7 +36,7 @@ int run_cage_fit(const CageFitCmdOptions& o) {
     }
   }();
   sw.restart();
-  write_mesh(to_tri_mesh(fit.cage), o.output);
+  write_cage(fit.cage, o.output);
   const double write_seconds = sw.seconds();
   const json r{{"scan", mesh_json(scan.mesh, scan.name)},
                {"cage",

@@ -4,6 +4,9 @@
 #include <string>
 
 #include "common.h"
+#include "strata/cage_editing.h"
+#include "strata/cage_fit.h"
+#include "strata/cage_io.h"
 #include "strata/edit_script.h"
 #include "strata/editing.h"
 #include "strata/exceptions.h"
@@ -21,15 +24,27 @@ struct DeformCmdOptions {
   std::string base_output;  // empty: not written
   std::string report;       // empty: no report
   double smoothing = 0.25;
+  std::string base = "faired";  // or "subdiv"
+  std::string cage;             // subdiv: given cage (empty: fitted)
+  std::string cage_tags;        // subdiv: its sharpness tags (optional)
+  int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
   bool quiet = false;
 };
 
-json edit_json(const RegionEditor& editor, const EditResult& r, double select_seconds, double metrics_seconds) {
+// What the report says about one edit, whichever editor ran it.
+struct EditFacts {
+  std::size_t region_vertices = 0, handle_vertices = 0;
+  int region_faces = 0;
+  const EncodeReport* encoding = nullptr;
+};
+
+json edit_json(const EditFacts& editor, Method method, const EditResult& r, double select_seconds,
+               double metrics_seconds) {
   const EditTimes& t = r.times;
-  json j{{"region_vertices", editor.region_vertices().size()},
-         {"handle_vertices", editor.handle_vertices().size()},
-         {"region_faces", editor.region_faces()},
-         {"encoding", encoding_json(editor.encoding().report)},
+  json j{{"region_vertices", editor.region_vertices},
+         {"handle_vertices", editor.handle_vertices},
+         {"region_faces", editor.region_faces},
+         {"encoding", encoding_json(*editor.encoding)},
          {"volume_metrics", volume_metrics_json(r.volume)},
          {"timing_seconds",
           {{"select", select_seconds},
@@ -39,9 +54,8 @@ json edit_json(const RegionEditor& editor, const EditResult& r, double select_se
            {"edit", t.edit},
            {"solve", t.solve},
            {"metrics", metrics_seconds}}}};
-  j["iterations"] = editor.options().method == EditOptions::Method::Volumes
-                        ? iterations_json(std::optional<ReconstructStats>(r.stats))
-                        : json(nullptr);
+  j["iterations"] =
+      method == Method::Volumes ? iterations_json(std::optional<ReconstructStats>(r.stats)) : json(nullptr);
   return j;
 }
 
@@ -56,6 +70,38 @@ int run_deform(const DeformCmdOptions& o) {
   const NamedMesh input = read_named_mesh(o.input);
   const double read_seconds = sw.seconds();
   const TimedIntersections input_pairs = find_intersections(input.mesh.vertices, input.mesh.faces);
+  const bool subdiv = o.base == "subdiv";
+  if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
+    throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
+  if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
+  if (!o.cage.empty() && o.cage_faces > 0) throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
+  PolyMesh cage;
+  SubdivTags tags;
+  json cage_json = nullptr;
+  if (subdiv) {
+    if (!o.cage.empty()) {
+      log.phase("reading the cage " + o.cage);
+      cage = read_cage(o.cage);
+      if (!o.cage_tags.empty()) tags = read_subdiv_tags(o.cage_tags);
+      cage_json = {{"path", o.cage}, {"faces", cage.num_faces()}, {"fitted", false}};
+    } else {
+      log.phase("fitting a cage to " + input.name);
+      CageFitOptions fo;
+      fo.faces = o.cage_faces;
+      CageFit fit;
+      try {
+        fit = fit_cage(input.mesh, fo);
+      } catch (const InvalidInput& ex) {
+        throw InvalidInput(input.name + ": " + ex.what());
+      }
+      cage = std::move(fit.cage);
+      cage_json = {{"faces", cage.num_faces()},
+                   {"fitted", true},
+                   {"rms_error", fit.rms_error},
+                   {"max_error", fit.max_error},
+                   {"seconds", fit.seconds_smooth + fit.seconds_decimate + fit.seconds_fit}};
+    }
+  }
 
   EditOptions options;
   options.smoothing_fraction = o.smoothing;
@@ -68,14 +114,41 @@ int run_deform(const DeformCmdOptions& o) {
     const std::string label = "edit " + std::to_string(k + 1) + "/" + std::to_string(script.edits.size());
     const std::string where = o.edit + ": edit " + std::to_string(k + 1);
     sw.restart();
+    // Over a subdivision base, the selections pick cage vertices.
+    const std::vector<Vec3>& selectable = subdiv ? cage.vertices : current.vertices;
     std::vector<char> region, handle;
     try {
-      region = select_vertices(current.vertices, e.region);
-      handle = select_vertices(current.vertices, e.handle);
+      region = select_vertices(selectable, e.region);
+      handle = select_vertices(selectable, e.handle);
     } catch (const InvalidInput& ex) {
       throw InvalidInput(where + ": " + ex.what());
     }
     const double select_seconds = sw.seconds();
+    if (subdiv) {
+      log.phase(label + ": encoding over the cage's limit surface");
+      CageEditOptions co;
+      co.method = options.method;
+      co.reconstruct.progress = log.progress(label + ": " + to_string(method));
+      std::unique_ptr<CageEditor> editor;
+      try {
+        editor = std::make_unique<CageEditor>(current, SubdivSurface(cage, tags), region, handle, co);
+      } catch (const InvalidInput& ex) {
+        throw InvalidInput(where + ": " + ex.what());
+      }
+      log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region cage vertices, " +
+                std::to_string(editor->handle_vertices().size()) + " handle; reconstructing " +
+                std::to_string(editor->region_faces()) + " prisms");
+      EditResult r = editor->apply(e.transform);
+      sw.restart();
+      const EditFacts facts{editor->region_vertices().size(), editor->handle_vertices().size(),
+                            editor->region_faces(), &editor->encoding().report};
+      json ej = edit_json(facts, method, r, select_seconds, 0.0);
+      current.vertices = std::move(r.positions);
+      cage.vertices = std::move(r.base_positions);
+      ej["timing_seconds"]["metrics"] = sw.seconds();
+      edits.push_back(std::move(ej));
+      continue;
+    }
     log.phase(label + ": decomposing the region");
     options.reconstruct.progress = log.progress(label + ": " + to_string(method));
     std::unique_ptr<RegionEditor> editor;
@@ -88,7 +161,9 @@ int run_deform(const DeformCmdOptions& o) {
               std::to_string(editor->handle_vertices().size()) + " handle vertices; reconstructing");
     EditResult r = editor->apply(e.transform);
     sw.restart();
-    json ej = edit_json(*editor, r, select_seconds, 0.0);
+    const EditFacts facts{editor->region_vertices().size(), editor->handle_vertices().size(),
+                          editor->region_faces(), &editor->encoding().report};
+    json ej = edit_json(facts, method, r, select_seconds, 0.0);
     current.vertices = std::move(r.positions);
     base_out.vertices = std::move(r.base_positions);
     ej["timing_seconds"]["metrics"] = sw.seconds();
@@ -102,11 +177,18 @@ int run_deform(const DeformCmdOptions& o) {
   log.phase("writing " + o.output);
   sw.restart();
   write_mesh(current, o.output);
-  if (!o.base_output.empty()) write_mesh(base_out, o.base_output);
+  if (!o.base_output.empty()) {
+    if (subdiv)
+      write_cage(cage, o.base_output);
+    else
+      write_mesh(base_out, o.base_output);
+  }
   const double write_seconds = sw.seconds();
 
   json report{{"command", "deform"},
               {"method", to_string(method)},
+              {"base", o.base},
+              {"cage", cage_json},
               {"input", mesh_json(input.mesh, input.name)},
               {"edit_script", o.edit},
               {"output", mesh_json(current, o.output)},
@@ -134,12 +216,13 @@ int run_deform(const DeformCmdOptions& o) {
     const json& vm = ej["volume_metrics"];
     const json& t = ej["timing_seconds"];
     std::cout << "edit " << k + 1 << "         " << ej["region_vertices"].get<std::size_t>() << " region / "
-              << ej["handle_vertices"].get<std::size_t>() << " handle vertices, " << ej["region_faces"].get<int>()
-              << " prisms; volume error max " << sci(vm["max_relative_error"].get<double>()) << ", RMS "
+              << ej["handle_vertices"].get<std::size_t>() << " handle vertices, "
+              << ej["region_faces"].get<int>() << " prisms; volume error max "
+              << sci(vm["max_relative_error"].get<double>()) << ", RMS "
               << sci(vm["rms_relative_error"].get<double>()) << "; decompose "
               << fixed(t["decompose"].get<double>()) << " s, encode " << fixed(t["encode"].get<double>())
-              << " s, setup " << fixed(t["setup"].get<double>()) << " s, solve " << fixed(t["solve"].get<double>())
-              << " s\n";
+              << " s, setup " << fixed(t["setup"].get<double>()) << " s, solve "
+              << fixed(t["solve"].get<double>()) << " s\n";
   }
   std::cout << "intersections  " << input_pairs.result.num_pairs << " pairs in the input, "
             << output_pairs.result.num_pairs << " in the output, " << new_pairs << " new\n"
@@ -154,22 +237,40 @@ int run_deform(const DeformCmdOptions& o) {
 Subcommand register_deform(CLI::App& parent) {
   auto o = std::make_shared<DeformCmdOptions>();
   CLI::App* app = parent.add_subcommand(
-      "deform", "Edit a region of a mesh by an edit script; the detail follows by displacement volumes or vectors");
+      "deform",
+      "Edit a region of a mesh by an edit script; the detail follows by displacement volumes or vectors");
   app->add_option("input", o->input, "Mesh to edit (.obj, .off, .ply, .stl)")->required();
   app->add_option("--edit", o->edit, "Edit script (JSON; see README, \"Edit scripts\")")->required();
-  app->add_option("--method", o->method, "volumes (prism volumes preserved) or vectors (normal displacements)")
+  app->add_option("--method", o->method,
+                  "volumes (prism volumes preserved) or vectors (normal displacements)")
       ->check(CLI::IsMember({"volumes", "vectors"}))
       ->capture_default_str();
   app->add_option("-o,--output", o->output, "Edited mesh to write (atomically)")->required();
-  app->add_option("--write-base", o->base_output, "Also write the edited smooth base here");
+  app->add_option("--write-base", o->base_output,
+                  "Also write the edited smooth base here (the edited cage with --base subdiv)");
+  app->add_option(
+         "--base", o->base,
+         "faired: each region's thin-plate faired base; subdiv: the limit surface of a control cage, "
+         "edited through its vertices (the edit script's selections pick cage vertices)")
+      ->check(CLI::IsMember({"faired", "subdiv"}))
+      ->capture_default_str();
+  app->add_option("--cage", o->cage,
+                  "With --base subdiv: the cage (a triangle mesh file); default: fitted to the input");
+  app->add_option("--cage-tags", o->cage_tags,
+                  "With --cage: its crease and corner tags (JSON, see cage_io.h)");
+  app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
+      ->check(CLI::NonNegativeNumber);
   app->add_option("--report", o->report, "Also write a JSON report (metrics, sizes, timings) here");
-  app->add_option("--smoothing", o->smoothing,
-                  "Base cut-off wavelength as a fraction of the region's size: shape longer than this stays in "
-                  "the smooth base, shorter becomes detail")
+  app->add_option(
+         "--smoothing", o->smoothing,
+         "Base cut-off wavelength as a fraction of the region's size: shape longer than this stays in "
+         "the smooth base, shorter becomes detail")
       ->check(CLI::Range(1e-3, 100.0))
       ->capture_default_str();
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
-  app->footer("Example:\n  strata deform scan.off --edit bend.json --method volumes -o bent.obj --report report.json");
+  app->footer(
+      "Example:\n  strata deform scan.off --edit bend.json --method volumes -o bent.obj --report "
+      "report.json");
   return {app, [o] { return run_deform(*o); }};
 }
 

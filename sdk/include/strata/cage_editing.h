@@ -1,0 +1,89 @@
+//! \file cage_editing.h
+//! The editing operator over a subdivision base (issue 4, item 5): the mesh's detail is encoded
+//! once over the limit surface of a control cage; region and handle select cage vertices; the
+//! handle's transform is blended over the region's cage vertices (paper, section 5, with the
+//! cage as the smooth base), the limit surface follows, and the detail is rebuilt over it.
+//!
+//! \code
+//!   strata::CageFit fit = strata::fit_cage(scan);
+//!   strata::CageEditor editor(scan, strata::SubdivSurface(fit.cage),
+//!                             strata::select_vertices(fit.cage.vertices, region),
+//!                             strata::select_vertices(fit.cage.vertices, handle));
+//!   strata::EditResult r = editor.apply(strata::EditTransform::rotation(axis, 90.0, pivot));
+//! \endcode
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "strata/editing.h"
+#include "strata/subdiv.h"
+
+namespace strata {
+
+//! Options of CageEditor, with their defaults.
+struct CageEditOptions {
+  //! Volumes (the paper) or displacement vectors along the limit normals (the baseline).
+  EditOptions::Method method = EditOptions::Method::Volumes;
+  //! Projection of the mesh's vertices onto the cage's limit surface (the encoding).
+  ProjectOptions projection;
+  //! Reconstruction (exact solves: apply() and end_drag()).
+  ReconstructOptions reconstruct;
+  //! Interactive steps (update_drag()).
+  WarmStartOptions drag{true, 1e-2};
+};
+
+//! Editing of a mesh through the control cage of its subdivision base. Only the prisms whose
+//! base points depend on a region cage vertex (through their limit stencils) are solved; every
+//! other detail vertex keeps its position exactly, since its base frame cannot change.
+//! Not thread-safe: one drag at a time, one thread per object.
+class CageEditor {
+ public:
+  //! \p region and \p handle hold one flag per cage vertex; the handle is taken as the region
+  //! vertices it flags. The blend field is bi-harmonic on the cage graph (uniform Laplacian) over
+  //! the region minus the handle, 0 outside the region and 1 on the handle.
+  //! \pre mesh is a valid triangle mesh (validate_mesh()).
+  //! \throw InvalidInput if the flags do not match the cage's vertex count, the region or handle
+  //!        is empty, the handle is the whole region, or no detail vertex depends on the region.
+  //! \throw SolverError if the blend field cannot be solved.
+  CageEditor(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,
+             const std::vector<char>& handle, CageEditOptions options = {});
+  ~CageEditor();
+  CageEditor(CageEditor&&) noexcept;
+  CageEditor& operator=(CageEditor&&) noexcept;
+
+  const TriMesh& mesh() const;
+  const SubdivSurface& base() const;
+  //! The blend field per cage vertex.
+  const std::vector<double>& blend() const;
+  const std::vector<int>& region_vertices() const;  //!< cage vertices
+  const std::vector<int>& handle_vertices() const;  //!< cage vertices
+  //! Prisms solved: the mesh faces with a vertex whose base point depends on the region.
+  int region_faces() const;
+  //! The solved part's encoding over the limit surface (submesh indices).
+  const DetailEncoding& encoding() const;
+  const CageEditOptions& options() const;
+
+  //! The cage with \p transform blended over the region.
+  //! \throw InvalidInput if the transform is not finite or its linear part is singular or
+  //!        reflecting.
+  std::vector<Vec3> edited_cage(const EditTransform& transform) const;
+
+  //! The exact edit from the clean start. EditResult::base_positions holds the edited cage.
+  //! \throw as edited_cage(); SolverError if the reconstruction fails.
+  EditResult apply(const EditTransform& transform) const;
+
+  //! Interactive drag, as RegionEditor's: warm-started steps, the exact solve at the end.
+  void begin_drag();
+  //! \throw InvalidInput if no drag is active, or as edited_cage().
+  const std::vector<Vec3>& update_drag(const EditTransform& transform);
+  //! \throw InvalidInput if no drag is active.
+  EditResult end_drag();
+  bool dragging() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace strata

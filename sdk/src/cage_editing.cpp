@@ -1,0 +1,301 @@
+#include "strata/cage_editing.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <chrono>
+#include <string>
+
+#include "internal/blended_map.h"
+#include "strata/exceptions.h"
+#include "strata/metrics.h"
+
+namespace strata {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// Vertex -> neighbours of a polygonal cage (consecutive corners of a face), sorted and unique.
+std::vector<std::vector<int>> cage_neighbors(const PolyMesh& cage) {
+  std::vector<std::vector<int>> nb(cage.num_vertices());
+  for (const auto& f : cage.faces)
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const int a = f[k], b = f[(k + 1) % f.size()];
+      nb[a].push_back(b);
+      nb[b].push_back(a);
+    }
+  for (auto& n : nb) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  return nb;
+}
+
+}  // namespace
+
+class CageEditor::Impl {
+ public:
+  Impl(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,
+       const std::vector<char>& handle, CageEditOptions o)
+      : mesh_(mesh), base_(std::move(base)), opt_(std::move(o)) {
+    const int n = base_.num_control_points();
+    if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
+      throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) +
+                         ")");
+    for (int i = 0; i < n; ++i) {
+      if (!region[i]) continue;
+      region_.push_back(i);
+      if (handle[i]) handle_.push_back(i);
+    }
+    if (region_.empty()) throw InvalidInput("the region selects no cage vertex");
+    if (handle_.empty()) throw InvalidInput("the handle selects no cage vertex of the region");
+    if (handle_.size() == region_.size())
+      throw InvalidInput("the handle is the whole region: nothing to blend");
+    const auto t0 = Clock::now();
+    blend_field(region, handle);
+    decompose_seconds_ = seconds_since(t0);
+    const auto t1 = Clock::now();
+    encode(region);
+    encode_seconds_ = seconds_since(t1);
+  }
+
+  std::vector<Vec3> edited_cage(const EditTransform& t) const {
+    const internal::BlendedMap map(t);
+    std::vector<Vec3> out = base_.control_points();
+    for (int i : region_) out[i] = map.apply(out[i], s_[i]);
+    return out;
+  }
+
+  EditResult apply(const EditTransform& t) const {
+    EditResult res;
+    auto t0 = Clock::now();
+    res.base_positions = edited_cage(t);
+    res.times.edit = seconds_since(t0);
+    std::vector<Vec3> sub;
+    if (opt_.method == EditOptions::Method::Volumes) {
+      res.times.setup = ensure_reconstructor();
+      t0 = Clock::now();
+      ReconstructResult r = rec_->reconstruct(res.base_positions);
+      sub = std::move(r.positions);
+      res.stats = std::move(r.stats);
+    } else {
+      t0 = Clock::now();
+      sub = reconstruct_vectors(enc_, res.base_positions);
+    }
+    res.times.solve = seconds_since(t0);
+    res.times.decompose = decompose_seconds_;
+    res.times.encode = encode_seconds_;
+    res.positions = mesh_.vertices;
+    scatter(sub, res.positions);
+    res.volume = volume_metrics(enc_, evaluate_base_frames(enc_, res.base_positions), sub);
+    return res;
+  }
+
+  void begin_drag() {
+    drag_sub_ = enc_.detail_rest;
+    drag_positions_ = mesh_.vertices;
+    drag_transform_ = EditTransform{};
+    dragging_ = true;
+    if (opt_.method == EditOptions::Method::Volumes) ensure_reconstructor();
+  }
+
+  const std::vector<Vec3>& update_drag(const EditTransform& t) {
+    if (!dragging_) throw InvalidInput("update_drag() without begin_drag()");
+    const std::vector<Vec3> cage = edited_cage(t);
+    if (opt_.method == EditOptions::Method::Volumes)
+      drag_sub_ = rec_->reconstruct_from(cage, drag_sub_, opt_.drag).positions;
+    else
+      drag_sub_ = reconstruct_vectors(enc_, cage);
+    drag_transform_ = t;
+    scatter(drag_sub_, drag_positions_);
+    return drag_positions_;
+  }
+
+  // The exact solve from the clean start, as RegionEditor::end_drag (warm-started exact solves
+  // drift into folds over long drags).
+  EditResult end_drag() {
+    if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
+    dragging_ = false;
+    return apply(drag_transform_);
+  }
+
+  const TriMesh& mesh() const { return mesh_; }
+  const SubdivSurface& base() const { return base_; }
+  const std::vector<double>& blend() const { return s_; }
+  const std::vector<int>& region() const { return region_; }
+  const std::vector<int>& handle() const { return handle_; }
+  int region_faces() const { return static_cast<int>(enc_.detail_faces.size()); }
+  const DetailEncoding& encoding() const { return enc_; }
+  const CageEditOptions& options() const { return opt_; }
+  bool dragging() const { return dragging_; }
+
+ private:
+  // s: bi-harmonic (L^2 s = 0, uniform L) on the free cage vertices, 0 outside the region, 1 on
+  // the handle.
+  void blend_field(const std::vector<char>& region, const std::vector<char>& handle) {
+    const PolyMesh& cage = base_.cage();
+    const int n = cage.num_vertices();
+    const auto nb = cage_neighbors(cage);
+    Eigen::SparseMatrix<double> L(n, n);
+    std::vector<Eigen::Triplet<double>> t;
+    for (int v = 0; v < n; ++v) {
+      if (nb[v].empty()) continue;
+      t.emplace_back(v, v, 1.0);
+      for (int w : nb[v]) t.emplace_back(v, w, -1.0 / nb[v].size());
+    }
+    L.setFromTriplets(t.begin(), t.end());
+    const Eigen::SparseMatrix<double> B = L.transpose() * L;
+    std::vector<int> free_id(n, -1), free;
+    Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);
+    for (int v = 0; v < n; ++v) {
+      if (region[v] && !handle[v]) {
+        free_id[v] = static_cast<int>(free.size());
+        free.push_back(v);
+      } else if (region[v]) {
+        fixed[v] = 1.0;
+      }
+    }
+    s_.assign(n, 0.0);
+    for (int v : handle_) s_[v] = 1.0;
+    if (free.empty()) return;
+    const int m = static_cast<int>(free.size());
+    std::vector<Eigen::Triplet<double>> tf;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+    const Eigen::VectorXd Bfixed = B * fixed;
+    for (int k = 0; k < B.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
+        if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0)
+          tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
+    for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
+    Eigen::SparseMatrix<double> A(m, m);
+    A.setFromTriplets(tf.begin(), tf.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+    if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
+    const Eigen::VectorXd x = ldlt.solve(rhs);
+    if (ldlt.info() != Eigen::Success || !x.allFinite())
+      throw SolverError("the cage's blend field solve failed");
+    for (int k = 0; k < m; ++k) s_[free[k]] = x[k];
+  }
+
+  // The prisms whose base points depend on a region cage vertex (a non-zero weight in their
+  // limit stencil), encoded over the limit surface; their vertices that do not depend on the
+  // region are pinned (their frames cannot change).
+  void encode(const std::vector<char>& region) {
+    const int nv = mesh_.num_vertices();
+    const Projection pr = project_to_limit(base_, mesh_.vertices, opt_.projection);
+    std::vector<char> moves(nv, 0);
+    tbb::parallel_for(0, nv, [&](int i) {
+      const SubdivSurface::Stencil st = base_.stencil(pr.points[i]);
+      for (std::size_t k = 0; k < st.indices.size(); ++k)
+        if (region[st.indices[k]] && st.position[k] != 0.0) {
+          moves[i] = 1;
+          return;
+        }
+    });
+    std::vector<int> sub_id(nv, -1);
+    TriMesh detail;
+    for (const Face& f : mesh_.faces) {
+      if (!moves[f[0]] && !moves[f[1]] && !moves[f[2]]) continue;
+      Face g;
+      for (int c = 0; c < 3; ++c) {
+        int& id = sub_id[f[c]];
+        if (id < 0) {
+          id = static_cast<int>(sub_vertices_.size());
+          sub_vertices_.push_back(f[c]);
+        }
+        g[c] = id;
+      }
+      detail.faces.push_back(g);
+    }
+    if (detail.faces.empty()) throw InvalidInput("no detail vertex depends on the region's cage vertices");
+    for (int v : sub_vertices_) detail.vertices.push_back(mesh_.vertices[v]);
+    enc_ = encode_detail(detail, base_, opt_.projection);
+    moves_.swap(moves);
+    enc_.pinned.resize(sub_vertices_.size());
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) enc_.pinned[k] = !moves_[sub_vertices_[k]];
+  }
+
+  double ensure_reconstructor() const {
+    if (rec_) return 0.0;
+    const auto t0 = Clock::now();
+    rec_ = std::make_unique<VolumeReconstructor>(enc_, opt_.reconstruct);
+    return seconds_since(t0);
+  }
+
+  // Vertices that depend on the region take the solution; all others keep theirs exactly.
+  void scatter(const std::vector<Vec3>& sub, std::vector<Vec3>& whole) const {
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k)
+      if (moves_[sub_vertices_[k]]) whole[sub_vertices_[k]] = sub[k];
+  }
+
+  TriMesh mesh_;
+  SubdivSurface base_;
+  CageEditOptions opt_;
+  std::vector<int> region_, handle_;
+  std::vector<double> s_;
+  std::vector<char> moves_;
+  std::vector<int> sub_vertices_;
+  DetailEncoding enc_;
+  mutable std::unique_ptr<VolumeReconstructor> rec_;
+  double decompose_seconds_ = 0.0, encode_seconds_ = 0.0;
+  bool dragging_ = false;
+  std::vector<Vec3> drag_sub_, drag_positions_;
+  EditTransform drag_transform_;
+};
+
+CageEditor::CageEditor(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,
+                       const std::vector<char>& handle, CageEditOptions options)
+    : impl_(std::make_unique<Impl>(mesh, std::move(base), region, handle, std::move(options))) {}
+CageEditor::~CageEditor() = default;
+CageEditor::CageEditor(CageEditor&&) noexcept = default;
+CageEditor& CageEditor::operator=(CageEditor&&) noexcept = default;
+
+const TriMesh& CageEditor::mesh() const {
+  return impl_->mesh();
+}
+const SubdivSurface& CageEditor::base() const {
+  return impl_->base();
+}
+const std::vector<double>& CageEditor::blend() const {
+  return impl_->blend();
+}
+const std::vector<int>& CageEditor::region_vertices() const {
+  return impl_->region();
+}
+const std::vector<int>& CageEditor::handle_vertices() const {
+  return impl_->handle();
+}
+int CageEditor::region_faces() const {
+  return impl_->region_faces();
+}
+const DetailEncoding& CageEditor::encoding() const {
+  return impl_->encoding();
+}
+const CageEditOptions& CageEditor::options() const {
+  return impl_->options();
+}
+std::vector<Vec3> CageEditor::edited_cage(const EditTransform& t) const {
+  return impl_->edited_cage(t);
+}
+EditResult CageEditor::apply(const EditTransform& t) const {
+  return impl_->apply(t);
+}
+void CageEditor::begin_drag() {
+  impl_->begin_drag();
+}
+const std::vector<Vec3>& CageEditor::update_drag(const EditTransform& t) {
+  return impl_->update_drag(t);
+}
+EditResult CageEditor::end_drag() {
+  return impl_->end_drag();
+}
+bool CageEditor::dragging() const {
+  return impl_->dragging();
+}
+
+}  // namespace strata

@@ -1,0 +1,115 @@
+#include "strata/cage_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+
+namespace strata {
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void fail(const std::string& name, const std::string& where, const std::string& what) {
+  throw InvalidInput(name + ": " + where + ": " + what);
+}
+
+void only_keys(const std::string& name, const std::string& where, const json& j,
+               std::initializer_list<const char*> keys) {
+  if (!j.is_object()) fail(name, where, "expected an object");
+  for (const auto& [k, v] : j.items()) {
+    bool known = false;
+    for (const char* a : keys) known = known || k == a;
+    if (!known) fail(name, where, "unknown key \"" + k + "\"");
+  }
+}
+
+int vertex(const std::string& name, const std::string& where, const json& j) {
+  if (!j.is_number_integer() || j.get<long long>() < 0 || j.get<long long>() > 2147483647LL)
+    fail(name, where, "expected a vertex index (a non-negative integer)");
+  return j.get<int>();
+}
+
+double sharpness(const std::string& name, const std::string& where, const json& j) {
+  if (!j.contains("sharpness")) return 10.0;
+  const json& s = j["sharpness"];
+  if (!s.is_number() || !std::isfinite(s.get<double>()) || s.get<double>() < 0)
+    fail(name, where + ".sharpness", "expected a finite number >= 0");
+  return s.get<double>();
+}
+
+const json& list(const std::string& name, const json& j, const char* key) {
+  static const json empty = json::array();
+  if (!j.contains(key)) return empty;
+  if (!j[key].is_array()) fail(name, key, "expected a list");
+  return j[key];
+}
+
+}  // namespace
+
+SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InvalidInput(name + ": not valid JSON: " + e.what());
+  }
+  only_keys(name, "top level", j, {"creases", "corners"});
+  SubdivTags tags;
+  const json& creases = list(name, j, "creases");
+  for (std::size_t k = 0; k < creases.size(); ++k) {
+    const std::string where = "creases[" + std::to_string(k) + "]";
+    const json& c = creases[k];
+    only_keys(name, where, c, {"edge", "sharpness"});
+    if (!c.contains("edge") || !c["edge"].is_array() || c["edge"].size() != 2)
+      fail(name, where + ".edge", "expected two vertex indices");
+    tags.creases.push_back({vertex(name, where + ".edge", c["edge"][0]),
+                            vertex(name, where + ".edge", c["edge"][1]), sharpness(name, where, c)});
+  }
+  const json& corners = list(name, j, "corners");
+  for (std::size_t k = 0; k < corners.size(); ++k) {
+    const std::string where = "corners[" + std::to_string(k) + "]";
+    const json& c = corners[k];
+    only_keys(name, where, c, {"vertex", "sharpness"});
+    if (!c.contains("vertex")) fail(name, where, "missing \"vertex\"");
+    tags.corners.push_back({vertex(name, where + ".vertex", c["vertex"]), sharpness(name, where, c)});
+  }
+  return tags;
+}
+
+SubdivTags read_subdiv_tags(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path + ": cannot open the tags file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw IoError(path + ": cannot read the tags file");
+  return parse_subdiv_tags(ss.str(), path);
+}
+
+PolyMesh read_cage(const std::string& path) {
+  const TriMesh m = read_mesh(path);
+  PolyMesh cage;
+  cage.vertices = m.vertices;
+  cage.faces.reserve(m.faces.size());
+  for (const Face& f : m.faces) cage.faces.push_back({f[0], f[1], f[2]});
+  return cage;
+}
+
+void write_cage(const PolyMesh& cage, const std::string& path) {
+  TriMesh m;
+  m.vertices = cage.vertices;
+  m.faces.reserve(cage.faces.size());
+  for (std::size_t k = 0; k < cage.faces.size(); ++k) {
+    const auto& f = cage.faces[k];
+    if (f.size() != 3)
+      throw InvalidInput(path + ": cage face " + std::to_string(k) +
+                         " is not a triangle (only triangle cages are written)");
+    m.faces.push_back({f[0], f[1], f[2]});
+  }
+  write_mesh(m, path);
+}
+
+}  // namespace strata
