@@ -7,6 +7,7 @@
 
 #include "paper_cases.h"
 #include "strata/cage_fit.h"
+#include "strata/cage_io.h"
 #include "strata/exceptions.h"
 #include "strata/subdiv.h"
 
@@ -160,4 +161,34 @@ TEST(CageFit, RejectsBadInput) {
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothness = NAN; })), InvalidInput);
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.rounds = 0; })), InvalidInput);
   EXPECT_NO_THROW(fit_cage(scan, with([](CageFitOptions&) {})));
+}
+
+TEST(CageIo, ParsesTagsAndNamesTheProblem) {
+  const SubdivTags t = parse_subdiv_tags(
+      R"({"creases": [{"edge": [0, 1], "sharpness": 2.5}, {"edge": [1, 2]}], "corners": [{"vertex": 4}]})",
+      "t.json");
+  ASSERT_EQ(t.creases.size(), 2u);
+  EXPECT_EQ(t.creases[0].v0, 0);
+  EXPECT_EQ(t.creases[0].v1, 1);
+  EXPECT_EQ(t.creases[0].sharpness, 2.5);
+  EXPECT_EQ(t.creases[1].sharpness, 10.0);
+  ASSERT_EQ(t.corners.size(), 1u);
+  EXPECT_EQ(t.corners[0].vertex, 4);
+  EXPECT_TRUE(parse_subdiv_tags("{}", "t.json").creases.empty());
+  auto message = [](const std::string& text) -> std::string {
+    try {
+      parse_subdiv_tags(text, "t.json");
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message("{").find("t.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(message(R"({"crease": []})").find("unknown key \"crease\""), std::string::npos);
+  EXPECT_NE(message(R"({"creases": [{"edge": [0]}]})").find("creases[0].edge"), std::string::npos);
+  EXPECT_NE(message(R"({"creases": [{"edge": [0, -1]}]})").find("creases[0].edge"), std::string::npos);
+  EXPECT_NE(message(R"({"corners": [{"vertex": 1, "sharpness": -1}]})").find("corners[0].sharpness"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"corners": [{"sharpness": 1}]})").find("missing \"vertex\""), std::string::npos);
+  EXPECT_THROW(read_subdiv_tags("/nonexistent/tags.json"), IoError);
 }
