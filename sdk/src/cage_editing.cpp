@@ -9,8 +9,8 @@
 #include <string>
 
 #include "internal/blended_map.h"
+#include "internal/detail_solve.h"
 #include "strata/exceptions.h"
-#include "strata/metrics.h"
 
 namespace strata {
 namespace {
@@ -42,7 +42,10 @@ class CageEditor::Impl {
  public:
   Impl(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,
        const std::vector<char>& handle, CageEditOptions o)
-      : mesh_(mesh), base_(std::move(base)), opt_(std::move(o)) {
+      : mesh_(mesh),
+        base_(std::move(base)),
+        opt_(std::move(o)),
+        detail_(opt_.method, opt_.reconstruct, opt_.drag) {
     const int n = base_.num_control_points();
     if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
       throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) +
@@ -76,43 +79,25 @@ class CageEditor::Impl {
     auto t0 = Clock::now();
     res.base_positions = edited_cage(t);
     res.times.edit = seconds_since(t0);
-    std::vector<Vec3> sub;
-    if (opt_.method == EditOptions::Method::Volumes) {
-      res.times.setup = ensure_reconstructor();
-      t0 = Clock::now();
-      ReconstructResult r = rec_->reconstruct(res.base_positions);
-      sub = std::move(r.positions);
-      res.stats = std::move(r.stats);
-    } else {
-      t0 = Clock::now();
-      sub = reconstruct_vectors(enc_, res.base_positions);
-    }
-    res.times.solve = seconds_since(t0);
+    const std::vector<Vec3> sub = detail_.solve(res.base_positions, res);
     res.times.decompose = decompose_seconds_;
     res.times.encode = encode_seconds_;
     res.positions = mesh_.vertices;
     scatter(sub, res.positions);
-    res.volume = volume_metrics(enc_, evaluate_base_frames(enc_, res.base_positions), sub);
     return res;
   }
 
   void begin_drag() {
-    drag_sub_ = enc_.detail_rest;
+    detail_.begin_drag();
     drag_positions_ = mesh_.vertices;
     drag_transform_ = EditTransform{};
     dragging_ = true;
-    if (opt_.method == EditOptions::Method::Volumes) ensure_reconstructor();
   }
 
   const std::vector<Vec3>& update_drag(const EditTransform& t) {
     if (!dragging_) throw InvalidInput("update_drag() without begin_drag()");
-    const std::vector<Vec3> cage = edited_cage(t);
-    if (opt_.method == EditOptions::Method::Volumes)
-      drag_sub_ = rec_->reconstruct_from(cage, drag_sub_, opt_.drag).positions;
-    else
-      drag_sub_ = reconstruct_vectors(enc_, cage);
+    scatter(detail_.drag_step(edited_cage(t)), drag_positions_);
     drag_transform_ = t;
-    scatter(drag_sub_, drag_positions_);
     return drag_positions_;
   }
 
@@ -129,8 +114,8 @@ class CageEditor::Impl {
   const std::vector<double>& blend() const { return s_; }
   const std::vector<int>& region() const { return region_; }
   const std::vector<int>& handle() const { return handle_; }
-  int region_faces() const { return static_cast<int>(enc_.detail_faces.size()); }
-  const DetailEncoding& encoding() const { return enc_; }
+  int region_faces() const { return static_cast<int>(encoding().detail_faces.size()); }
+  const DetailEncoding& encoding() const { return detail_.encoding(); }
   const CageEditOptions& options() const { return opt_; }
   bool dragging() const { return dragging_; }
 
@@ -214,17 +199,11 @@ class CageEditor::Impl {
     }
     if (detail.faces.empty()) throw InvalidInput("no detail vertex depends on the region's cage vertices");
     for (int v : sub_vertices_) detail.vertices.push_back(mesh_.vertices[v]);
-    enc_ = encode_detail(detail, base_, opt_.projection);
+    DetailEncoding& enc = detail_.encoding();
+    enc = encode_detail(detail, base_, opt_.projection);
     moves_.swap(moves);
-    enc_.pinned.resize(sub_vertices_.size());
-    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) enc_.pinned[k] = !moves_[sub_vertices_[k]];
-  }
-
-  double ensure_reconstructor() const {
-    if (rec_) return 0.0;
-    const auto t0 = Clock::now();
-    rec_ = std::make_unique<VolumeReconstructor>(enc_, opt_.reconstruct);
-    return seconds_since(t0);
+    enc.pinned.resize(sub_vertices_.size());
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) enc.pinned[k] = !moves_[sub_vertices_[k]];
   }
 
   // Vertices that depend on the region take the solution; all others keep theirs exactly.
@@ -236,15 +215,14 @@ class CageEditor::Impl {
   TriMesh mesh_;
   SubdivSurface base_;
   CageEditOptions opt_;
+  internal::DetailSolve detail_;
   std::vector<int> region_, handle_;
   std::vector<double> s_;
   std::vector<char> moves_;
   std::vector<int> sub_vertices_;
-  DetailEncoding enc_;
-  mutable std::unique_ptr<VolumeReconstructor> rec_;
   double decompose_seconds_ = 0.0, encode_seconds_ = 0.0;
   bool dragging_ = false;
-  std::vector<Vec3> drag_sub_, drag_positions_;
+  std::vector<Vec3> drag_positions_;
   EditTransform drag_transform_;
 };
 

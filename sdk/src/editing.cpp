@@ -10,6 +10,7 @@
 #include <string>
 
 #include "internal/blended_map.h"
+#include "internal/detail_solve.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 
@@ -106,7 +107,7 @@ Vec3 EditTransform::apply_blended(const Vec3& x, double s) const { return Blende
 class RegionEditor::Impl {
  public:
   Impl(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle, EditOptions o)
-      : mesh_(mesh), opt_(std::move(o)) {
+      : mesh_(mesh), opt_(std::move(o)), detail_(opt_.method, opt_.reconstruct, opt_.drag) {
     const int n = mesh.num_vertices();
     if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
       throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) + ")");
@@ -147,39 +148,25 @@ class RegionEditor::Impl {
     res.base_positions = edited_base(t);
     const std::vector<Vec3> sub_base = gather(res.base_positions);
     res.times.edit = seconds_since(t0);
-    t0 = Clock::now();
-    std::vector<Vec3> sub;
-    if (opt_.method == EditOptions::Method::Volumes) {
-      res.times.setup = ensure_reconstructor();
-      t0 = Clock::now();
-      ReconstructResult r = rec_->reconstruct(sub_base);
-      sub = std::move(r.positions);
-      res.stats = std::move(r.stats);
-    } else {
-      sub = reconstruct_vectors(enc_, sub_base);
-    }
-    res.times.solve = seconds_since(t0);
-    finish(sub, sub_base, res);
+    const std::vector<Vec3> sub = detail_.solve(sub_base, res);
+    res.times.decompose = decompose_seconds_;
+    res.times.encode = encode_seconds_;
+    res.positions = mesh_.vertices;
+    scatter(sub, res.positions);
     return res;
   }
 
   void begin_drag() {
-    drag_sub_ = enc_.detail_rest;
+    detail_.begin_drag();
     drag_positions_ = mesh_.vertices;
     drag_transform_ = EditTransform{};
     dragging_ = true;
-    if (opt_.method == EditOptions::Method::Volumes) ensure_reconstructor();
   }
 
   const std::vector<Vec3>& update_drag(const EditTransform& t) {
     if (!dragging_) throw InvalidInput("update_drag() without begin_drag()");
-    const std::vector<Vec3> sub_base = gather(edited_base(t));
-    if (opt_.method == EditOptions::Method::Volumes)
-      drag_sub_ = rec_->reconstruct_from(sub_base, drag_sub_, opt_.drag).positions;
-    else
-      drag_sub_ = reconstruct_vectors(enc_, sub_base);
+    scatter(detail_.drag_step(gather(edited_base(t))), drag_positions_);
     drag_transform_ = t;
-    scatter(drag_sub_, drag_positions_);
     return drag_positions_;
   }
 
@@ -197,7 +184,7 @@ class RegionEditor::Impl {
   const std::vector<double>& blend() const { return s_; }
   const std::vector<int>& region() const { return region_; }
   const std::vector<int>& handle() const { return handle_; }
-  const DetailEncoding& encoding() const { return enc_; }
+  const DetailEncoding& encoding() const { return detail_.encoding(); }
   const std::vector<int>& sub_vertices() const { return sub_vertices_; }
   const EditOptions& options() const { return opt_; }
   double decompose_seconds() const { return decompose_seconds_; }
@@ -367,14 +354,15 @@ class RegionEditor::Impl {
       base.vertices.push_back(base_[v]);
     }
     if (detail.faces.empty()) throw InvalidInput("the region has no face");
-    enc_ = encode_detail(detail, base, opt_.encode);
+    DetailEncoding& enc = detail_.encoding();
+    enc = encode_detail(detail, base, opt_.encode);
     // The handle moves rigidly, and so does its detail: its vertices farther than a few rings
     // from the blended part are placed by the (then exact) vector rule, not solved.
     const std::vector<int> depth = handle_depth(adj, opt_.handle_solved_rings + 1);
-    enc_.pinned.resize(sub_vertices_.size());
+    enc.pinned.resize(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
-      enc_.pinned[k] = !in_region_[v] || depth[v] > opt_.handle_solved_rings;
+      enc.pinned[k] = !in_region_[v] || depth[v] > opt_.handle_solved_rings;
     }
   }
 
@@ -402,13 +390,6 @@ class RegionEditor::Impl {
     return depth;
   }
 
-  double ensure_reconstructor() const {
-    if (rec_) return 0.0;
-    const auto t0 = Clock::now();
-    rec_ = std::make_unique<VolumeReconstructor>(enc_, opt_.reconstruct);
-    return seconds_since(t0);
-  }
-
   std::vector<Vec3> gather(const std::vector<Vec3>& whole) const {
     std::vector<Vec3> out(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) out[k] = whole[sub_vertices_[k]];
@@ -421,26 +402,17 @@ class RegionEditor::Impl {
       if (in_region_[sub_vertices_[k]]) whole[sub_vertices_[k]] = sub[k];
   }
 
-  void finish(const std::vector<Vec3>& sub, const std::vector<Vec3>& sub_base, EditResult& res) const {
-    res.times.decompose = decompose_seconds_;
-    res.times.encode = encode_seconds_;
-    res.positions = mesh_.vertices;
-    scatter(sub, res.positions);
-    res.volume = volume_metrics(enc_, evaluate_base_frames(enc_, sub_base), sub);
-  }
-
   TriMesh mesh_;
   EditOptions opt_;
+  internal::DetailSolve detail_;
   std::vector<char> in_region_, in_handle_;
   std::vector<int> region_, handle_;
   std::vector<Vec3> base_;
   std::vector<double> s_;
   std::vector<int> sub_vertices_;
-  DetailEncoding enc_;
-  mutable std::unique_ptr<VolumeReconstructor> rec_;
   double decompose_seconds_ = 0.0, encode_seconds_ = 0.0;
   bool dragging_ = false;
-  std::vector<Vec3> drag_sub_, drag_positions_;
+  std::vector<Vec3> drag_positions_;
   EditTransform drag_transform_;
 };
 

@@ -1,0 +1,42 @@
+// Internal: the detail half of an editor (RegionEditor, CageEditor): one encoding, rebuilt over
+// edited bases by volumes or vectors, exactly or as warm-started drag steps (paper, section 5).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "strata/editing.h"
+
+namespace strata::internal {
+
+class DetailSolve {
+ public:
+  DetailSolve(EditOptions::Method method, ReconstructOptions reconstruct, WarmStartOptions drag)
+      : method_(method), reconstruct_(std::move(reconstruct)), drag_(drag) {}
+
+  //! Set once by the editor before the first solve (the reconstructor is built from it lazily).
+  DetailEncoding& encoding() { return enc_; }
+  const DetailEncoding& encoding() const { return enc_; }
+
+  //! The exact solve over \p base (the encoding's base vertices, or a cage's control points):
+  //! from the clean start for volumes. Fills res.stats, res.times.setup/solve and res.volume.
+  std::vector<Vec3> solve(const std::vector<Vec3>& base, EditResult& res) const;
+
+  //! Starts a drag from the encoded detail at rest.
+  void begin_drag();
+  //! One warm-started step over \p base; returns the detail positions.
+  const std::vector<Vec3>& drag_step(const std::vector<Vec3>& base);
+
+ private:
+  //! Builds the volume reconstructor on first use; returns the seconds it took (0 if it existed).
+  double ensure_reconstructor() const;
+
+  EditOptions::Method method_;
+  ReconstructOptions reconstruct_;
+  WarmStartOptions drag_;
+  DetailEncoding enc_;
+  mutable std::unique_ptr<VolumeReconstructor> rec_;
+  std::vector<Vec3> drag_sub_;
+};
+
+}  // namespace strata::internal
