@@ -10,39 +10,12 @@
 #include "strata/cage_io.h"
 #include "strata/exceptions.h"
 #include "strata/subdiv.h"
+#include "test_meshes.h"
 
 using namespace strata;
+using strata::test::icosphere;
 
 namespace {
-
-// The unit sphere as an icosahedron subdivided \p levels times (20 * 4^levels faces), projected.
-TriMesh icosphere(int levels) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  TriMesh m;
-  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
-  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (Vec3& v : m.vertices) v.normalize();
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
-      return mid[key] = m.num_vertices() - 1;
-    };
-    std::vector<Face> next;
-    for (const Face& f : m.faces) {
-      const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
-      next.insert(next.end(), {Face{f[0], a, c}, Face{f[1], b, a}, Face{f[2], c, b}, Face{a, b, c}});
-    }
-    m.faces = std::move(next);
-  }
-  return m;
-}
 
 struct RadialError {
   double mean = 0.0, max = 0.0;

@@ -1,0 +1,45 @@
+// Meshes shared by several test suites.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata::test {
+
+//! A sphere: the icosahedron subdivided \p levels times (20 * 4^levels faces), its vertices
+//! projected onto the sphere of \p radius about \p centre. Outward-oriented.
+inline TriMesh icosphere(int levels, double radius = 1.0, const Vec3& centre = Vec3::Zero()) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriMesh m;
+  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (Vec3& p : m.vertices) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> midpoints;
+    auto midpoint = [&](int a, int b) {
+      const std::pair<int, int> key(std::min(a, b), std::max(a, b));
+      const auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
+      return midpoints[key] = m.num_vertices() - 1;
+    };
+    std::vector<Face> faces;
+    for (const Face& f : m.faces) {
+      const int ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      faces.insert(faces.end(), {{f[0], ab, ca}, {f[1], bc, ab}, {f[2], ca, bc}, {ab, bc, ca}});
+    }
+    m.faces = std::move(faces);
+  }
+  for (Vec3& p : m.vertices) p = centre + radius * p;
+  return m;
+}
+
+}  // namespace strata::test
