@@ -164,4 +164,12 @@ TEST(CageIo, ParsesTagsAndNamesTheProblem) {
             std::string::npos);
   EXPECT_NE(message(R"({"corners": [{"sharpness": 1}]})").find("missing \"vertex\""), std::string::npos);
   EXPECT_THROW(read_subdiv_tags("/nonexistent/tags.json"), IoError);
+  // Not a regular file (a FIFO or device would block the reader): refused, naming the path.
+  try {
+    read_subdiv_tags("/dev/zero");
+    ADD_FAILURE() << "/dev/zero was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/zero: cannot read: not a regular file"), std::string::npos)
+        << e.what();
+  }
 }

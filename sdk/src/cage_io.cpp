@@ -1,10 +1,9 @@
 #include "strata/cage_io.h"
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
+#include "internal/read_file.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
 
@@ -81,12 +80,7 @@ SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
 }
 
 SubdivTags read_subdiv_tags(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path + ": cannot open the tags file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw IoError(path + ": cannot read the tags file");
-  return parse_subdiv_tags(ss.str(), path);
+  return parse_subdiv_tags(internal::read_whole_file(path), path);
 }
 
 PolyMesh read_cage(const std::string& path) {

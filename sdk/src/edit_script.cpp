@@ -2,11 +2,10 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
+#include "internal/read_file.h"
 #include "strata/exceptions.h"
 
 namespace strata {
@@ -154,12 +153,7 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
 }
 
 EditScript read_edit_script(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path + ": cannot open the edit script");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw IoError(path + ": cannot read the edit script");
-  return parse_edit_script(ss.str(), path);
+  return parse_edit_script(internal::read_whole_file(path), path);
 }
 
 }  // namespace strata

@@ -13,6 +13,7 @@
 
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
+#include "internal/read_file.h"
 
 #include <algorithm>
 #include <array>
@@ -98,23 +99,6 @@ Format format_of(const std::string& path) {
   fail_io(path, "unsupported mesh file extension '" + ext + "' (supported: " + supported_list() + ")");
 }
 
-std::string read_whole_file(const std::string& path) {
-  // Only regular files: a FIFO or a device like /dev/zero could block or never end.
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) fail_io(path, "cannot read: not a regular file");
-  struct Closer {
-    void operator()(std::FILE* f) const { std::fclose(f); }
-  };
-  std::unique_ptr<std::FILE, Closer> f(std::fopen(path.c_str(), "rb"));
-  if (!f) fail_io(path, std::string("cannot open: ") + std::strerror(errno));
-  std::string data;
-  char buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
-  if (std::ferror(f.get())) fail_io(path, std::string("read error: ") + std::strerror(errno));
-  return data;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Numbers. std::from_chars is locale-independent and exact (the double nearest to the text).
@@ -1283,7 +1267,7 @@ void validate_mesh(const TriMesh& mesh, const std::string& name) {
 
 TriMesh read_mesh(const std::string& path) {
   const Format format = format_of(path);
-  const std::string data = read_whole_file(path);
+  const std::string data = internal::read_whole_file(path);
   TriMesh mesh;
   switch (format) {
     case Format::Obj: mesh = read_obj(path, data); break;
