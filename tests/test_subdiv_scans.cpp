@@ -2,7 +2,7 @@
 // points on the cage's limit surface must be found for at least 99.9% of the scan's vertices,
 // and the cage's limit must approximate the scan.
 // Measured (2026-11-22, default CageFitOptions, 400-520 cage faces): fallbacks camel 5 of 9770,
-// man 8 of 17495, armadillo 8 of 26002, bear 2 of 13826; rms distance scan to limit 2.0e-3 ..
+// man 8 of 17495, armadillo 7 of 26002, bear 1 of 13826; rms distance scan to limit 2.0e-3 ..
 // 3.6e-3 of the bounding-box diagonal.
 #include <gtest/gtest.h>
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "internal/blended_map.h"
+#include "internal/cage_graph.h"
 #include "internal/detail_solve.h"
 #include "strata/exceptions.h"
 
@@ -18,22 +19,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-// Vertex -> neighbours of a polygonal cage (consecutive corners of a face), sorted and unique.
-std::vector<std::vector<int>> cage_neighbors(const PolyMesh& cage) {
-  std::vector<std::vector<int>> nb(cage.num_vertices());
-  for (const auto& f : cage.faces)
-    for (std::size_t k = 0; k < f.size(); ++k) {
-      const int a = f[k], b = f[(k + 1) % f.size()];
-      nb[a].push_back(b);
-      nb[b].push_back(a);
-    }
-  for (auto& n : nb) {
-    std::sort(n.begin(), n.end());
-    n.erase(std::unique(n.begin(), n.end()), n.end());
-  }
-  return nb;
 }
 
 }  // namespace
@@ -123,17 +108,8 @@ class CageEditor::Impl {
   // s: bi-harmonic (L^2 s = 0, uniform L) on the free cage vertices, 0 outside the region, 1 on
   // the handle.
   void blend_field(const std::vector<char>& region, const std::vector<char>& handle) {
-    const PolyMesh& cage = base_.cage();
-    const int n = cage.num_vertices();
-    const auto nb = cage_neighbors(cage);
-    Eigen::SparseMatrix<double> L(n, n);
-    std::vector<Eigen::Triplet<double>> t;
-    for (int v = 0; v < n; ++v) {
-      if (nb[v].empty()) continue;
-      t.emplace_back(v, v, 1.0);
-      for (int w : nb[v]) t.emplace_back(v, w, -1.0 / nb[v].size());
-    }
-    L.setFromTriplets(t.begin(), t.end());
+    const int n = base_.num_control_points();
+    const Eigen::SparseMatrix<double> L = internal::cage_laplacian(base_.cage(), false);
     const Eigen::SparseMatrix<double> B = L.transpose() * L;
     std::vector<int> free_id(n, -1), free;
     Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <string>
 
+#include "internal/cage_graph.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
@@ -123,30 +124,6 @@ PolyMesh decimate(const std::vector<Vec3>& positions, const std::vector<Face>& f
   return cage;
 }
 
-// Uniform Laplacian of the cage, c_v - mean of its neighbours, as a sparse matrix. As in the
-// smoothing, a boundary vertex averages its boundary neighbours only: the open boundary is kept
-// smooth along itself without being pulled into the surface, short of the scan's boundary.
-Eigen::SparseMatrix<double> uniform_laplacian(const PolyMesh& cage) {
-  std::vector<Face> tris;
-  tris.reserve(cage.faces.size());
-  for (const auto& f : cage.faces) tris.push_back({f[0], f[1], f[2]});
-  const internal::Adjacency adj = internal::build_adjacency(cage.num_vertices(), tris);
-  const std::vector<char> boundary = internal::boundary_vertices(cage.num_vertices(), tris);
-  std::vector<Eigen::Triplet<double>> t;
-  std::vector<int> ring;
-  for (int v = 0; v < cage.num_vertices(); ++v) {
-    ring.clear();
-    for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k)
-      if (!boundary[v] || boundary[adj.neighbors[k]]) ring.push_back(adj.neighbors[k]);
-    if (ring.empty()) continue;
-    t.emplace_back(v, v, 1.0);
-    for (int w : ring) t.emplace_back(v, w, -1.0 / ring.size());
-  }
-  Eigen::SparseMatrix<double> L(cage.num_vertices(), cage.num_vertices());
-  L.setFromTriplets(t.begin(), t.end());
-  return L;
-}
-
 struct Distances {
   double rms = 0.0, max = 0.0;
 };
@@ -171,9 +148,12 @@ class CageFitter {
       : o_(o),
         targets_(targets),
         surface_(cage, {}, loop_options(o.subdiv)),
-        laplacian_(uniform_laplacian(cage)),
         decimated_(cage.num_vertices(), 3) {
+    // The boundary's smoothness is taken along the boundary, as in the scan's smoothing.
+    const Eigen::SparseMatrix<double> L = internal::cage_laplacian(cage, true);
+    LtL_ = L.transpose() * L;
     for (int j = 0; j < cage.num_vertices(); ++j) decimated_.row(j) = cage.vertices[j].transpose();
+    LtL_decimated_ = LtL_ * decimated_;
   }
 
   // One round: foot points of the targets on the current limit, then the cage that minimizes
@@ -197,15 +177,14 @@ class CageFitter {
     Eigen::SparseMatrix<double> I(n, n);
     I.setIdentity();
     const Eigen::SparseMatrix<double> At = A.transpose();
-    const Eigen::SparseMatrix<double> LtL = laplacian_.transpose() * laplacian_;
-    const Eigen::SparseMatrix<double> N = At * A + mu * LtL + eps * I;
+    const Eigen::SparseMatrix<double> N = At * A + mu * LtL_ + eps * I;
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(N);
     if (ldlt.info() != Eigen::Success) throw SolverError("cage fit: the least-squares system is singular");
     Eigen::MatrixXd T(m, 3), C(n, 3);
     for (int i = 0; i < m; ++i) T.row(i) = targets_[i].transpose();
     const std::vector<Vec3>& prev = surface_.control_points();
     for (int j = 0; j < n; ++j) C.row(j) = prev[j].transpose();
-    const Eigen::MatrixXd X = ldlt.solve(At * T + mu * (LtL * decimated_) + eps * C);
+    const Eigen::MatrixXd X = ldlt.solve(At * T + mu * LtL_decimated_ + eps * C);
     if (ldlt.info() != Eigen::Success || !X.allFinite())
       throw SolverError("cage fit: the least-squares solve failed");
     std::vector<Vec3> next(n);
@@ -224,8 +203,9 @@ class CageFitter {
   const CageFitOptions& o_;
   const std::vector<Vec3>& targets_;
   SubdivSurface surface_;
-  Eigen::SparseMatrix<double> laplacian_;
-  Eigen::MatrixXd decimated_;  // C_0, n x 3
+  Eigen::MatrixXd decimated_;        // C_0, n x 3
+  Eigen::SparseMatrix<double> LtL_;  // L^T L of the cage's Laplacian, fixed over the rounds
+  Eigen::MatrixXd LtL_decimated_;    // L^T L C_0
 };
 
 }  // namespace
