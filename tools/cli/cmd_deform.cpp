@@ -63,6 +63,12 @@ int run_deform(const DeformCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
   check_outputs(o.output, {o.base_output}, o.report);
+  const bool subdiv = o.base == "subdiv";
+  if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
+    throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
+  if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
+  if (!o.cage.empty() && o.cage_faces > 0)
+    throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
   Stopwatch total;
   Stopwatch sw;
   log.phase("reading " + o.input + " and " + o.edit);
@@ -70,11 +76,6 @@ int run_deform(const DeformCmdOptions& o) {
   const NamedMesh input = read_named_mesh(o.input);
   const double read_seconds = sw.seconds();
   const TimedIntersections input_pairs = find_intersections(input.mesh.vertices, input.mesh.faces);
-  const bool subdiv = o.base == "subdiv";
-  if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
-    throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
-  if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
-  if (!o.cage.empty() && o.cage_faces > 0) throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
   PolyMesh cage;
   SubdivTags tags;
   json cage_json = nullptr;
@@ -109,6 +110,17 @@ int run_deform(const DeformCmdOptions& o) {
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
   json edits = json::array();
+  // Adopts one edit's result (the mesh, and the edited base or cage) and adds its report entry.
+  auto record = [&](const auto& editor, EditResult r, double select_seconds, std::vector<Vec3>& base) {
+    Stopwatch metrics;
+    const EditFacts facts{editor.region_vertices().size(), editor.handle_vertices().size(),
+                          editor.region_faces(), &editor.encoding().report};
+    json ej = edit_json(facts, method, r, select_seconds, 0.0);
+    current.vertices = std::move(r.positions);
+    base = std::move(r.base_positions);
+    ej["timing_seconds"]["metrics"] = metrics.seconds();
+    edits.push_back(std::move(ej));
+  };
   for (std::size_t k = 0; k < script.edits.size(); ++k) {
     const EditStep& e = script.edits[k];
     const std::string label = "edit " + std::to_string(k + 1) + "/" + std::to_string(script.edits.size());
@@ -138,15 +150,7 @@ int run_deform(const DeformCmdOptions& o) {
       log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region cage vertices, " +
                 std::to_string(editor->handle_vertices().size()) + " handle; reconstructing " +
                 std::to_string(editor->region_faces()) + " prisms");
-      EditResult r = editor->apply(e.transform);
-      sw.restart();
-      const EditFacts facts{editor->region_vertices().size(), editor->handle_vertices().size(),
-                            editor->region_faces(), &editor->encoding().report};
-      json ej = edit_json(facts, method, r, select_seconds, 0.0);
-      current.vertices = std::move(r.positions);
-      cage.vertices = std::move(r.base_positions);
-      ej["timing_seconds"]["metrics"] = sw.seconds();
-      edits.push_back(std::move(ej));
+      record(*editor, editor->apply(e.transform), select_seconds, cage.vertices);
       continue;
     }
     log.phase(label + ": decomposing the region");
@@ -159,15 +163,7 @@ int run_deform(const DeformCmdOptions& o) {
     }
     log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region vertices, " +
               std::to_string(editor->handle_vertices().size()) + " handle vertices; reconstructing");
-    EditResult r = editor->apply(e.transform);
-    sw.restart();
-    const EditFacts facts{editor->region_vertices().size(), editor->handle_vertices().size(),
-                          editor->region_faces(), &editor->encoding().report};
-    json ej = edit_json(facts, method, r, select_seconds, 0.0);
-    current.vertices = std::move(r.positions);
-    base_out.vertices = std::move(r.base_positions);
-    ej["timing_seconds"]["metrics"] = sw.seconds();
-    edits.push_back(std::move(ej));
+    record(*editor, editor->apply(e.transform), select_seconds, base_out.vertices);
   }
 
   log.phase("counting self-intersections");
