@@ -5,7 +5,7 @@ set -euo pipefail
 PKGS=(cmake g++ make pkg-config libopenmesh-dev libosd-dev libeigen3-dev libglm-dev
       libglfw3-dev libgl-dev libegl-dev libgl1-mesa-dri libimgui-dev libstb-dev libgtest-dev
       nlohmann-json3-dev libcli11-dev libtbb-dev libcgal-dev libgmp-dev libmpfr-dev libsuitesparse-dev
-      python3 xvfb xauth)
+      zlib1g-dev python3 xvfb xauth)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

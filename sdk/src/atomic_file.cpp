@@ -1,5 +1,6 @@
 #include "strata/atomic_file.h"
 
+#include "internal/read_file.h"
 #include "strata/exceptions.h"
 
 #include <atomic>
@@ -120,5 +121,7 @@ void write_text_file_atomically(const std::string& path, const std::string& cont
     if (!out) throw IoError(path + ": writing temporary file " + tmp + " failed (disk full?)");
   });
 }
+
+std::string read_file_bytes(const std::string& path) { return internal::read_whole_file(path); }
 
 }  // namespace strata

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <string>
 
-#include "internal/blended_map.h"
 #include "internal/cage_graph.h"
 #include "internal/detail_solve.h"
 #include "strata/exceptions.h"
@@ -21,7 +20,58 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// Region and handle flags on a cage of n vertices: sizes, and a handle that leaves something to blend.
+void check_cage_selection(int n, const std::vector<char>& region, const std::vector<char>& handle) {
+  if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
+    throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) + ")");
+  int nr = 0, nh = 0;
+  for (int i = 0; i < n; ++i) {
+    nr += region[i] != 0;
+    nh += region[i] && handle[i];
+  }
+  if (nr == 0) throw InvalidInput("the region selects no cage vertex");
+  if (nh == 0) throw InvalidInput("the handle selects no cage vertex of the region");
+  if (nh == nr) throw InvalidInput("the handle is the whole region: nothing to blend");
+}
+
 }  // namespace
+
+std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<char>& region,
+                                     const std::vector<char>& handle) {
+  const int n = cage.num_vertices();
+  check_cage_selection(n, region, handle);
+  const Eigen::SparseMatrix<double> L = internal::cage_laplacian(cage, false);
+  const Eigen::SparseMatrix<double> B = L.transpose() * L;
+  std::vector<int> free_id(n, -1), free;
+  Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);
+  std::vector<double> s(n, 0.0);
+  for (int v = 0; v < n; ++v) {
+    if (region[v] && !handle[v]) {
+      free_id[v] = static_cast<int>(free.size());
+      free.push_back(v);
+    } else if (region[v]) {
+      fixed[v] = 1.0;
+      s[v] = 1.0;
+    }
+  }
+  if (free.empty()) return s;
+  const int m = static_cast<int>(free.size());
+  std::vector<Eigen::Triplet<double>> tf;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  const Eigen::VectorXd Bfixed = B * fixed;
+  for (int k = 0; k < B.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
+      if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0) tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
+  for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
+  Eigen::SparseMatrix<double> A(m, m);
+  A.setFromTriplets(tf.begin(), tf.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
+  const Eigen::VectorXd x = ldlt.solve(rhs);
+  if (ldlt.info() != Eigen::Success || !x.allFinite()) throw SolverError("the cage's blend field solve failed");
+  for (int k = 0; k < m; ++k) s[free[k]] = x[k];
+  return s;
+}
 
 class CageEditor::Impl {
  public:
@@ -32,32 +82,21 @@ class CageEditor::Impl {
         opt_(std::move(o)),
         detail_(opt_.method, opt_.reconstruct, opt_.drag) {
     const int n = base_.num_control_points();
-    if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
-      throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) +
-                         ")");
+    check_cage_selection(n, region, handle);
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       region_.push_back(i);
       if (handle[i]) handle_.push_back(i);
     }
-    if (region_.empty()) throw InvalidInput("the region selects no cage vertex");
-    if (handle_.empty()) throw InvalidInput("the handle selects no cage vertex of the region");
-    if (handle_.size() == region_.size())
-      throw InvalidInput("the handle is the whole region: nothing to blend");
     const auto t0 = Clock::now();
-    blend_field(region, handle);
+    s_ = cage_blend_field(base_.cage(), region, handle);
     decompose_seconds_ = seconds_since(t0);
     const auto t1 = Clock::now();
     encode(region);
     encode_seconds_ = seconds_since(t1);
   }
 
-  std::vector<Vec3> edited_cage(const EditTransform& t) const {
-    const internal::BlendedMap map(t);
-    std::vector<Vec3> out = base_.control_points();
-    for (int i : region_) out[i] = map.apply(out[i], s_[i]);
-    return out;
-  }
+  std::vector<Vec3> edited_cage(const EditTransform& t) const { return blend_transform(base_.control_points(), s_, t); }
 
   EditResult apply(const EditTransform& t) const {
     EditResult res;
@@ -105,44 +144,6 @@ class CageEditor::Impl {
   bool dragging() const { return dragging_; }
 
  private:
-  // s: bi-harmonic (L^2 s = 0, uniform L) on the free cage vertices, 0 outside the region, 1 on
-  // the handle.
-  void blend_field(const std::vector<char>& region, const std::vector<char>& handle) {
-    const int n = base_.num_control_points();
-    const Eigen::SparseMatrix<double> L = internal::cage_laplacian(base_.cage(), false);
-    const Eigen::SparseMatrix<double> B = L.transpose() * L;
-    std::vector<int> free_id(n, -1), free;
-    Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);
-    for (int v = 0; v < n; ++v) {
-      if (region[v] && !handle[v]) {
-        free_id[v] = static_cast<int>(free.size());
-        free.push_back(v);
-      } else if (region[v]) {
-        fixed[v] = 1.0;
-      }
-    }
-    s_.assign(n, 0.0);
-    for (int v : handle_) s_[v] = 1.0;
-    if (free.empty()) return;
-    const int m = static_cast<int>(free.size());
-    std::vector<Eigen::Triplet<double>> tf;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
-    const Eigen::VectorXd Bfixed = B * fixed;
-    for (int k = 0; k < B.outerSize(); ++k)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
-        if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0)
-          tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
-    for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
-    Eigen::SparseMatrix<double> A(m, m);
-    A.setFromTriplets(tf.begin(), tf.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
-    if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
-    const Eigen::VectorXd x = ldlt.solve(rhs);
-    if (ldlt.info() != Eigen::Success || !x.allFinite())
-      throw SolverError("the cage's blend field solve failed");
-    for (int k = 0; k < m; ++k) s_[free[k]] = x[k];
-  }
-
   // The prisms whose base points depend on a region cage vertex (a non-zero weight in their
   // limit stencil), encoded over the limit surface; their vertices that do not depend on the
   // region are pinned (their frames cannot change).

@@ -4,11 +4,6 @@
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
-#include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
-#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
-#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +13,7 @@
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
+#include "strata/mesh_processing.h"
 
 namespace strata {
 namespace {
@@ -26,12 +22,6 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-
-struct DoubleTraits : public OpenMesh::DefaultTraits {
-  typedef OpenMesh::Vec3d Point;
-  typedef OpenMesh::Vec3d Normal;
-};
-using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
 void check_options(const CageFitOptions& o) {
   if (o.faces < 0) throw InvalidInput("cage fit: faces must be >= 0 (0 chooses face_fraction)");
@@ -42,86 +32,6 @@ void check_options(const CageFitOptions& o) {
   if (!(o.smoothness >= 0.0) || !std::isfinite(o.smoothness))
     throw InvalidInput("cage fit: smoothness must be finite and >= 0");
   if (o.rounds < 1) throw InvalidInput("cage fit: rounds must be >= 1");
-}
-
-// Taubin's lambda|mu smoothing with uniform weights: a low-pass filter that does not shrink the
-// surface the way plain Laplacian smoothing does. A boundary vertex averages its boundary
-// neighbours only, so open boundaries are smoothed along themselves instead of pulled inwards.
-std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
-  std::vector<Vec3> x = m.vertices;
-  if (steps == 0) return x;
-  const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
-  const std::vector<char> boundary = internal::boundary_vertices(m.num_vertices(), m.faces);
-  std::vector<Vec3> next(x.size());
-  auto pass = [&](double factor) {
-    tbb::parallel_for(0, m.num_vertices(), [&](int v) {
-      Vec3 sum = Vec3::Zero();
-      int n = 0;
-      for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
-        const int w = adj.neighbors[k];
-        if (boundary[v] && !boundary[w]) continue;
-        sum += x[w];
-        ++n;
-      }
-      next[v] = n > 0 ? Vec3(x[v] + factor * (sum / n - x[v])) : x[v];
-    });
-    x.swap(next);
-  };
-  for (int s = 0; s < steps; ++s) {
-    pass(0.5);
-    pass(-0.53);
-  }
-  return x;
-}
-
-// Quadric-error decimation (Garland and Heckbert) of the smoothed scan to about \p target faces,
-// refusing collapses that flip a face normal or create slivers.
-PolyMesh decimate(const std::vector<Vec3>& positions, const std::vector<Face>& faces, int target) {
-  OMesh om;
-  std::vector<OMesh::VertexHandle> vh(positions.size());
-  for (size_t i = 0; i < positions.size(); ++i)
-    vh[i] = om.add_vertex(OMesh::Point(positions[i].x(), positions[i].y(), positions[i].z()));
-  // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
-  // is rejected by OpenMesh's add_face. The cage only needs to approximate the scan, so such a
-  // face is left out of the decimation input (every scan vertex is still a fitting target).
-  for (const Face& f : faces) om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
-  // Unreferenced and isolated vertices would survive as stray cage points.
-  for (auto v : om.vertices())
-    if (om.is_isolated(v)) om.delete_vertex(v, false);
-  // The normal-flipping module needs face normals (OpenMesh prints a warning and computes them).
-  om.request_face_normals();
-  om.update_face_normals();
-  {
-    using Decimater = OpenMesh::Decimater::DecimaterT<OMesh>;
-    Decimater dec(om);
-    OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
-    OpenMesh::Decimater::ModNormalFlippingT<OMesh>::Handle flipping;
-    OpenMesh::Decimater::ModAspectRatioT<OMesh>::Handle aspect;
-    dec.add(quadric);
-    dec.module(quadric).unset_max_err();
-    dec.add(flipping);
-    dec.module(flipping).set_max_normal_deviation(45.0);
-    dec.add(aspect);
-    dec.module(aspect).set_aspect_ratio(8.0f);
-    dec.module(aspect).set_binary(true);
-    if (!dec.initialize()) throw SolverError("cage fit: the decimater could not be initialized");
-    dec.decimate_to_faces(0, static_cast<size_t>(target));
-    om.garbage_collection();  // while the decimater exists (OpenMesh's note)
-  }
-  PolyMesh cage;
-  cage.vertices.reserve(om.n_vertices());
-  for (auto v : om.vertices()) {
-    const OMesh::Point& p = om.point(v);
-    cage.vertices.emplace_back(p[0], p[1], p[2]);
-  }
-  cage.faces.reserve(om.n_faces());
-  for (auto f : om.faces()) {
-    std::vector<int> c;
-    for (auto v : om.fv_range(f)) c.push_back(v.idx());
-    cage.faces.push_back(std::move(c));
-  }
-  if (cage.num_faces() < 4) throw SolverError("cage fit: the decimation left fewer than 4 faces");
-  return cage;
 }
 
 struct Distances {
@@ -225,7 +135,10 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   const std::vector<Vec3> smooth = taubin_smooth(scan, options.smoothing_steps);
   fit.seconds_smooth = seconds_since(t0);
   t0 = Clock::now();
-  const PolyMesh decimated = decimate(smooth, scan.faces, target);
+  const TriMesh decimated_mesh = decimate_mesh(TriMesh{smooth, scan.faces}, target);
+  PolyMesh decimated;
+  decimated.vertices = decimated_mesh.vertices;
+  for (const Face& f : decimated_mesh.faces) decimated.faces.push_back({f[0], f[1], f[2]});
   fit.seconds_decimate = seconds_since(t0);
 
   t0 = Clock::now();

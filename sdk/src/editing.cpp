@@ -104,6 +104,18 @@ Vec3 EditTransform::apply(const Vec3& x) const { return pivot + linear * (x - pi
 
 Vec3 EditTransform::apply_blended(const Vec3& x, double s) const { return BlendedMap(*this).apply(x, s); }
 
+std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::vector<double>& s,
+                                  const EditTransform& transform) {
+  if (points.size() != s.size())
+    throw InvalidInput("blend: " + std::to_string(s.size()) + " blend values for " + std::to_string(points.size()) +
+                       " points");
+  const BlendedMap map(transform);
+  std::vector<Vec3> out = points;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (s[i] != 0.0) out[i] = map.apply(points[i], s[i]);
+  return out;
+}
+
 class RegionEditor::Impl {
  public:
   Impl(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle, EditOptions o)
@@ -135,12 +147,7 @@ class RegionEditor::Impl {
     encode_seconds_ = seconds_since(t1);
   }
 
-  std::vector<Vec3> edited_base(const EditTransform& t) const {
-    const BlendedMap map(t);
-    std::vector<Vec3> out = base_;
-    for (int i : region_) out[i] = map.apply(base_[i], s_[i]);
-    return out;
-  }
+  std::vector<Vec3> edited_base(const EditTransform& t) const { return blend_transform(base_, s_, t); }
 
   EditResult apply(const EditTransform& t) const {
     EditResult res;

@@ -198,6 +198,15 @@ class Encoder {
   std::vector<int> ring_;
 };
 
+// The regularization weights of the detail at rest (section 4.2): normalized clamped cotangent
+// weights of its own connectivity.
+void set_regularization_weights(DetailEncoding& e) {
+  const internal::Adjacency adj = internal::build_adjacency(e.num_detail_vertices(), e.detail_faces);
+  e.weight_offsets = adj.neighbor_offsets;
+  e.weight_neighbors = adj.neighbors;
+  e.weights = internal::normalized_cotan_weights(e.detail_rest, e.detail_faces, adj);
+}
+
 // What every encoding stores once its base points are known (sections 3 and 4.2): the base
 // points' rest positions, the displacement lengths and tangential offsets, the target volumes and
 // the regularization weights of the original detail.
@@ -225,10 +234,7 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
     e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
                                        frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
   }
-  const internal::Adjacency adj = internal::build_adjacency(n, detail.faces);
-  e.weight_offsets = adj.neighbor_offsets;
-  e.weight_neighbors = adj.neighbors;
-  e.weights = internal::normalized_cotan_weights(detail.vertices, detail.faces, adj);
+  set_regularization_weights(e);
 }
 
 }  // namespace
@@ -275,6 +281,100 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
   finish_encoding(e, detail, evaluate_base_frames(e, base));
   e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
+}
+
+DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std::vector<BasePoint> base_points) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
+  check_mesh(base, "base");
+  if (base_points.size() != detail.vertices.size())
+    throw InvalidInput("encoding: " + std::to_string(base_points.size()) + " base points for " +
+                       std::to_string(detail.vertices.size()) + " detail vertices");
+  for (std::size_t i = 0; i < base_points.size(); ++i)
+    if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() || !base_points[i].bary.allFinite())
+      throw InvalidInput("encoding: base point " + std::to_string(i) + " is not on a base face");
+  DetailEncoding e;
+  e.detail_faces = detail.faces;
+  e.detail_rest = detail.vertices;
+  e.base_num_vertices = base.num_vertices();
+  e.base_faces = base.faces;
+  e.base_points = std::move(base_points);
+  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
+  finish_encoding(e, detail, evaluate_base_frames(e, base.vertices));
+  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
+                                std::vector<LimitPoint> limit_points) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
+  if (limit_points.size() != detail.vertices.size())
+    throw InvalidInput("encoding: " + std::to_string(limit_points.size()) + " limit points for " +
+                       std::to_string(detail.vertices.size()) + " detail vertices");
+  for (std::size_t i = 0; i < limit_points.size(); ++i) {
+    const LimitPoint& p = limit_points[i];
+    if (p.face < 0 || p.face >= base.num_ptex_faces() || !std::isfinite(p.u) || !std::isfinite(p.v))
+      throw InvalidInput("encoding: limit point " + std::to_string(i) + " is not on a ptex face");
+  }
+  DetailEncoding e;
+  e.detail_faces = detail.faces;
+  e.detail_rest = detail.vertices;
+  e.base_num_vertices = base.num_control_points();
+  e.cage_faces = base.cage().faces;
+  e.cage_tags = base.tags();
+  e.cage_options = base.options();
+  e.cage_options.scheme = base.scheme();
+  e.limit_points = std::move(limit_points);
+  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
+  finish_encoding(e, detail, evaluate_base_frames(e, base));
+  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>& faces, std::vector<int>& vertices) {
+  if (faces.empty()) throw InvalidInput("restrict_encoding: no faces selected");
+  const int n = e.num_detail_vertices();
+  std::vector<int> id(n, -1);
+  vertices.clear();
+  DetailEncoding r;
+  r.detail_faces.reserve(faces.size());
+  r.target_volumes.reserve(faces.size());
+  for (int j : faces) {
+    if (j < 0 || j >= static_cast<int>(e.detail_faces.size()))
+      throw InvalidInput("restrict_encoding: face " + std::to_string(j) + " out of range");
+    Face g;
+    for (int c = 0; c < 3; ++c) {
+      int& v = id[e.detail_faces[j][c]];
+      if (v < 0) {
+        v = static_cast<int>(vertices.size());
+        vertices.push_back(e.detail_faces[j][c]);
+      }
+      g[c] = v;
+    }
+    r.detail_faces.push_back(g);
+    r.target_volumes.push_back(e.target_volumes[j]);
+  }
+  r.base_num_vertices = e.base_num_vertices;
+  r.base_faces = e.base_faces;
+  r.cage_faces = e.cage_faces;
+  r.cage_tags = e.cage_tags;
+  r.cage_options = e.cage_options;
+  const bool limit = e.over_limit_surface();
+  for (int v : vertices) {
+    r.detail_rest.push_back(e.detail_rest[v]);
+    r.base_rest_points.push_back(e.base_rest_points[v]);
+    r.normal_offsets.push_back(e.normal_offsets[v]);
+    r.tangential_offsets.push_back(e.tangential_offsets[v]);
+    if (limit)
+      r.limit_points.push_back(e.limit_points[v]);
+    else
+      r.base_points.push_back(e.base_points[v]);
+    if (!e.pinned.empty()) r.pinned.push_back(e.pinned[v]);
+  }
+  set_regularization_weights(r);
+  r.report.num_vertices = static_cast<int>(vertices.size());
+  return r;
 }
 
 BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>& x) {
@@ -400,14 +500,14 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
 
 }  // namespace
 
-std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr) {
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr, double amplitude) {
   const int n = e.num_detail_vertices();
   std::vector<Vec3> p(n);
   for (int i = 0; i < n; ++i) {
     const Vec3& nrm = fr.normals[i];
     const Vec3& t = fr.tangents[i];
     const Eigen::Vector2d& o = e.tangential_offsets[i];
-    p[i] = fr.points[i] + e.normal_offsets[i] * nrm + o[0] * t + o[1] * nrm.cross(t);
+    p[i] = fr.points[i] + amplitude * (e.normal_offsets[i] * nrm + o[0] * t + o[1] * nrm.cross(t));
   }
   return p;
 }

@@ -72,6 +72,7 @@ struct State {
   std::vector<Vec3> tdev;       // regularization scratch: tangential deviation per level vertex
   std::vector<Vec3> before;     // positions before a regularization round
   std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
+  double amplitude = 1.0;       // scales every target and rest offset (ReconstructRequest)
   GnScratch gn;
 };
 
@@ -117,22 +118,22 @@ class VolumeReconstructor::Impl {
   }
 
   ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start,
-                        const WarmStartOptions* warm) const {
+                        const WarmStartOptions* warm, const ReconstructRequest& request = {}) const {
     const auto t0 = Clock::now();
     const BaseFrames fr = frames_for(base);
     const double seconds = seconds_since(t0);
-    ReconstructResult res = run(fr, start, warm);
+    ReconstructResult res = run(fr, start, warm, request);
     res.stats.seconds_frames += seconds;  // evaluating the frames, then preparing the state
     return res;
   }
 
-  ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start,
-                        const WarmStartOptions* warm) const {
+  ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start, const WarmStartOptions* warm,
+                        const ReconstructRequest& request = {}) const {
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
     State s;
-    init_state(fr, s);
+    init_state(fr, request, s);
     st.seconds_frames = seconds_since(t0);
     t0 = Clock::now();
     const int nl = static_cast<int>(levels_.size());
@@ -142,14 +143,24 @@ class VolumeReconstructor::Impl {
       st.level_faces.push_back(static_cast<int>(L.faces.size()));
     }
     std::vector<double> V;
+    const double a = s.amplitude;
+    if (!start && a == 0.0) {
+      // No detail: every prism is flat, which the clean configuration solves exactly.
+      s.P = s.Q;
+      place_pinned(s);
+      st.converged = true;
+      st.seconds_solve = seconds_since(t0);
+      res.positions = std::move(s.P);
+      return res;
+    }
     if (!start) {
       // Section 4.1: the clean configuration p' = q', then growing volume scales.
       s.P = s.Q;
       place_pinned(s);
       const int k = std::max(1, opt_.volume_scales);
       for (int sc = 0; sc < k; ++sc) {
-        const double h = static_cast<double>(sc + 1) / k;
-        multigrid_pass(s, h, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
+        const double h = a * static_cast<double>(sc + 1) / k;
+        multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
         report("reconstruct", static_cast<double>(sc + 1) / k);
       }
     } else {
@@ -159,20 +170,20 @@ class VolumeReconstructor::Impl {
       s.P = *start;
       place_pinned(s);
       if (warm->coarse_levels_only) {
-        multigrid_pass(s, 1.0, warm->tolerance, true, st, V);
+        multigrid_pass(s, a, true, warm->tolerance, true, st, V);
       } else {
         // The exact solve from a nearby start: the finest level only, so that a start which
         // already solves the problem stays put (coarse levels have their own targets).
         const Level& F = levels_.back();
         st.finest_cycles_per_scale.push_back(
-            solve_level(F, s, 1.0, warm->tolerance, opt_.final_max_cycles, st, V));
+            solve_level(F, s, a, warm->tolerance, opt_.final_max_cycles, st, V));
         polish(F, s, warm->tolerance, st, V);
       }
     }
     // Final accuracy on the finest level.
     const Level& F = levels_.back();
     compute_volumes(F, s, V);
-    st.max_relative_error = relative_error(F, 1.0, V, &st.rms_relative_error);
+    st.max_relative_error = relative_error(F, a, V, &st.rms_relative_error);
     st.converged = st.max_relative_error <= (start ? warm->tolerance : opt_.tolerance);
     for (const Vec3& p : s.P)
       if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
@@ -350,7 +361,9 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) val[L.jj_diag_slot[j]] += eps;
   }
 
-  void init_state(const BaseFrames& fr, State& s) const {
+  void init_state(const BaseFrames& fr, const ReconstructRequest& request, State& s) const {
+    if (!std::isfinite(request.amplitude)) throw InvalidInput("reconstruction: the amplitude is not finite");
+    s.amplitude = request.amplitude;
     const int n = enc_.num_detail_vertices();
     if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
         static_cast<int>(fr.tangents.size()) != n)
@@ -364,11 +377,23 @@ class VolumeReconstructor::Impl {
     s.R.resize(n);
     for (int i = 0; i < n; ++i) {
       const Eigen::Vector2d& o = enc_.tangential_offsets[i];
-      s.R[i] = o[0] * fr.tangents[i] + o[1] * fr.normals[i].cross(fr.tangents[i]);
+      s.R[i] = s.amplitude * (o[0] * fr.tangents[i] + o[1] * fr.normals[i].cross(fr.tangents[i]));
     }
     s.dRho.assign(n, 0.0);
     s.dT.assign(n, Vec3::Zero());
-    if (!enc_.pinned.empty()) s.pinned_at = reconstruct_vectors(enc_, fr);
+    if (enc_.pinned.empty()) return;
+    if (!request.pinned_positions) {
+      s.pinned_at = reconstruct_vectors(enc_, fr, s.amplitude);
+      return;
+    }
+    const std::vector<Vec3>& pp = *request.pinned_positions;
+    if (static_cast<int>(pp.size()) != n)
+      throw InvalidInput("reconstruction: " + std::to_string(pp.size()) + " pinned positions for " +
+                         std::to_string(n) + " detail vertices");
+    for (int i = 0; i < n; ++i)
+      if (enc_.pinned[i] && !pp[i].allFinite())
+        throw InvalidInput("reconstruction: pinned position " + std::to_string(i) + " is not finite");
+    s.pinned_at = pp;
   }
 
   bool pinned(int i) const { return !enc_.pinned.empty() && enc_.pinned[i]; }
@@ -387,7 +412,8 @@ class VolumeReconstructor::Impl {
   // Listing 1 for one volume scale h: every level from the coarsest to the finest, each solved by
   // cycles of (at most) n volume steps and m regularization sweeps, then prolongated to the next
   // level.
-  void multigrid_pass(State& s, double h, double final_tol, bool coarse_only, ReconstructStats& st,
+  // h: the volume scale times the amplitude; full_scale: the last scale (h = amplitude).
+  void multigrid_pass(State& s, double h, bool full_scale, double final_tol, bool coarse_only, ReconstructStats& st,
                       std::vector<double>& V) const {
     s.P0 = s.P;
     const int nl = static_cast<int>(levels_.size());
@@ -401,11 +427,11 @@ class VolumeReconstructor::Impl {
         st.regularization_sweeps += opt_.regularization_iterations;
         continue;
       }
-      const int max_cycles = finest && h == 1.0 ? opt_.final_max_cycles : opt_.max_cycles;
+      const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
       const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
-        if (h == 1.0) polish(L, s, final_tol, st, V);
+        if (full_scale) polish(L, s, final_tol, st, V);
       }
     }
   }
@@ -461,7 +487,7 @@ class VolumeReconstructor::Impl {
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
   // tolerance holds: the volume terms get all the weight at the end (section 4.2).
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
-    st.final_sweeps += project(L, s, 1.0, tol, opt_.max_final_steps, true, st, V);
+    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, true, st, V);
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
@@ -474,7 +500,7 @@ class VolumeReconstructor::Impl {
 
   // max_j |h V*_j - V_j| / mean_j |h V*_j|, and optionally the RMS of the same ratio.
   static double relative_error(const Level& L, double h, const std::vector<double>& V, double* rms) {
-    const double scale = h * L.mean_abs_target;
+    const double scale = std::abs(h) * L.mean_abs_target;
     if (!(scale > 0)) return 0.0;
     double mx = 0.0, sq = 0.0;
     for (std::size_t j = 0; j < V.size(); ++j) {
@@ -695,6 +721,14 @@ ReconstructResult VolumeReconstructor::reconstruct(const std::vector<Vec3>& edit
 }
 ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_frames) const {
   return impl_->run(edited_frames, nullptr, nullptr);
+}
+ReconstructResult VolumeReconstructor::reconstruct(const std::vector<Vec3>& edited_base,
+                                                     const ReconstructRequest& request) const {
+  return impl_->run(edited_base, nullptr, nullptr, request);
+}
+ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_frames,
+                                                     const ReconstructRequest& request) const {
+  return impl_->run(edited_frames, nullptr, nullptr, request);
 }
 ReconstructResult VolumeReconstructor::reconstruct_from(const BaseFrames& edited_frames,
                                                         const std::vector<Vec3>& start,

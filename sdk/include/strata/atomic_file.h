@@ -1,5 +1,5 @@
 //! \file atomic_file.h
-//! Replace a file in one step: write a temporary file next to it, flush it to disk, then rename
+//! Whole-file reads that never hang, and atomic writes. Replace a file in one step: write a temporary file next to it, flush it to disk, then rename
 //! it over the target. Readers of the target see either the old or the new contents, never a
 //! half-written file, even if the writer fails or the process dies mid-write.
 #pragma once
@@ -30,5 +30,10 @@ void write_file_atomically(const std::string& path,
 //! \pre The directory containing \p path exists and is writable.
 //! \throw IoError if writing, syncing or renaming fails; \p path is then left untouched.
 void write_text_file_atomically(const std::string& path, const std::string& contents);
+
+//! The bytes of the regular file at \p path. A FIFO or a device is refused (it could block or
+//! never end), so a reader built on this never hangs.
+//! \throw IoError "<path>: <problem>" if the file is not regular, cannot be opened or read.
+std::string read_file_bytes(const std::string& path);
 
 }  // namespace strata

@@ -33,6 +33,16 @@ struct CageEditOptions {
   WarmStartOptions drag{true, 1e-2};
 };
 
+//! The blend field of an edit on a cage (paper, section 5, with the cage as the base): s is
+//! bi-harmonic (L^2 s = 0 with the uniform Laplacian of the cage graph) on the region's cage
+//! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
+//! that \p handle flags).
+//! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
+//!        handle is empty, or the handle is the whole region.
+//! \throw SolverError if the field's system cannot be factorized or solved.
+std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<char>& region,
+                                     const std::vector<char>& handle);
+
 //! Editing of a mesh through the control cage of its subdivision base. Only the prisms whose
 //! base points depend on a region cage vertex (through their limit stencils) are solved; every
 //! other detail vertex keeps its position exactly, since its base frame cannot change.

@@ -77,6 +77,13 @@ struct EditTransform {
   Vec3 apply_blended(const Vec3& x, double s) const;
 };
 
+//! \p points with \p transform blended by the field \p s (one value per point): point i gets
+//! transform.apply_blended(points[i], s[i]), the map decomposed once for all points; points with
+//! s = 0 keep their positions exactly.
+//! \throw InvalidInput if the sizes differ, or as EditTransform::apply_blended().
+std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::vector<double>& s,
+                                  const EditTransform& transform);
+
 //! Options of RegionEditor, with their defaults.
 struct EditOptions {
   //! Reconstruct the detail by displacement volumes (the paper) or by displacement vectors along

@@ -108,6 +108,31 @@ DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const E
 DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
                              const ProjectOptions& options = {});
 
+//! Encodes \p detail over \p base with the base points given (e.g. stored in a file, or found by
+//! encode_detail()): the target volumes, displacement lengths, tangential offsets and
+//! regularization weights, computed exactly as encode_detail() computes them, so that an encoding
+//! restored from its base points is bit for bit the one first computed. The report counts every
+//! vertex as projected.
+//! \throw InvalidInput if a mesh is invalid as for encode_detail(), the point count differs from
+//!        the detail's vertex count, or a base point's face is out of range or its coordinates
+//!        are not finite.
+DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std::vector<BasePoint> base_points);
+
+//! The same over a subdivision limit surface with the limit points given.
+//! \throw InvalidInput as above, or if a limit point's face is out of range.
+DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
+                                std::vector<LimitPoint> limit_points);
+
+//! The part of \p encoding spanned by the detail faces \p faces (indices into detail_faces): its
+//! vertices renumbered in order of first use (\p vertices receives each one's original index),
+//! with their base points, offsets, rest positions, pinned flags and the faces' target volumes
+//! copied, and the regularization weights recomputed on the part's own connectivity (as
+//! encode_detail() would for that submesh). The base connectivity is kept whole, so the part is
+//! reconstructed over the same edited bases.
+//! \throw InvalidInput if \p faces is empty or holds an index out of range.
+DetailEncoding restrict_encoding(const DetailEncoding& encoding, const std::vector<int>& faces,
+                                 std::vector<int>& vertices);
+
 //! Positions, unit normals and local frames of the base points on a base with the encoding's base
 //! connectivity.
 struct BaseFrames {
@@ -145,7 +170,9 @@ SubdivSurface limit_surface_for(const DetailEncoding& encoding, const std::vecto
 //! Over the original base it returns the original detail positions.
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
 
-//! Same, from already evaluated base frames.
-std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames);
+//! Same, from already evaluated base frames, with the displacements scaled by \p amplitude (a
+//! band's amplitude in a layered model: 0 puts every vertex on its base point).
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames,
+                                      double amplitude = 1.0);
 
 }  // namespace strata

@@ -119,6 +119,19 @@ struct WarmStartOptions {
   double tolerance = 1e-4;
 };
 
+//! Per-call inputs of a clean-start reconstruction beyond the edited base (layered models).
+struct ReconstructRequest {
+  //! Scales every target volume and rest offset (a band's amplitude, issue 5): 1 keeps the
+  //! detail, 0 removes it (every vertex on its base point, no solve), values above 1 exaggerate
+  //! it and negative values invert it. Must be finite.
+  double amplitude = 1.0;
+  //! Optional, one position per detail vertex (only the pinned vertices' entries are read):
+  //! where the encoding's pinned vertices stay. Null: where displacement vectors put them. A
+  //! layered model pins the vertices of a band whose base did not change at their current
+  //! positions, which need not be the displacement vectors' after earlier edits.
+  const std::vector<Vec3>* pinned_positions = nullptr;
+};
+
 //! The volumetric reconstruction operator for one encoding. Construction builds the multigrid
 //! hierarchy (decimation of the detail connectivity, per-level targets and weights, and the
 //! symbolic analysis of each level's volume system) once; every reconstruct() call over an
@@ -144,6 +157,13 @@ class VolumeReconstructor {
   //! SubdivSurface the application keeps and edits).
   //! \throw InvalidInput if the frames do not have one finite entry per detail vertex.
   ReconstructResult reconstruct(const BaseFrames& edited_frames) const;
+
+  //! The clean-start reconstruction with a request's amplitude and pinned positions. The hierarchy
+  //! does not depend on either, so changing the amplitude rebuilds nothing.
+  //! \throw InvalidInput as reconstruct(), or if the amplitude is not finite or pinned_positions
+  //!        does not have one finite position per detail vertex.
+  ReconstructResult reconstruct(const std::vector<Vec3>& edited_base, const ReconstructRequest& request) const;
+  ReconstructResult reconstruct(const BaseFrames& edited_frames, const ReconstructRequest& request) const;
 
   //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
   //! the interactive mode of section 5.

@@ -1,0 +1,189 @@
+//! \file model.h
+//! Layered models (issue 5; the multi-layer extension the paper closes with, section 7): a scan
+//! as a stack of frequency bands. Band 0 is a subdivision control cage whose limit surface is the
+//! smoothest band and the main editing target. Each band k >= 1 is a triangle mesh whose detail
+//! over band k-1's surface is encoded as displacement volumes (band 1 over the limit surface,
+//! band k >= 2 over band k-1's mesh). The finest band is the scan itself, unchanged.
+//!
+//! Frequency ranges: band 0 holds the shape at wavelengths longer than about twice the cage's
+//! mean edge length (its limit surface cannot bend faster); band k >= 1 holds what lies between
+//! band k-1's resolution and its own: features longer than about twice its own mean edge length
+//! and shorter than band k-1's smoothing kept. Intermediate bands are the scan Taubin-smoothed,
+//! decimated to a face count between the cage's and the scan's (a geometric progression) and
+//! smoothed again.
+//!
+//! Editing band k re-encodes band k over band k-1 (the edit becomes part of band k's detail), then
+//! rebuilds bands k+1 .. N-1 in order (the cascade). An amplitude a_k scales band k's target
+//! volumes. Only the vertices whose base actually changed are solved; every other vertex keeps its
+//! position bit for bit, and a vertex whose base and amplitude are back at rest takes its rest
+//! position exactly (the exact solution of its prisms), so nothing drifts and nothing is lost.
+//!
+//! \code
+//!   strata::TriMesh scan = strata::read_mesh("armadillo.off");
+//!   strata::layers::LayeredModel model = strata::layers::LayeredModel::build(scan);  // 3 bands
+//!   model.edit(0, step);                // a cage edit; bands 1 and 2 follow
+//!   model.set_amplitude(2, 0.0);        // mute the finest band's detail
+//!   strata::layers::write_model(model, "armadillo.strata");
+//!   strata::TriMesh finest = model.band_mesh(model.num_bands() - 1);
+//! \endcode
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "strata/cage_fit.h"
+#include "strata/edit_script.h"
+#include "strata/editing.h"
+#include "strata/encoding.h"
+#include "strata/metrics.h"
+#include "strata/reconstruction.h"
+#include "strata/subdiv.h"
+
+namespace strata::layers {
+
+//! Options of edits and rebuilds, kept with the model (and in its file).
+struct ModelOptions {
+  //! Detail rebuilt by displacement volumes (the paper) or vectors (the baseline, for comparison).
+  EditOptions::Method method = EditOptions::Method::Volumes;
+  //! The volume reconstruction of every band (the progress callback is not stored).
+  ReconstructOptions reconstruct;
+  //! Edits of triangle bands (RegionEditor): the region's cut-off wavelength relative to its
+  //! bounding-box diagonal, and the handle's solved rings (see EditOptions).
+  double smoothing_fraction = 0.25;
+  int handle_solved_rings = 3;
+  //! Re-encoding after an edit: band 1 by projection onto the limit surface, bands >= 2 by normal
+  //! projection onto the next coarser band.
+  ProjectOptions projection;
+  EncodeOptions encode;
+};
+
+//! Options of LayeredModel::build(), with their defaults.
+struct BuildOptions {
+  //! Bands in all, 2 to 8: the cage (band 0) plus bands-1 triangle bands, the finest the scan.
+  int bands = 3;
+  //! Band 0: the cage fitted to the scan (faces 0: 1% of the scan's faces, at least 400).
+  CageFitOptions cage;
+  //! Taubin smoothing steps of the scan before an intermediate band is decimated from it, and
+  //! again of the decimated band.
+  int band_smoothing_steps = 10;
+  ModelOptions model;
+  //! Optional progress reports (phase, fraction done).
+  ProgressCallback progress;
+};
+
+//! One band of a model. Band 0 uses cage, tags and subdiv; bands >= 1 the rest.
+struct Band {
+  PolyMesh cage;                      //!< band 0: the control cage, current control points
+  SubdivTags tags;                    //!< band 0: crease and corner tags
+  SubdivOptions subdiv;               //!< band 0: scheme and boundary rule
+  TriMesh mesh;                       //!< band k >= 1: connectivity and current positions
+  DetailEncoding encoding;            //!< band k >= 1: over band k-1 at rest (detail_rest: rest positions)
+  std::vector<Vec3> base_rest;        //!< band k >= 1: band k-1's vertices (cage points for k = 1) at encoding
+  double amplitude = 1.0;             //!< band k >= 1: scales the target volumes
+};
+
+//! Detail magnitude of a band at rest: |p_i - q_i| over its vertices (q_i on band k-1).
+struct DetailMagnitude {
+  double rms = 0.0, max = 0.0;
+  double mean_edge_length = 0.0;  //!< of the band's mesh (the cage for band 0)
+};
+
+//! What one band's rebuild did in a cascade.
+struct BandRebuild {
+  int band = 0;
+  int solved_vertices = 0;   //!< vertices solved (their base moved)
+  int rest_vertices = 0;     //!< vertices put back at rest (base and amplitude at rest)
+  int solved_prisms = 0;
+  VolumeMetrics volume;      //!< over the solved prisms (zero when none)
+  ReconstructStats stats;    //!< volumes only
+  double seconds = 0.0;
+};
+
+//! What an edit or an amplitude change did.
+struct CascadeReport {
+  int edited_band = 0;
+  double edit_seconds = 0.0;      //!< the edit of the band itself (and its re-encoding)
+  VolumeMetrics edit_volume;      //!< the edited band's region prisms (triangle bands, volumes)
+  std::vector<BandRebuild> rebuilt;
+  double total_seconds = 0.0;
+};
+
+//! A layered model: bands, their encodings and amplitudes, options and the edit history. A value
+//! type (copies are independent, e.g. for undo); the solvers it caches are rebuilt on demand.
+//! Not thread-safe: one thread at a time per object.
+class LayeredModel {
+ public:
+  //! Builds a model from a scan: a cage fitted to it (band 0), intermediate bands, and the scan as
+  //! the finest band, each encoded over the next coarser one.
+  //! \pre nothing: the scan is validated.
+  //! \throw InvalidInput if the scan is not a valid triangle mesh (validate_mesh) or an option is
+  //!        out of range; SolverError if fitting or decimation fails.
+  static LayeredModel build(const TriMesh& scan, const BuildOptions& options = {});
+
+  //! Assembles a model from its parts (the file reader): checks that every band's encoding fits
+  //! its mesh and its base.
+  //! \throw InvalidInput naming the band and the problem.
+  static LayeredModel assemble(std::vector<Band> bands, ModelOptions options, std::vector<std::string> history);
+
+  LayeredModel();
+  ~LayeredModel();
+  LayeredModel(const LayeredModel& other);
+  LayeredModel& operator=(const LayeredModel& other);
+  LayeredModel(LayeredModel&&) noexcept;
+  LayeredModel& operator=(LayeredModel&&) noexcept;
+
+  int num_bands() const;
+  //! \throw InvalidInput if k is out of range.
+  const Band& band(int k) const;
+  //! Band k's current surface as a triangle mesh: for k >= 1 its mesh; for band 0 the limit
+  //! surface tessellated at \p resolution segments per ptex edge.
+  TriMesh band_mesh(int k, int resolution = 4) const;
+  //! The positions an edit of band k selects on: cage control points (k = 0) or band k's vertices.
+  const std::vector<Vec3>& band_points(int k) const;
+  DetailMagnitude detail_magnitude(int k) const;
+  const ModelOptions& options() const;
+  //! JSON objects, one per operation (build, edit, amplitude), oldest first: provenance.
+  const std::vector<std::string>& history() const;
+
+  //! Edits band k with one edit step (selections on band_points(k)). Band 0: the transform is
+  //! blended over the region's cage vertices (cage_blend_field). Band k >= 1: RegionEditor on the
+  //! band's mesh, then band k is re-encoded over band k-1 (an amplitude other than 1 is baked in
+  //! and reset to 1). Then bands k+1 .. N-1 are rebuilt. \p provenance (JSON text, e.g. the edit
+  //! script) goes into the history.
+  //! \throw InvalidInput for a band out of range, empty selections or a bad transform (as the
+  //!        editors); SolverError if a solve fails. On any error the model is unchanged.
+  CascadeReport edit(int k, const EditStep& step, const std::string& provenance = "{}");
+
+  //! Sets band k's amplitude (k >= 1) and rebuilds bands k .. N-1.
+  //! \throw InvalidInput if k is 0 or out of range or the amplitude is not finite.
+  CascadeReport set_amplitude(int k, double amplitude);
+
+  // Interactive editing (paper, section 5), for the viewer: while dragging, band(j) holds the
+  // preview (band k by the editor's warm-started drag step, finer bands by warm-started
+  // coarse-level solves of the vertices the region reaches); end_drag() runs the exact edit.
+  //! \throw as edit() for the selections.
+  void begin_drag(int k, const Selection& region, const Selection& handle);
+  //! \throw InvalidInput if no drag is active or the transform is bad.
+  void update_drag(const EditTransform& transform);
+  //! The exact edit() with the last transform, from the state before the drag.
+  CascadeReport end_drag(const std::string& provenance = "{}");
+  //! Restores the state before the drag.
+  void cancel_drag();
+  bool dragging() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+//! Writes \p model to \p path (.strata; layout in layers/FORMAT.md), atomically.
+//! \throw IoError if the file cannot be written.
+void write_model(const LayeredModel& model, const std::string& path);
+
+//! Reads a model written by write_model().
+//! \throw IoError "<path>: <problem>" for unreadable, foreign, newer, truncated or corrupted
+//!        files; InvalidInput "<path>: <problem>" for contents that do not form a valid model.
+LayeredModel read_model(const std::string& path);
+
+}  // namespace strata::layers

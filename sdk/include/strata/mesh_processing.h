@@ -1,0 +1,30 @@
+//! \file mesh_processing.h
+//! Low-pass filtering and simplification of triangle meshes: the smooth, coarse versions of a
+//! scan that serve as bases (a cage to fit, the intermediate bands of a layered model).
+#pragma once
+
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata {
+
+//! Taubin's lambda|mu smoothing (lambda 0.5, mu -0.53, uniform weights), \p steps pairs of
+//! passes: a low-pass filter that, unlike plain Laplacian smoothing, does not shrink the surface.
+//! A boundary vertex averages its boundary neighbours only, so open boundaries are smoothed
+//! along themselves instead of pulled inwards. Returns the smoothed positions (mesh's order).
+//! \pre mesh's face indices are in range (validate_mesh()).
+//! \throw InvalidInput if steps < 0.
+std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
+
+//! Quadric-error decimation (Garland and Heckbert, OpenMesh's decimater) of \p mesh to about
+//! \p target_faces faces, refusing collapses that flip a face normal by more than 45 degrees or
+//! create slivers (aspect ratio above 8). Unreferenced vertices are dropped and the rest renumbered.
+//! A face whose corners make a non-manifold vertex is left out
+//! of the input. The result keeps the mesh's orientation.
+//! \pre mesh is a valid triangle mesh (validate_mesh()).
+//! \throw InvalidInput if target_faces < 4.
+//! \throw SolverError if the decimater cannot be initialized or leaves fewer than 4 faces.
+TriMesh decimate_mesh(const TriMesh& mesh, int target_faces);
+
+}  // namespace strata

@@ -1,0 +1,104 @@
+#include "strata/mesh_processing.h"
+
+#include <tbb/parallel_for.h>
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
+#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+
+#include "internal/topology.h"
+#include "strata/exceptions.h"
+
+namespace strata {
+namespace {
+
+struct DoubleTraits : public OpenMesh::DefaultTraits {
+  typedef OpenMesh::Vec3d Point;
+  typedef OpenMesh::Vec3d Normal;
+};
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
+
+}  // namespace
+
+std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
+  if (steps < 0) throw InvalidInput("taubin_smooth: steps must be >= 0");
+  std::vector<Vec3> x = m.vertices;
+  if (steps == 0) return x;
+  const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
+  const std::vector<char> boundary = internal::boundary_vertices(m.num_vertices(), m.faces);
+  std::vector<Vec3> next(x.size());
+  auto pass = [&](double factor) {
+    tbb::parallel_for(0, m.num_vertices(), [&](int v) {
+      Vec3 sum = Vec3::Zero();
+      int n = 0;
+      for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
+        const int w = adj.neighbors[k];
+        if (boundary[v] && !boundary[w]) continue;
+        sum += x[w];
+        ++n;
+      }
+      next[v] = n > 0 ? Vec3(x[v] + factor * (sum / n - x[v])) : x[v];
+    });
+    x.swap(next);
+  };
+  for (int s = 0; s < steps; ++s) {
+    pass(0.5);
+    pass(-0.53);
+  }
+  return x;
+}
+
+TriMesh decimate_mesh(const TriMesh& mesh, int target) {
+  if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
+  OMesh om;
+  std::vector<OMesh::VertexHandle> vh(mesh.vertices.size());
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3& p = mesh.vertices[i];
+    vh[i] = om.add_vertex(OMesh::Point(p.x(), p.y(), p.z()));
+  }
+  // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
+  // is rejected by OpenMesh's add_face, and that face is left out of the decimation input.
+  for (const Face& f : mesh.faces) om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
+  // Unreferenced and isolated vertices would survive as stray points.
+  for (auto v : om.vertices())
+    if (om.is_isolated(v)) om.delete_vertex(v, false);
+  // The normal-flipping module needs face normals (OpenMesh prints a warning and computes them).
+  om.request_face_normals();
+  om.update_face_normals();
+  {
+    using Decimater = OpenMesh::Decimater::DecimaterT<OMesh>;
+    Decimater dec(om);
+    OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
+    OpenMesh::Decimater::ModNormalFlippingT<OMesh>::Handle flipping;
+    OpenMesh::Decimater::ModAspectRatioT<OMesh>::Handle aspect;
+    dec.add(quadric);
+    dec.module(quadric).unset_max_err();
+    dec.add(flipping);
+    dec.module(flipping).set_max_normal_deviation(45.0);
+    dec.add(aspect);
+    dec.module(aspect).set_aspect_ratio(8.0f);
+    dec.module(aspect).set_binary(true);
+    if (!dec.initialize()) throw SolverError("decimate_mesh: the decimater could not be initialized");
+    dec.decimate_to_faces(0, static_cast<size_t>(target));
+    om.garbage_collection();  // while the decimater exists (OpenMesh's note)
+  }
+  TriMesh out;
+  out.vertices.reserve(om.n_vertices());
+  for (auto v : om.vertices()) {
+    const OMesh::Point& p = om.point(v);
+    out.vertices.emplace_back(p[0], p[1], p[2]);
+  }
+  out.faces.reserve(om.n_faces());
+  for (auto f : om.faces()) {
+    Face c{};
+    int k = 0;
+    for (auto v : om.fv_range(f)) c[k++] = v.idx();
+    out.faces.push_back(c);
+  }
+  if (out.num_faces() < 4) throw SolverError("decimate_mesh: the decimation left fewer than 4 faces");
+  return out;
+}
+
+}  // namespace strata
