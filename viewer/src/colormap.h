@@ -1,0 +1,32 @@
+//! \file colormap.h
+//! Colour maps of the viewer: the surface colour, the prism volume error map and the
+//! intersecting-triangles map. No OpenGL here.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "renderer.h"
+#include "strata/mesh.h"
+
+namespace strata::viewer {
+
+//! The plain surface colour (a light blue-grey: never "red-ish" in the pixel tests).
+Rgb surface_color();
+//! The colour marking intersecting triangles and large errors (pure-ish red).
+Rgb alarm_color();
+
+//! What --color selects.
+enum class ColorMode { None, Error, Intersections };
+//! Parses "none", "error" or "intersections". \throw std::invalid_argument otherwise.
+ColorMode parse_color_mode(const std::string& name);
+
+//! Per-face colours of relative errors: surface colour at 0, through yellow at scale/2, to red at
+//! \p scale and above; NaN (not measured) keeps the surface colour.
+std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale);
+
+//! Per-face colours marking the faces of intersecting non-adjacent triangle pairs (exact test,
+//! find_self_intersections), the rest in the surface colour. \p pairs receives the pair count.
+std::vector<Rgb> intersection_colors(const TriMesh& mesh, std::size_t& pairs);
+
+}  // namespace strata::viewer

@@ -1,0 +1,194 @@
+#include "headless.h"
+
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <vector>
+
+#include "document.h"
+#include "egl_context.h"
+#include "renderer.h"
+#include "scene.h"
+#include "strata/atomic_file.h"
+#include "strata/edit_script.h"
+#include "strata/exceptions.h"
+
+namespace strata::viewer {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+//! A framebuffer object of RGBA8 colour and 24-bit depth, multisampled when samples > 0 (then
+//! resolved into a single-sample one for reading).
+class Offscreen {
+ public:
+  Offscreen(int width, int height, int samples) : width_(width), height_(height) {
+    GLint max_samples = 0;
+    glGetIntegerv(GL_MAX_SAMPLES, &max_samples);
+    samples = std::min(samples, static_cast<int>(max_samples));
+    resolve_ = make_target(0);
+    draw_ = samples > 0 ? make_target(samples) : Target{};
+  }
+  void bind() const { glBindFramebuffer(GL_FRAMEBUFFER, draw_.fbo ? draw_.fbo.get() : resolve_.fbo.get()); }
+  //! RGBA rows, top row first.
+  std::vector<std::uint8_t> read() const {
+    if (draw_.fbo) {
+      glBindFramebuffer(GL_READ_FRAMEBUFFER, draw_.fbo.get());
+      glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_.fbo.get());
+      glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    }
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_.fbo.get());
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    const std::size_t row = 4 * static_cast<std::size_t>(width_);
+    std::vector<std::uint8_t> pixels(row * static_cast<std::size_t>(height_));
+    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    std::vector<std::uint8_t> flipped(pixels.size());
+    for (int y = 0; y < height_; ++y)
+      std::memcpy(&flipped[row * static_cast<std::size_t>(y)],
+                  &pixels[row * static_cast<std::size_t>(height_ - 1 - y)], row);
+    return flipped;
+  }
+
+ private:
+  struct Target {
+    GlName fbo, color, depth;
+  };
+  Target make_target(int samples) const {
+    Target t{make_framebuffer(), make_renderbuffer(), make_renderbuffer()};
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+    auto storage = [&](GLuint rb, GLenum format, GLenum attachment) {
+      glBindRenderbuffer(GL_RENDERBUFFER, rb);
+      if (samples > 0)
+        glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, format, width_, height_);
+      else
+        glRenderbufferStorage(GL_RENDERBUFFER, format, width_, height_);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
+    };
+    storage(t.color.get(), GL_RGBA8, GL_COLOR_ATTACHMENT0);
+    storage(t.depth.get(), GL_DEPTH_COMPONENT24, GL_DEPTH_ATTACHMENT);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw std::runtime_error("the offscreen framebuffer (" + std::to_string(width_) + "x" +
+                               std::to_string(height_) + ", " + std::to_string(samples) +
+                               " samples) is incomplete");
+    return t;
+  }
+  int width_, height_;
+  Target resolve_, draw_;
+};
+
+void write_png(const std::string& path, const std::vector<std::uint8_t>& rgba, int width, int height) {
+  write_file_atomically(path, [&](const std::string& tmp) {
+    if (!stbi_write_png(tmp.c_str(), width, height, 4, rgba.data(), 4 * width))
+      throw IoError(path + ": cannot write the PNG");
+  });
+}
+
+}  // namespace
+
+std::string run_headless(const Options& options) {
+  nlohmann::json report;
+  const auto t_load = Clock::now();
+  Document document = Document::load(options.input);
+  report["load_s"] = seconds_since(t_load);
+  document.check_band(options.band);
+  if (options.show >= 0) document.check_band(options.show);
+  for (const auto& [k, a] : options.amplitudes) document.check_band(k);
+
+  const auto t_edit = Clock::now();
+  int steps = 0;
+  for (const std::string& path : options.edits) {
+    const EditScript script = read_edit_script(path);
+    for (std::size_t i = 0; i < script.edits.size(); ++i) {
+      nlohmann::json provenance = {{"source", "strata-viewer"}, {"script", path}, {"step", i}};
+      document.edit(options.band, script.edits[i], provenance.dump());
+      ++steps;
+    }
+  }
+  for (const auto& [k, a] : options.amplitudes) document.set_amplitude(k, a);
+  report["edit_steps"] = steps;
+  report["edit_s"] = seconds_since(t_edit);
+
+  const auto t_scene = Clock::now();
+  SceneSettings settings;
+  settings.show = options.show;
+  settings.vectors = options.vectors;
+  settings.color = options.color;
+  settings.error_scale = options.error_scale;
+  settings.cage = options.cage;
+  const SceneData scene = make_scene(document, settings);
+  report["scene_s"] = seconds_since(t_scene);
+  report["band_shown"] = scene.shown_band;
+  report["bands"] = document.num_bands();
+  report["triangles"] = scene.mesh.num_faces();
+  if (options.color == ColorMode::Error) report["max_relative_error"] = scene.max_error;
+  if (options.color == ColorMode::Intersections) report["intersecting_pairs"] = scene.intersection_pairs;
+
+  const auto t_context = Clock::now();
+  EglContext context;
+  report["context_s"] = seconds_since(t_context);
+  report["platform"] = context.platform();
+  report["gl_renderer"] = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  std::vector<std::uint8_t> pixels;
+  std::vector<double> frame_ms;
+  {
+    Renderer renderer;
+    Offscreen target(options.width, options.height, options.samples);
+    const auto t_upload = Clock::now();
+    GpuMesh mesh;
+    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, options.smooth, surface_color());
+    GpuLines net;
+    if (!scene.net.empty())
+      net.upload(scene.net, std::vector<Rgb>(scene.net.size(), Rgb(0.85f, 0.45f, 0.05f)));
+    glFinish();
+    report["upload_s"] = seconds_since(t_upload);
+    check_gl_errors("setup");
+
+    Camera camera;
+    Vec3f lo, hi;
+    scene_bounds(scene, lo, hi);
+    camera.fit(lo, hi);
+    camera.set_view(options.view);
+    MeshStyle style;
+    style.wireframe = options.wireframe;
+    for (int f = 0; f < options.frames; ++f) {
+      const auto t_frame = Clock::now();
+      target.bind();
+      renderer.begin_frame(options.width, options.height, Rgb(1.0f, 1.0f, 1.0f));
+      renderer.set_camera(camera.view(), camera.projection(static_cast<float>(options.width) /
+                                                           static_cast<float>(options.height)));
+      renderer.draw_mesh(mesh, style);
+      if (!net.empty()) renderer.draw_lines(net);
+      glFinish();
+      frame_ms.push_back(1e3 * seconds_since(t_frame));
+      check_gl_errors("frame");
+    }
+    const auto t_read = Clock::now();
+    pixels = target.read();
+    report["readback_s"] = seconds_since(t_read);
+    check_gl_errors("readback");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+  report["frame_ms"] = frame_ms;
+  report["gl_errors"] = gl_error_count();
+  if (gl_error_count() > 0)
+    throw std::runtime_error(std::to_string(gl_error_count()) +
+                             " OpenGL errors while rendering (listed above)");
+  const auto t_write = Clock::now();
+  write_png(options.screenshot, pixels, options.width, options.height);
+  report["write_s"] = seconds_since(t_write);
+  report["size"] = {options.width, options.height};
+  report["png"] = options.screenshot;
+  return report.dump();
+}
+
+}  // namespace strata::viewer
