@@ -37,6 +37,13 @@ std::vector<double> relative_errors(const std::vector<double>& volumes, const st
 }
 }  // namespace
 
+Document build_layers(const Document& document, int bands) {
+  if (document.is_model()) throw InvalidInput(document.name() + " is already a layered model");
+  layers::BuildOptions options;
+  options.bands = bands;
+  return Document::from_model(layers::LayeredModel::build(document.mesh(), options), document.name());
+}
+
 Document Document::load(const std::string& path) {
   if (ends_with_strata(path)) return from_model(layers::read_model(path), path);
   return from_mesh(read_mesh(path), path);

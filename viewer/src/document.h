@@ -14,6 +14,12 @@
 
 namespace strata::viewer {
 
+class Document;
+
+//! A layered model of \p bands bands built from a plain mesh document (LayeredModel::build).
+//! \throw InvalidInput if \p document is already a model; as LayeredModel::build.
+Document build_layers(const Document& document, int bands);
+
 class Document {
  public:
   //! Reads a .strata model (by extension, any case) or a mesh (.obj, .ply, .off, .stl).
@@ -22,6 +28,8 @@ class Document {
   //! Wraps an existing model or mesh.
   static Document from_model(layers::LayeredModel model, const std::string& name);
   static Document from_mesh(TriMesh mesh, const std::string& name);
+  //! The plain mesh. \pre !is_model().
+  const TriMesh& mesh() const { return mesh_; }
 
   const std::string& name() const { return name_; }
   bool is_model() const { return model_.has_value(); }

@@ -17,6 +17,8 @@
 #include "strata/atomic_file.h"
 #include "strata/edit_script.h"
 #include "strata/exceptions.h"
+#include "strata/layers/model.h"
+#include "strata/mesh_io.h"
 
 namespace strata::viewer {
 
@@ -100,6 +102,11 @@ std::string run_headless(const Options& options) {
   const auto t_load = Clock::now();
   Document document = Document::load(options.input);
   report["load_s"] = seconds_since(t_load);
+  if (options.build_bands > 0) {
+    const auto t_build = Clock::now();
+    document = build_layers(document, options.build_bands);
+    report["build_s"] = seconds_since(t_build);
+  }
   document.check_band(options.band);
   if (options.show >= 0) document.check_band(options.show);
   for (const auto& [k, a] : options.amplitudes) document.check_band(k);
@@ -127,6 +134,8 @@ std::string run_headless(const Options& options) {
   settings.cage = options.cage;
   const SceneData scene = make_scene(document, settings);
   report["scene_s"] = seconds_since(t_scene);
+  if (!options.save.empty()) layers::write_model(document.model(), options.save);
+  if (!options.export_mesh.empty()) write_mesh(scene.mesh, options.export_mesh);
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();

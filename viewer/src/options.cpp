@@ -46,8 +46,11 @@ Without --screenshot: the interactive window (GLFW + Dear ImGui; press F1 for th
   --color error|intersections|none
                            prism volume error of the shown band, or intersecting triangles
   --error-scale S          relative prism volume error drawn full red (default 0.05)
+  --layers N               build an N-band layered model (2 .. 8) from a scan first
   --edit EDIT.json         apply an edit script to --band (repeatable; in order)
   --amplitude K=A ...      set band K's amplitude to A after the edits (0 mutes the band)
+  --save OUT.strata        write the model (after edits and amplitudes)
+  --export OUT.obj         write the mesh drawn (obj, ply, off or stl)
   --frames N               frames to render (timing); with --script-drag the frames of the drag
   --msaa N                 offscreen samples (default 4, 0 = none)
   --script-drag EDIT.json  window: drag each edit step over --frames frames, then release
@@ -105,6 +108,8 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--error-scale") {
       o.error_scale = parse_double(a, value());
       if (o.error_scale <= 0) throw UsageError("--error-scale must be positive");
+    } else if (a == "--layers") {
+      o.build_bands = parse_int(a, value(), 2, 8);
     } else if (a == "--edit") {
       o.edits.push_back(value());
     } else if (a == "--amplitude") {
@@ -121,6 +126,10 @@ Options parse_options(int argc, char** argv) {
           break;
         }
       } while (true);
+    } else if (a == "--save") {
+      o.save = value();
+    } else if (a == "--export") {
+      o.export_mesh = value();
     } else if (a == "--frames") {
       o.frames = parse_int(a, value(), 1, 100000);
     } else if (a == "--msaa") {

@@ -24,15 +24,18 @@ struct Options {
   int band = 0;            //!< --band K: the band edits apply to (and the window edits)
   int show = -1;           //!< --show K: the band drawn (-1: the finest)
   ViewPreset view = ViewPreset::Front;
-  int width = 1024, height = 768;                  //!< --size WxH
-  bool smooth = true;                              //!< --shading smooth|flat
-  bool wireframe = false;                          //!< --wireframe
-  bool cage = false;                               //!< --cage: draw band 0's control net
-  bool vectors = false;                            //!< --vectors: band shown rebuilt by displacement vectors
-  ColorMode color = ColorMode::None;               //!< --color error|intersections|none
-  double error_scale = 0.05;                       //!< --error-scale S: relative prism error drawn full red
-  std::vector<std::string> edits;                  //!< --edit EDIT.json (repeatable), applied in order
+  int width = 1024, height = 768;     //!< --size WxH
+  bool smooth = true;                 //!< --shading smooth|flat
+  bool wireframe = false;             //!< --wireframe
+  bool cage = false;                  //!< --cage: draw band 0's control net
+  bool vectors = false;               //!< --vectors: band shown rebuilt by displacement vectors
+  ColorMode color = ColorMode::None;  //!< --color error|intersections|none
+  double error_scale = 0.05;          //!< --error-scale S: relative prism error drawn full red
+  int build_bands = 0;                //!< --layers N: build an N-band model from a scan first (0: no)
+  std::vector<std::string> edits;     //!< --edit EDIT.json (repeatable), applied in order
   std::vector<std::pair<int, double>> amplitudes;  //!< --amplitude K=A ..., after the edits
+  std::string save;         //!< --save OUT.strata: the model after edits and amplitudes
+  std::string export_mesh;  //!< --export OUT.(obj|ply|off|stl): the mesh drawn
   int frames = 1;           //!< --frames N: frames rendered (timing; window: scripted run)
   int samples = 4;          //!< --msaa N: samples of the offscreen target (0: none)
   std::string script_drag;  //!< --script-drag EDIT.json: window, drag each step over the frames

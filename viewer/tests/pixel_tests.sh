@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# Pixel tests of strata-viewer's headless mode (EGL surfaceless; no display needed):
+#   usage: pixel_tests.sh VIEWER REPO_ROOT
+# Renders the bumps-75 detail mesh (3k faces) and a 3-band model built from it, then checks
+# with png_stats.py: the model is drawn, muting a band changes the image (and amplitude 1 does
+# not), the prism-error colour map shows red after an edit rebuilt by displacement vectors and
+# none at rest, no GL errors, and bad inputs exit 1 with a message and leave the PNG untouched.
+set -euo pipefail
+VIEWER=$1
+ROOT=$2
+HERE=$(cd "$(dirname "$0")" && pwd)
+STATS="python3 $HERE/png_stats.py"
+MESH=$ROOT/assets/bumps-75/detail.obj
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+pass() { echo "PASS: $*"; }
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+field() { python3 -c "import json,sys; print(json.loads(sys.argv[1])[sys.argv[2]])" "$1" "$2"; }
+# check NAME EXPR: EXPR is a Python expression over the variables s (stats) and r (report)
+check() {
+  local name=$1 expr=$2 stats=$3 report=${4:-'{}'}
+  if python3 -c "import json,sys; s=json.loads(sys.argv[1]); r=json.loads(sys.argv[2]); sys.exit(0 if ($expr) else 1)" \
+    "$stats" "$report"; then pass "$name"; else fail "$name ($expr; stats $stats)"; fi
+}
+
+cat > "$T/bend.json" <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 2.0], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 4.5], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 60, "pivot": [0, 0, 3.5]}}}
+JSON
+COMMON=(--size 320x240 --view right)
+
+# 1. A scan is drawn: foreground in the centre, a sane fraction of the image, no GL errors.
+r=$("$VIEWER" "$MESH" --screenshot "$T/scan.png" "${COMMON[@]}")
+s=$($STATS "$T/scan.png")
+check "scan drawn" "s['centre_foreground'] > 0.9 and 0.05 < s['foreground'] < 0.9 and s['width'] == 320" "$s"
+check "no GL errors (scan)" "r['gl_errors'] == 0 and len(r['frame_ms']) == 1" "$s" "$r"
+r=$("$VIEWER" "$MESH" --screenshot "$T/flat.png" "${COMMON[@]}" --shading flat --wireframe --view iso)
+s=$($STATS "$T/flat.png" "$T/scan.png")
+check "flat + wireframe drawn, differs from smooth" "s['centre_foreground'] > 0.5 and s['changed'] > 0.02" "$s"
+
+# 2. A layered model saved and read back: muting the finest band changes the image.
+r=$("$VIEWER" "$MESH" --layers 3 --save "$T/model.strata" --screenshot "$T/built.png" "${COMMON[@]}")
+r=$("$VIEWER" "$T/model.strata" --screenshot "$T/rest.png" "${COMMON[@]}")
+check "model read back has 3 bands" "r['bands'] == 3 and r['band_shown'] == 2 and r['gl_errors'] == 0" '{}' "$r"
+s=$($STATS "$T/rest.png" "$T/built.png")
+check "model drawn, same as before saving" "s['centre_foreground'] > 0.9 and s['changed'] == 0" "$s"
+"$VIEWER" "$T/model.strata" --screenshot "$T/muted.png" "${COMMON[@]}" --amplitude 2=0 >/dev/null
+s=$($STATS "$T/muted.png" "$T/rest.png")
+check "muting band 2 changes the image" "s['changed'] > 0.02 and s['centre_foreground'] > 0.9" "$s"
+"$VIEWER" "$T/model.strata" --screenshot "$T/unmuted.png" "${COMMON[@]}" --amplitude 2=1 >/dev/null
+s=$($STATS "$T/unmuted.png" "$T/rest.png")
+check "amplitude 1 leaves the image unchanged" "s['changed'] == 0" "$s"
+"$VIEWER" "$T/model.strata" --screenshot "$T/muted1.png" "${COMMON[@]}" --amplitude 1=0 >/dev/null
+s=$($STATS "$T/muted1.png" "$T/rest.png")
+check "muting band 1 changes the image" "s['changed'] > 0.005" "$s"
+
+# 3. The prism volume error colour map: none at rest, red after a cage edit rebuilt by
+#    displacement vectors; the volumes keep their prisms (no red, max error below 1%).
+r=$("$VIEWER" "$T/model.strata" --screenshot "$T/err_rest.png" "${COMMON[@]}" --color error)
+s=$($STATS "$T/err_rest.png")
+check "error map at rest: no red" "s['reddish'] == 0 and r['max_relative_error'] < 1e-9" "$s" "$r"
+rv=$("$VIEWER" "$T/model.strata" --edit "$T/bend.json" --band 0 --screenshot "$T/err_vec.png" "${COMMON[@]}" \
+  --color error --vectors)
+s=$($STATS "$T/err_vec.png")
+check "error map after an edit (vectors): red present" "s['reddish'] > 0.005 and r['max_relative_error'] > 0.05" "$s" "$rv"
+r=$("$VIEWER" "$T/model.strata" --edit "$T/bend.json" --band 0 --screenshot "$T/err_vol.png" "${COMMON[@]}" \
+  --color error)
+s=$($STATS "$T/err_vol.png" "$T/err_vec.png")
+check "error map after an edit (volumes): prisms kept, no red" \
+  "r['max_relative_error'] < 0.01 and s['reddish'] < 0.001 and s['changed'] > 0.01" "$s" "$r"
+r=$("$VIEWER" "$MESH" --edit "$T/bend.json" --screenshot "$T/mesh_edit.png" "${COMMON[@]}" --color error --vectors)
+s=$($STATS "$T/mesh_edit.png" "$T/scan.png")
+check "plain mesh edit (RegionEditor): image changes, vectors error red" \
+  "s['changed'] > 0.05 and s['reddish'] > 0.005 and r['edit_steps'] == 1" "$s" "$r"
+r=$("$VIEWER" "$MESH" --screenshot "$T/isect.png" "${COMMON[@]}" --color intersections)
+check "intersection map runs" "r['intersecting_pairs'] >= 0 and r['gl_errors'] == 0" '{}' "$r"
+
+# 4. Bad inputs: exit 1, one "strata-viewer: error:" message, the PNG untouched.
+printf 'not a png' > "$T/keep.png"
+printf 'v 0 0 0\nv 1 0\nf 1 2 3\n' > "$T/corrupt.obj"
+head -c 300 "$T/model.strata" > "$T/truncated.strata"
+printf '{"region": {"sphere": {"center": [0, 0], "radius": 1}}}' > "$T/bad_edit.json"
+bad() {
+  local name=$1; shift
+  local out code=0
+  out=$("$VIEWER" "$@" --screenshot "$T/keep.png" 2>&1 >/dev/null) || code=$?
+  if [[ $code -eq 1 && $out == "strata-viewer: error: "* && $(cat "$T/keep.png") == "not a png" ]]; then
+    pass "$name: $out"
+  else
+    fail "$name (exit $code, message '$out')"
+  fi
+}
+bad "missing file" "$T/missing.obj"
+bad "corrupt mesh" "$T/corrupt.obj"
+bad "truncated model" "$T/truncated.strata"
+bad "bad --band (mesh)" "$MESH" --band 1
+bad "bad --band (model)" "$T/model.strata" --band 7
+bad "bad --amplitude band" "$T/model.strata" --amplitude 0=0.5
+bad "bad --view" "$MESH" --view sideways
+bad "bad --size" "$MESH" --size 0x10
+bad "bad edit script" "$MESH" --edit "$T/bad_edit.json"
+bad "unknown option" "$MESH" --frobnicate
+out=$("$VIEWER" "$MESH" --screenshot "$T/nodir/x.png" 2>&1 >/dev/null) && code=0 || code=$?
+[[ $code -eq 1 && $out == "strata-viewer: error: "* ]] && pass "unwritable output: $out" || fail "unwritable output ($code: $out)"
+
+if ((fails)); then
+  echo "$fails pixel test(s) failed"
+  exit 1
+fi
+echo "all pixel tests passed"
