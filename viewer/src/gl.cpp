@@ -112,3 +112,11 @@ GlName make_renderbuffer() {
 }
 
 }  // namespace strata::viewer
+
+namespace strata::viewer {
+GlName make_texture() {
+  GLuint n = 0;
+  glGenTextures(1, &n);
+  return GlName(n, [](GLuint x) { glDeleteTextures(1, &x); });
+}
+}  // namespace strata::viewer

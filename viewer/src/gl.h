@@ -57,5 +57,6 @@ GlName make_vertex_array();
 GlName make_program(GLuint program);
 GlName make_framebuffer();
 GlName make_renderbuffer();
+GlName make_texture();
 
 }  // namespace strata::viewer

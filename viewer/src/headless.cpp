@@ -154,7 +154,7 @@ std::string run_headless(const Options& options) {
     Offscreen target(options.width, options.height, options.samples);
     const auto t_upload = Clock::now();
     GpuMesh mesh;
-    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, options.smooth, surface_color());
+    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, surface_color());
     GpuLines net;
     if (!scene.net.empty())
       net.upload(scene.net, std::vector<Rgb>(scene.net.size(), Rgb(0.85f, 0.45f, 0.05f)));
@@ -169,6 +169,7 @@ std::string run_headless(const Options& options) {
     camera.set_view(options.view);
     MeshStyle style;
     style.wireframe = options.wireframe;
+    style.smooth = options.smooth;
     for (int f = 0; f < options.frames; ++f) {
       const auto t_frame = Clock::now();
       target.bind();

@@ -1,5 +1,6 @@
 #include "renderer.h"
 
+#include <algorithm>
 #include <cstddef>
 
 namespace strata::viewer {
@@ -10,19 +11,16 @@ const char* kMeshVertex = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec3 a_color;
-layout(location = 3) in vec3 a_bary;
 uniform mat4 u_view;
 uniform mat4 u_projection;
 out vec3 v_normal;
 out vec3 v_color;
-out vec3 v_bary;
 out vec3 v_position;
 void main() {
   vec4 p = u_view * vec4(a_position, 1.0);
   v_position = p.xyz;
   v_normal = mat3(u_view) * a_normal;
   v_color = a_color;
-  v_bary = a_bary;
   gl_Position = u_projection * p;
 }
 )";
@@ -30,28 +28,30 @@ void main() {
 const char* kMeshFragment = R"(#version 330 core
 in vec3 v_normal;
 in vec3 v_color;
-in vec3 v_bary;
 in vec3 v_position;
-uniform int u_wireframe;
-uniform vec3 u_wire_color;
+uniform int u_smooth;
+uniform int u_color_mode;  // 0 uniform, 1 per vertex, 2 per face
+uniform vec3 u_color;
+uniform samplerBuffer u_face_colors;
 out vec4 frag_color;
 void main() {
-  vec3 n = normalize(v_normal);
-  if (!gl_FrontFacing) n = -n;
+  vec3 n = u_smooth != 0 ? normalize(v_normal) : normalize(cross(dFdx(v_position), dFdy(v_position)));
+  if (u_smooth != 0 && !gl_FrontFacing) n = -n;
   vec3 to_eye = normalize(-v_position);
+  if (u_smooth == 0 && dot(n, to_eye) < 0.0) n = -n;
   vec3 key = normalize(to_eye + vec3(0.35, 0.45, 0.0));
   float diffuse = 0.65 * max(dot(n, key), 0.0) + 0.25 * max(dot(n, to_eye), 0.0);
   vec3 h = normalize(key + to_eye);
   float specular = 0.18 * pow(max(dot(n, h), 0.0), 40.0);
-  vec3 c = v_color * (0.22 + diffuse) + vec3(specular);
-  if (u_wireframe != 0) {
-    vec3 d = fwidth(v_bary);
-    vec3 a = smoothstep(vec3(0.0), 1.2 * d, v_bary);
-    float edge = min(min(a.x, a.y), a.z);
-    c = mix(u_wire_color, c, edge);
-  }
-  frag_color = vec4(c, 1.0);
+  vec3 base = u_color_mode == 1 ? v_color : u_color_mode == 2 ? texelFetch(u_face_colors, gl_PrimitiveID).rgb : u_color;
+  frag_color = vec4(base * (0.22 + diffuse) + vec3(specular), 1.0);
 }
+)";
+
+const char* kWireFragment = R"(#version 330 core
+uniform vec3 u_color;
+out vec4 frag_color;
+void main() { frag_color = vec4(u_color, 1.0); }
 )";
 
 const char* kLineVertex = R"(#version 330 core
@@ -73,10 +73,6 @@ in vec3 v_color;
 out vec4 frag_color;
 void main() { frag_color = vec4(v_color, 1.0); }
 )";
-
-struct MeshVertex {
-  float position[3], normal[3], color[3], bary[3];
-};
 
 struct LineVertex {
   float position[3], color[3];
@@ -103,42 +99,79 @@ void set_matrices(GLuint program, const Mat4& view, const Mat4& projection) {
 }  // namespace
 
 void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                     const std::vector<Rgb>& colors, bool smooth, const Rgb& color) {
-  const bool per_face = !colors.empty() && colors.size() == faces.size();
-  const bool per_vertex = !colors.empty() && !per_face && colors.size() == vertices.size();
-  std::vector<Vec3> normals;
-  if (smooth) normals = vertex_normals(vertices, faces);
-  std::vector<MeshVertex> data(3 * faces.size());
-  static const float kBary[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const Face& t = faces[f];
-    const Vec3 fn = triangle_area_normal(vertices[t[0]], vertices[t[1]], vertices[t[2]]).normalized();
-    for (int c = 0; c < 3; ++c) {
-      MeshVertex& v = data[3 * f + c];
-      put(v.position, vertices[t[c]]);
-      put(v.normal, smooth && normals[t[c]].squaredNorm() > 0 ? normals[t[c]] : fn);
-      put(v.color, per_face ? colors[f] : per_vertex ? colors[t[c]] : color);
-      for (int k = 0; k < 3; ++k) v.bary[k] = kBary[c][k];
-    }
+                     const std::vector<Rgb>& colors, const Rgb& color) {
+  color_ = color;
+  color_mode_ = colors.empty()                     ? 0
+                : colors.size() == faces.size()    ? 2
+                : colors.size() == vertices.size() ? 1
+                                                   : 0;
+  if (!vao_) {
+    vao_ = make_vertex_array();
+    positions_ = make_buffer();
+    colors_ = make_buffer();
+    indices_ = make_buffer();
   }
-  if (!vao_) vao_ = make_vertex_array();
-  if (!vbo_) vbo_ = make_buffer();
   glBindVertexArray(vao_.get());
-  glBindBuffer(GL_ARRAY_BUFFER, vbo_.get());
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(MeshVertex)), data.data(),
-               GL_DYNAMIC_DRAW);
-  attribute(0, 3, sizeof(MeshVertex), offsetof(MeshVertex, position));
-  attribute(1, 3, sizeof(MeshVertex), offsetof(MeshVertex, normal));
-  attribute(2, 3, sizeof(MeshVertex), offsetof(MeshVertex, color));
-  attribute(3, 3, sizeof(MeshVertex), offsetof(MeshVertex, bary));
+  vertex_count_ = static_cast<int>(vertices.size());
+  update_positions(vertices, faces);
+  glBindVertexArray(vao_.get());
+  glBindBuffer(GL_ARRAY_BUFFER, positions_.get());
+  attribute(0, 3, 6 * sizeof(float), 0);
+  attribute(1, 3, 6 * sizeof(float), 3 * sizeof(float));
+  if (color_mode_ == 1) {
+    std::vector<float> c(3 * colors.size());
+    for (std::size_t i = 0; i < colors.size(); ++i) put(&c[3 * i], colors[i]);
+    glBindBuffer(GL_ARRAY_BUFFER, colors_.get());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(c.size() * sizeof(float)), c.data(),
+                 GL_STATIC_DRAW);
+    attribute(2, 3, 3 * sizeof(float), 0);
+  } else {
+    glDisableVertexAttribArray(2);
+    glVertexAttrib3f(2, color.x(), color.y(), color.z());
+  }
+  std::vector<GLuint> idx(3 * faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int c = 0; c < 3; ++c) idx[3 * f + c] = static_cast<GLuint>(faces[f][c]);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices_.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)), idx.data(),
+               GL_STATIC_DRAW);
   glBindVertexArray(0);
   triangles_ = static_cast<int>(faces.size());
+  if (color_mode_ == 2) {
+    std::vector<unsigned char> c(4 * colors.size());
+    for (std::size_t i = 0; i < colors.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        c[4 * i + k] = static_cast<unsigned char>(std::clamp(colors[i][k], 0.0f, 1.0f) * 255.0f + 0.5f);
+    if (!face_buffer_) {
+      face_buffer_ = make_buffer();
+      face_texture_ = make_texture();
+    }
+    glBindBuffer(GL_TEXTURE_BUFFER, face_buffer_.get());
+    glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(c.size()), c.data(), GL_STATIC_DRAW);
+    glBindTexture(GL_TEXTURE_BUFFER, face_texture_.get());
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA8, face_buffer_.get());
+    glBindTexture(GL_TEXTURE_BUFFER, 0);
+    glBindBuffer(GL_TEXTURE_BUFFER, 0);
+  }
+}
+
+void GpuMesh::update_positions(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  const std::vector<Vec3> normals = vertex_normals(vertices, faces);
+  std::vector<float> data(6 * vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    put(&data[6 * i], vertices[i]);
+    put(&data[6 * i + 3], normals[i]);
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, positions_.get());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+               GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
 void GpuMesh::draw() const {
   if (triangles_ == 0) return;
   glBindVertexArray(vao_.get());
-  glDrawArrays(GL_TRIANGLES, 0, 3 * triangles_);
+  glDrawElements(GL_TRIANGLES, 3 * triangles_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
 }
 
@@ -176,7 +209,8 @@ void GpuLines::draw_points() const {
 
 Renderer::Renderer()
     : mesh_program_(make_program(build_program(kMeshVertex, kMeshFragment, "mesh"))),
-      line_program_(make_program(build_program(kLineVertex, kLineFragment, "line"))) {}
+      line_program_(make_program(build_program(kLineVertex, kLineFragment, "line"))),
+      wire_program_(make_program(build_program(kMeshVertex, kWireFragment, "wire"))) {}
 
 void Renderer::begin_frame(int width, int height, const Rgb& background) {
   glViewport(0, 0, width, height);
@@ -197,13 +231,27 @@ void Renderer::draw_mesh(const GpuMesh& mesh, const MeshStyle& style) {
   const GLuint p = mesh_program_.get();
   glUseProgram(p);
   set_matrices(p, view_, projection_);
-  glUniform1i(glGetUniformLocation(p, "u_wireframe"), style.wireframe ? 1 : 0);
-  glUniform3fv(glGetUniformLocation(p, "u_wire_color"), 1, style.wire_color.data());
-  // Pushed back a little so that lines and points on the surface win the depth test.
+  glUniform1i(glGetUniformLocation(p, "u_smooth"), style.smooth ? 1 : 0);
+  glUniform1i(glGetUniformLocation(p, "u_color_mode"), mesh.color_mode());
+  glUniform3fv(glGetUniformLocation(p, "u_color"), 1, mesh.color().data());
+  glUniform1i(glGetUniformLocation(p, "u_face_colors"), 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_BUFFER, mesh.color_mode() == 2 ? mesh.face_color_texture() : 0);
+  // Pushed back a little so that the wireframe, lines and points on the surface win the depth test.
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.0f, 1.0f);
   mesh.draw();
   glDisable(GL_POLYGON_OFFSET_FILL);
+  glBindTexture(GL_TEXTURE_BUFFER, 0);
+  if (style.wireframe) {
+    const GLuint w = wire_program_.get();
+    glUseProgram(w);
+    set_matrices(w, view_, projection_);
+    glUniform3fv(glGetUniformLocation(w, "u_color"), 1, style.wire_color.data());
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    mesh.draw();
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
 }
 
 void Renderer::draw_lines(const GpuLines& lines) {

@@ -15,22 +15,35 @@ namespace strata::viewer {
 
 using Rgb = Eigen::Vector3f;
 
-//! A triangle mesh on the GPU: every face's three corners stored apart (position, normal, colour,
-//! barycentric coordinate), so flat normals and per-face colours need no extra pass.
+//! A triangle mesh on the GPU, indexed (each vertex shaded once: llvmpipe runs vertex shaders on
+//! one thread): positions and smooth normals per vertex, colours per vertex (an attribute) or
+//! per face (a buffer texture read with gl_PrimitiveID). Flat shading derives the face normal
+//! in the fragment shader, and the wireframe is a second pass in line mode, so neither needs
+//! the corners stored apart.
 class GpuMesh {
  public:
   //! Uploads \p vertices / \p faces. \p colors: empty (all \p color), one per face or one per
-  //! vertex. \p smooth: angle-weighted vertex normals, else face normals.
-  //! \pre face indices are in range; colors.size() is 0, faces.size() or vertices.size().
+  //! vertex (per face wins when the counts are equal).
+  //! \pre face indices are in range.
   void upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-              const std::vector<Rgb>& colors, bool smooth, const Rgb& color);
+              const std::vector<Rgb>& colors, const Rgb& color);
+  //! New positions for the same vertices and faces (normals recomputed).
+  //! \pre vertices.size() is the uploaded vertex count.
+  void update_positions(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+  //! Binds the state and issues the draw call(s) of the fill pass; used by Renderer.
   void draw() const;
   int triangles() const { return triangles_; }
+  int vertices() const { return vertex_count_; }
   bool empty() const { return triangles_ == 0; }
+  //! 0: uniform colour, 1: per vertex, 2: per face.
+  int color_mode() const { return color_mode_; }
+  const Rgb& color() const { return color_; }
+  GLuint face_color_texture() const { return face_texture_.get(); }
 
  private:
-  GlName vao_, vbo_;
-  int triangles_ = 0;
+  GlName vao_, positions_, colors_, indices_, face_buffer_, face_texture_;
+  int triangles_ = 0, vertex_count_ = 0, color_mode_ = 0;
+  Rgb color_ = Rgb(1, 1, 1);
 };
 
 //! Coloured line segments (GL_LINES) or points (GL_POINTS).
@@ -49,6 +62,7 @@ class GpuLines {
 
 //! How a mesh is drawn.
 struct MeshStyle {
+  bool smooth = true;
   bool wireframe = false;
   Rgb wire_color = Rgb(0.08f, 0.08f, 0.1f);
 };
@@ -66,7 +80,7 @@ class Renderer {
   void draw_points(const GpuLines& points, float size_pixels);
 
  private:
-  GlName mesh_program_, line_program_;
+  GlName mesh_program_, line_program_, wire_program_;
   Mat4 view_ = Mat4::Identity(), projection_ = Mat4::Identity();
 };
 
