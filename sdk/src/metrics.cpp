@@ -18,7 +18,8 @@ std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vec
   return v;
 }
 
-VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, const std::vector<Vec3>& p) {
+VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, const std::vector<Vec3>& p,
+                             double amplitude) {
   const std::size_t n = static_cast<std::size_t>(e.num_detail_vertices());
   if (p.size() != n || frames.points.size() != n)
     throw InvalidInput("volume_metrics: expected " + std::to_string(n) +
@@ -28,11 +29,12 @@ VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, 
   VolumeMetrics m;
   double sq = 0.0, mx = 0.0, abs_sum = 0.0;
   for (std::size_t j = 0; j < v.size(); ++j) {
-    const double err = std::abs(v[j] - e.target_volumes[j]);
+    const double target = amplitude * e.target_volumes[j];
+    const double err = std::abs(v[j] - target);
     mx = std::max(mx, err);
     sq += err * err;
-    abs_sum += std::abs(e.target_volumes[j]);
-    m.total_target += e.target_volumes[j];
+    abs_sum += std::abs(target);
+    m.total_target += target;
     m.total_volume += v[j];
   }
   if (!v.empty()) {

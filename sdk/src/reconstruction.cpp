@@ -144,7 +144,7 @@ class VolumeReconstructor::Impl {
     }
     std::vector<double> V;
     const double a = s.amplitude;
-    if (!start && a == 0.0) {
+    if (a == 0.0) {
       // No detail: every prism is flat, which the clean configuration solves exactly.
       s.P = s.Q;
       place_pinned(s);
@@ -156,10 +156,13 @@ class VolumeReconstructor::Impl {
     if (!start) {
       // Section 4.1: the clean configuration p' = q', then growing volume scales.
       s.P = s.Q;
-      place_pinned(s);
       const int k = std::max(1, opt_.volume_scales);
       for (int sc = 0; sc < k; ++sc) {
-        const double h = a * static_cast<double>(sc + 1) / k;
+        const double t = static_cast<double>(sc + 1) / k, h = a * t;
+        // The pinned vertices' displacements follow the volume scale, so that the layer is scaled
+        // down as a whole: pinned at full height next to free vertices at the clean start would
+        // make steep walls at the border of the solved part, which fold.
+        place_pinned(s, t);
         multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
         report("reconstruct", static_cast<double>(sc + 1) / k);
       }
@@ -398,11 +401,12 @@ class VolumeReconstructor::Impl {
 
   bool pinned(int i) const { return !enc_.pinned.empty() && enc_.pinned[i]; }
 
-  // Pinned vertices sit where displacement vectors put them, whatever the start.
-  void place_pinned(State& s) const {
+  // Pinned vertices sit where displacement vectors (or the caller) put them, whatever the start;
+  // at a volume scale t < 1 their displacement from the base point is scaled by t.
+  void place_pinned(State& s, double t = 1.0) const {
     if (enc_.pinned.empty()) return;
     for (std::size_t i = 0; i < s.P.size(); ++i)
-      if (enc_.pinned[i]) s.P[i] = s.pinned_at[i];
+      if (enc_.pinned[i]) s.P[i] = t == 1.0 ? s.pinned_at[i] : Vec3(s.Q[i] + t * (s.pinned_at[i] - s.Q[i]));
   }
 
   void report(const char* phase, double f) const {
@@ -732,13 +736,15 @@ ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_fram
 }
 ReconstructResult VolumeReconstructor::reconstruct_from(const BaseFrames& edited_frames,
                                                         const std::vector<Vec3>& start,
-                                                        const WarmStartOptions& warm) const {
-  return impl_->run(edited_frames, &start, &warm);
+                                                        const WarmStartOptions& warm,
+                                                        const ReconstructRequest& request) const {
+  return impl_->run(edited_frames, &start, &warm, request);
 }
 ReconstructResult VolumeReconstructor::reconstruct_from(const std::vector<Vec3>& edited_base,
                                                         const std::vector<Vec3>& start,
-                                                        const WarmStartOptions& warm) const {
-  return impl_->run(edited_base, &start, &warm);
+                                                        const WarmStartOptions& warm,
+                                                        const ReconstructRequest& request) const {
+  return impl_->run(edited_base, &start, &warm, request);
 }
 const DetailEncoding& VolumeReconstructor::encoding() const {
   return impl_->encoding();

@@ -39,6 +39,8 @@ Subcommand register_generate(CLI::App& parent);
 Subcommand register_demo(CLI::App& parent);
 Subcommand register_deform(CLI::App& parent);
 Subcommand register_cage(CLI::App& parent);
+//! Layered models: build, info, edit, amplitude, export.
+std::vector<Subcommand> register_model_commands(CLI::App& parent);
 
 //! Wall-clock seconds since construction (or the last restart()).
 class Stopwatch {

@@ -19,9 +19,10 @@ int main(int argc, char** argv) {
   app.get_formatter()->column_width(34);
 
   try {
-    const std::vector<Subcommand> commands = {register_reconstruct(app), register_stats(app),
-                                              register_generate(app),    register_demo(app),
-                                              register_deform(app),      register_cage(app)};
+    std::vector<Subcommand> commands = {register_reconstruct(app), register_stats(app),
+                                        register_generate(app),    register_demo(app),
+                                        register_deform(app),      register_cage(app)};
+    for (Subcommand& c : register_model_commands(app)) commands.push_back(std::move(c));
     app.parse(argc, argv);
     for (const Subcommand& c : commands)
       if (c.app->parsed()) return c.run();

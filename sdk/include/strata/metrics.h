@@ -21,8 +21,9 @@ struct VolumeMetrics {
 
 //! Measures the prisms spanned by \p detail_positions over the base points in \p frames.
 //! \throw InvalidInput if positions or frames do not have one entry per detail vertex.
+//! With \p amplitude, the targets are amplitude times V*_j (a layered model's band amplitude).
 VolumeMetrics volume_metrics(const DetailEncoding& encoding, const BaseFrames& frames,
-                             const std::vector<Vec3>& detail_positions);
+                             const std::vector<Vec3>& detail_positions, double amplitude = 1.0);
 
 //! The signed volume of every prism, in face order.
 std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vector<Vec3>& detail_positions,

@@ -168,10 +168,12 @@ class VolumeReconstructor {
   //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
   //! the interactive mode of section 5.
   //! \throw InvalidInput if start does not have one position per detail vertex.
+  //! The request's amplitude scales the targets; its pinned positions replace the displacement
+  //! vectors' placement of the pinned vertices.
   ReconstructResult reconstruct_from(const std::vector<Vec3>& edited_base, const std::vector<Vec3>& start,
-                                     const WarmStartOptions& warm = {}) const;
+                                     const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
   ReconstructResult reconstruct_from(const BaseFrames& edited_frames, const std::vector<Vec3>& start,
-                                     const WarmStartOptions& warm = {}) const;
+                                     const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
 
   const DetailEncoding& encoding() const;
   const ReconstructOptions& options() const;

@@ -94,6 +94,7 @@ struct BandRebuild {
   int band = 0;
   int solved_vertices = 0;   //!< vertices solved (their base moved)
   int rest_vertices = 0;     //!< vertices put back at rest (base and amplitude at rest)
+  int rigid_vertices = 0;    //!< vertices moved by the edit's rigid map (their whole base did)
   int solved_prisms = 0;
   VolumeMetrics volume;      //!< over the solved prisms (zero when none)
   ReconstructStats stats;    //!< volumes only
@@ -143,6 +144,9 @@ class LayeredModel {
   const std::vector<Vec3>& band_points(int k) const;
   DetailMagnitude detail_magnitude(int k) const;
   const ModelOptions& options() const;
+  //! Replaces the options used by later edits and rebuilds (e.g. the method, for a comparison).
+  //! \throw InvalidInput during a drag.
+  void set_options(const ModelOptions& options);
   //! JSON objects, one per operation (build, edit, amplitude), oldest first: provenance.
   const std::vector<std::string>& history() const;
 

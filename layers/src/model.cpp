@@ -1,0 +1,627 @@
+#include "strata/layers/model.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "strata/cage_editing.h"
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+#include "strata/mesh_processing.h"
+
+namespace strata::layers {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::json;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+
+double mean_edge_length(const std::vector<Vec3>& x, const std::vector<std::vector<int>>& faces) {
+  double sum = 0.0;
+  long long n = 0;
+  for (const auto& f : faces)
+    for (std::size_t c = 0; c < f.size(); ++c) {
+      sum += (x[f[c]] - x[f[(c + 1) % f.size()]]).norm();
+      ++n;
+    }
+  return n > 0 ? sum / n : 0.0;
+}
+
+std::vector<std::vector<int>> as_polygons(const std::vector<Face>& faces) {
+  std::vector<std::vector<int>> out;
+  out.reserve(faces.size());
+  for (const Face& f : faces) out.push_back({f[0], f[1], f[2]});
+  return out;
+}
+
+EditOptions edit_options(const ModelOptions& o) {
+  EditOptions e;
+  e.method = o.method;
+  e.smoothing_fraction = o.smoothing_fraction;
+  e.handle_solved_rings = o.handle_solved_rings;
+  e.encode = o.encode;
+  e.reconstruct = o.reconstruct;
+  return e;
+}
+
+// The detail vertices of a band whose base frame depends on each base vertex, as lists per
+// detail vertex: over a limit surface the control points of its limit stencil; over a triangle
+// base the corners of its base face and their neighbours (the corners' vertex normals, which the
+// frame interpolates, depend on their one-rings).
+struct Dependencies {
+  std::vector<int> offsets;  // per detail vertex
+  std::vector<int> base;     // base vertex ids
+};
+
+Dependencies dependencies(const DetailEncoding& e) {
+  const int n = e.num_detail_vertices();
+  std::vector<std::vector<int>> lists(n);
+  if (e.over_limit_surface()) {
+    const SubdivSurface surface = limit_surface_for(e, std::vector<Vec3>(e.base_num_vertices, Vec3::Zero()));
+    tbb::parallel_for(0, n, [&](int i) {
+      const SubdivSurface::Stencil st = surface.stencil(e.limit_points[i]);
+      for (std::size_t k = 0; k < st.indices.size(); ++k)
+        if (st.position[k] != 0.0 || st.du[k] != 0.0 || st.dv[k] != 0.0) lists[i].push_back(st.indices[k]);
+    });
+  } else {
+    std::vector<std::vector<int>> ring(e.base_num_vertices);
+    for (const Face& f : e.base_faces)
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) ring[f[c]].push_back(f[d]);
+    for (auto& r : ring) {
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+    }
+    tbb::parallel_for(0, n, [&](int i) {
+      const Face& f = e.base_faces[e.base_points[i].face];
+      for (int c = 0; c < 3; ++c) lists[i].insert(lists[i].end(), ring[f[c]].begin(), ring[f[c]].end());
+      std::sort(lists[i].begin(), lists[i].end());
+      lists[i].erase(std::unique(lists[i].begin(), lists[i].end()), lists[i].end());
+    });
+  }
+  Dependencies d;
+  d.offsets.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i) d.offsets[i + 1] = d.offsets[i] + static_cast<int>(lists[i].size());
+  d.base.reserve(d.offsets[n]);
+  for (const auto& l : lists) d.base.insert(d.base.end(), l.begin(), l.end());
+  return d;
+}
+
+void check_band_index(int k, int n, bool allow_cage) {
+  if (k < (allow_cage ? 0 : 1) || k >= n)
+    throw InvalidInput("band " + std::to_string(k) + " out of range (the model has bands " +
+                       std::string(allow_cage ? "0" : "1") + " .. " + std::to_string(n - 1) +
+                       (allow_cage ? "" : "; band 0, the cage, has no amplitude") + ")");
+}
+
+// One band's solve over a changed base: the faces with a vertex to solve, restricted from the
+// band's encoding, the other vertices of those faces pinned at their current positions.
+struct PartSolve {
+  DetailEncoding part;
+  std::vector<int> vertices;     // part vertex -> band vertex
+  std::unique_ptr<VolumeReconstructor> reconstructor;
+  std::vector<Vec3> current;     // part positions (pinned ones fixed), warm start of drag steps
+
+  PartSolve(const Band& band, const std::vector<char>& solve, const ModelOptions& o) {
+    std::vector<int> faces;
+    for (int j = 0; j < band.mesh.num_faces(); ++j) {
+      const Face& f = band.mesh.faces[j];
+      if (solve[f[0]] || solve[f[1]] || solve[f[2]]) faces.push_back(j);
+    }
+    part = restrict_encoding(band.encoding, faces, vertices);
+    part.pinned.resize(vertices.size());
+    current.resize(vertices.size());
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+      part.pinned[v] = !solve[vertices[v]];
+      current[v] = band.mesh.vertices[vertices[v]];
+    }
+    if (o.method == EditOptions::Method::Volumes)
+      reconstructor = std::make_unique<VolumeReconstructor>(part, o.reconstruct);
+  }
+
+  // The exact solve from the clean start (volumes) or the vectors' placement.
+  BandRebuild solve_exact(const std::vector<Vec3>& base, double amplitude) {
+    BandRebuild r;
+    const BaseFrames frames = evaluate_base_frames(part, base);
+    std::vector<Vec3> x;
+    if (reconstructor) {
+      ReconstructRequest req;
+      req.amplitude = amplitude;
+      req.pinned_positions = &current;
+      ReconstructResult res = reconstructor->reconstruct(frames, req);
+      x = std::move(res.positions);
+      r.stats = std::move(res.stats);
+    } else {
+      x = reconstruct_vectors(part, frames, amplitude);
+      for (std::size_t v = 0; v < x.size(); ++v)
+        if (part.pinned[v]) x[v] = current[v];
+    }
+    r.solved_prisms = static_cast<int>(part.detail_faces.size());
+    r.volume = volume_metrics(part, frames, x, amplitude);
+    current = std::move(x);
+    return r;
+  }
+
+  // One interactive step (section 5): warm-started from the previous step, volumes on the coarse
+  // levels only.
+  void solve_drag(const std::vector<Vec3>& base, double amplitude) {
+    const BaseFrames frames = evaluate_base_frames(part, base);
+    if (reconstructor) {
+      ReconstructRequest req;
+      req.amplitude = amplitude;
+      req.pinned_positions = &current;
+      current = reconstructor->reconstruct_from(frames, current, WarmStartOptions{true, 1e-2}, req).positions;
+    } else {
+      std::vector<Vec3> x = reconstruct_vectors(part, frames, amplitude);
+      for (std::size_t v = 0; v < x.size(); ++v)
+        if (!part.pinned[v]) current[v] = x[v];
+    }
+  }
+
+  void scatter(std::vector<Vec3>& band_positions) const {
+    for (std::size_t v = 0; v < vertices.size(); ++v)
+      if (!part.pinned[v]) band_positions[vertices[v]] = current[v];
+  }
+};
+
+}  // namespace
+
+class LayeredModel::Impl {
+ public:
+  std::vector<Band> bands;
+  ModelOptions options;
+  std::vector<std::string> history;
+  // Caches, rebuilt on demand (not copied): each band's dependency lists.
+  mutable std::vector<std::optional<Dependencies>> deps;
+
+  // Drag state.
+  struct Drag {
+    int band = 0;
+    EditStep step;
+    std::vector<Band> saved;
+    std::vector<double> cage_blend;               // band 0
+    std::unique_ptr<RegionEditor> editor;         // band k >= 1
+    std::vector<std::unique_ptr<PartSolve>> finer;  // index j - band - 1
+    std::vector<std::vector<Vec3>> finer_base_rest;
+  };
+  std::unique_ptr<Drag> drag;
+
+  Impl() = default;
+  Impl(const Impl& o) : bands(o.bands), options(o.options), history(o.history) {}
+
+  int n() const { return static_cast<int>(bands.size()); }
+
+  const std::vector<Vec3>& points(int k) const { return k == 0 ? bands[0].cage.vertices : bands[k].mesh.vertices; }
+
+  const Dependencies& deps_of(int k) const {
+    if (deps.size() != bands.size()) deps.assign(bands.size(), std::nullopt);
+    if (!deps[k]) deps[k] = dependencies(bands[k].encoding);
+    return *deps[k];
+  }
+  void invalidate(int k) {
+    if (deps.size() == bands.size()) deps[k].reset();
+  }
+
+  // Flags of band k's vertices whose frame depends on a flagged base vertex.
+  std::vector<char> reached(int k, const std::vector<char>& base_flags) const {
+    const Dependencies& d = deps_of(k);
+    const int nv = bands[k].mesh.num_vertices();
+    std::vector<char> out(nv, 0);
+    tbb::parallel_for(0, nv, [&](int i) {
+      for (int t = d.offsets[i]; t < d.offsets[i + 1]; ++t)
+        if (base_flags[d.base[t]]) {
+          out[i] = 1;
+          return;
+        }
+    });
+    return out;
+  }
+
+  // How a band's base changed: its old positions, and optionally the base vertices that moved
+  // by exactly one rigid map (an edit's handle, s = 1), whose dependants follow that map exactly.
+  struct BaseChange {
+    std::vector<Vec3> old;
+    std::vector<char> rigid;  // empty: none
+    const EditTransform* map = nullptr;
+  };
+
+  // Rebuilds band k after its base (band k-1) changed (\p change), or after its amplitude changed
+  // (\p change null: every vertex is affected). A vertex whose base frame cannot have changed keeps
+  // its position; one whose base and amplitude are back at rest takes its rest position (the exact
+  // solution of its prisms); one whose base moved rigidly follows the map (volumes and the
+  // regularization are invariant under rigid maps); the others are solved, with their neighbours
+  // pinned. Returns how band k changed, for band k+1; nothing if it did not.
+  std::optional<BaseChange> rebuild(int k, const BaseChange* change, CascadeReport& report) {
+    const auto t0 = Clock::now();
+    Band& b = bands[k];
+    const std::vector<Vec3>& base = points(k - 1);
+    const int nb = static_cast<int>(base.size()), nv = b.mesh.num_vertices();
+    std::vector<char> moved(nb, 0), at_rest(nb, 0);
+    for (int v = 0; v < nb; ++v) {
+      moved[v] = !change || !same_bits(base[v], change->old[v]);
+      at_rest[v] = same_bits(base[v], b.base_rest[v]);
+    }
+    const bool rigid_base = change && change->map && !change->rigid.empty();
+    std::vector<char> affected = reached(k, moved);
+    const Dependencies& d = deps_of(k);
+    std::vector<char> solve(nv, 0), rigid(rigid_base ? nv : 0, 0);
+    BandRebuild r;
+    r.band = k;
+    BaseChange out;
+    out.old = b.mesh.vertices;
+    bool changed = false;
+    for (int i = 0; i < nv; ++i) {
+      if (!affected[i]) continue;
+      bool rest = b.amplitude == 1.0, follows = rigid_base;
+      for (int t = d.offsets[i]; t < d.offsets[i + 1]; ++t) {
+        rest = rest && at_rest[d.base[t]];
+        follows = follows && change->rigid[d.base[t]];
+      }
+      if (rest) {
+        changed |= !same_bits(b.mesh.vertices[i], b.encoding.detail_rest[i]);
+        b.mesh.vertices[i] = b.encoding.detail_rest[i];
+        ++r.rest_vertices;
+      } else if (follows) {
+        b.mesh.vertices[i] = change->map->apply(b.mesh.vertices[i]);
+        rigid[i] = 1;
+        ++r.rigid_vertices;
+        changed = true;
+      } else {
+        solve[i] = 1;
+        ++r.solved_vertices;
+      }
+    }
+    if (rigid_base && r.solved_vertices > 0) {
+      // Rigidly moved vertices next to solved ones are solved too (handle_solved_rings rings), so
+      // that the solved part is not squeezed between two pinned borders.
+      for (int ring = 0; ring < options.handle_solved_rings; ++ring) {
+        std::vector<char> grow = solve;
+        for (const Face& f : b.mesh.faces)
+          if (solve[f[0]] || solve[f[1]] || solve[f[2]])
+            for (int c = 0; c < 3; ++c)
+              if (rigid[f[c]]) {
+                grow[f[c]] = 1;
+                rigid[f[c]] = 0;
+                b.mesh.vertices[f[c]] = out.old[f[c]];
+                --r.rigid_vertices;
+                ++r.solved_vertices;
+              }
+        solve.swap(grow);
+      }
+    }
+    if (r.solved_vertices > 0) {
+      PartSolve part(b, solve, options);
+      BandRebuild s = part.solve_exact(base, b.amplitude);
+      r.solved_prisms = s.solved_prisms;
+      r.volume = s.volume;
+      r.stats = std::move(s.stats);
+      part.scatter(b.mesh.vertices);
+      changed = true;
+    }
+    r.seconds = seconds_since(t0);
+    report.rebuilt.push_back(std::move(r));
+    if (!changed) return std::nullopt;
+    if (rigid_base) {
+      out.rigid = std::move(rigid);
+      out.map = change->map;
+    }
+    return out;
+  }
+
+  // Rebuilds bands first .. N-1 in order, band first's base having changed by \p change.
+  void cascade(int first, BaseChange change, CascadeReport& report) {
+    for (int k = first; k < n(); ++k) {
+      std::optional<BaseChange> next = rebuild(k, &change, report);
+      if (!next) break;  // nothing moved: the finer bands keep their positions
+      change = std::move(*next);
+    }
+  }
+
+  // Re-encodes band k (k >= 1) at its current positions over band k-1's current surface.
+  void reencode(int k) {
+    Band& b = bands[k];
+    if (k == 1) {
+      const SubdivSurface surface(bands[0].cage, bands[0].tags, bands[0].subdiv);
+      b.encoding = encode_detail(b.mesh, surface, options.projection);
+    } else {
+      b.encoding = encode_detail(b.mesh, bands[k - 1].mesh, options.encode);
+    }
+    b.base_rest = points(k - 1);
+    b.amplitude = 1.0;
+    invalidate(k);
+  }
+
+  std::vector<char> selection_flags(int k, const Selection& region, const Selection& handle,
+                                    std::vector<char>& handle_flags) const {
+    std::vector<char> r = select_vertices(points(k), region);
+    handle_flags = select_vertices(points(k), handle);
+    return r;
+  }
+
+  static std::string entry(json j) { return j.dump(); }
+};
+
+LayeredModel::LayeredModel() : impl_(std::make_unique<Impl>()) {}
+LayeredModel::~LayeredModel() = default;
+LayeredModel::LayeredModel(const LayeredModel& o) : impl_(std::make_unique<Impl>(*o.impl_)) {}
+LayeredModel& LayeredModel::operator=(const LayeredModel& o) {
+  if (this != &o) impl_ = std::make_unique<Impl>(*o.impl_);
+  return *this;
+}
+LayeredModel::LayeredModel(LayeredModel&&) noexcept = default;
+LayeredModel& LayeredModel::operator=(LayeredModel&&) noexcept = default;
+
+int LayeredModel::num_bands() const { return impl_->n(); }
+const Band& LayeredModel::band(int k) const {
+  check_band_index(k, impl_->n(), true);
+  return impl_->bands[k];
+}
+const std::vector<Vec3>& LayeredModel::band_points(int k) const {
+  check_band_index(k, impl_->n(), true);
+  return impl_->points(k);
+}
+const ModelOptions& LayeredModel::options() const { return impl_->options; }
+void LayeredModel::set_options(const ModelOptions& options) {
+  if (impl_->drag) throw InvalidInput("set_options() during a drag");
+  impl_->options = options;
+  impl_->options.reconstruct.progress = nullptr;
+}
+const std::vector<std::string>& LayeredModel::history() const { return impl_->history; }
+
+TriMesh LayeredModel::band_mesh(int k, int resolution) const {
+  check_band_index(k, impl_->n(), true);
+  if (k > 0) return impl_->bands[k].mesh;
+  const Band& b = impl_->bands[0];
+  return SubdivSurface(b.cage, b.tags, b.subdiv).tessellate(resolution).mesh;
+}
+
+DetailMagnitude LayeredModel::detail_magnitude(int k) const {
+  check_band_index(k, impl_->n(), true);
+  const Band& b = impl_->bands[k];
+  DetailMagnitude m;
+  if (k == 0) {
+    m.mean_edge_length = mean_edge_length(b.cage.vertices, b.cage.faces);
+    return m;
+  }
+  m.mean_edge_length = mean_edge_length(b.mesh.vertices, as_polygons(b.mesh.faces));
+  const DetailEncoding& e = b.encoding;
+  double sum = 0.0;
+  for (int i = 0; i < e.num_detail_vertices(); ++i) {
+    const double d2 = e.normal_offsets[i] * e.normal_offsets[i] + e.tangential_offsets[i].squaredNorm();
+    sum += d2;
+    m.max = std::max(m.max, std::sqrt(d2));
+  }
+  m.rms = e.num_detail_vertices() > 0 ? std::sqrt(sum / e.num_detail_vertices()) : 0.0;
+  return m;
+}
+
+LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
+  const auto t0 = Clock::now();
+  validate_mesh(scan, "scan");
+  if (o.bands < 2 || o.bands > 8) throw InvalidInput("build: bands must be 2 to 8, not " + std::to_string(o.bands));
+  if (o.band_smoothing_steps < 0) throw InvalidInput("build: band_smoothing_steps must be >= 0");
+  auto progress = [&](const std::string& phase, double f) {
+    if (o.progress) o.progress(phase, f);
+  };
+  const int nb = o.bands;
+  const int scan_faces = scan.num_faces();
+  const int cage_faces =
+      o.cage.faces > 0 ? o.cage.faces
+                       : std::max(o.cage.min_faces, static_cast<int>(std::lround(o.cage.face_fraction * scan_faces)));
+  if (cage_faces >= scan_faces)
+    throw InvalidInput("build: the scan has " + std::to_string(scan_faces) + " faces, not more than the cage's " +
+                       std::to_string(cage_faces));
+  LayeredModel model;
+  Impl& m = *model.impl_;
+  m.options = o.model;
+  m.options.reconstruct.progress = nullptr;
+  m.bands.resize(nb);
+  m.bands[nb - 1].mesh = scan;
+  // Intermediate bands, finest first, each decimated from the smoothed next finer band.
+  TriMesh finer = scan;
+  for (int k = nb - 2; k >= 1; --k) {
+    progress("bands", static_cast<double>(nb - 1 - k) / nb);
+    const double t = static_cast<double>(k) / (nb - 1);
+    const int faces = std::max(
+        cage_faces + 1, static_cast<int>(std::lround(cage_faces * std::pow(static_cast<double>(scan_faces) / cage_faces, t))));
+    TriMesh smoothed{taubin_smooth(finer, o.band_smoothing_steps), finer.faces};
+    TriMesh band = decimate_mesh(smoothed, std::min(faces, finer.num_faces()));
+    band.vertices = taubin_smooth(band, o.band_smoothing_steps);
+    try {
+      validate_mesh(band, "band " + std::to_string(k));
+    } catch (const InvalidInput& e) {
+      throw SolverError(std::string("build: the decimated band is not a valid mesh: ") + e.what());
+    }
+    m.bands[k].mesh = band;
+    finer = std::move(band);
+  }
+  // Band 0: a cage fitted to band 1 (the smoothest triangle band).
+  progress("cage", 0.5);
+  CageFitOptions co = o.cage;
+  co.faces = cage_faces;
+  const CageFit fit = fit_cage(m.bands[1].mesh, co);
+  m.bands[0].cage = fit.cage;
+  m.bands[0].subdiv = co.subdiv;
+  m.bands[0].subdiv.scheme = SubdivScheme::Loop;
+  // Encodings, coarsest first.
+  for (int k = 1; k < nb; ++k) {
+    progress("encode", 0.6 + 0.4 * k / nb);
+    m.reencode(k);
+  }
+  progress("done", 1.0);
+  json h = {{"op", "build"},
+            {"bands", nb},
+            {"scan_vertices", scan.num_vertices()},
+            {"scan_faces", scan_faces},
+            {"cage_faces", fit.cage.num_faces()},
+            {"cage_fit_rms", fit.rms_error},
+            {"cage_fit_max", fit.max_error},
+            {"seconds", seconds_since(t0)}};
+  m.history.push_back(h.dump());
+  return model;
+}
+
+LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options, std::vector<std::string> history) {
+  const int nb = static_cast<int>(bands.size());
+  if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
+  for (int k = 1; k < nb; ++k) {
+    const Band& b = bands[k];
+    const std::string name = "band " + std::to_string(k);
+    const DetailEncoding& e = b.encoding;
+    const int nv = b.mesh.num_vertices();
+    if (e.num_detail_vertices() != nv || e.detail_faces != b.mesh.faces)
+      throw InvalidInput(name + ": the encoding does not match the band's mesh");
+    for (const Vec3& p : b.mesh.vertices)
+      if (!p.allFinite()) throw InvalidInput(name + ": a vertex position is not finite");
+    if (!std::isfinite(b.amplitude)) throw InvalidInput(name + ": the amplitude is not finite");
+    const int base_n = k == 1 ? bands[0].cage.num_vertices() : bands[k - 1].mesh.num_vertices();
+    if (e.base_num_vertices != base_n || static_cast<int>(b.base_rest.size()) != base_n)
+      throw InvalidInput(name + ": its base has " + std::to_string(base_n) + " vertices, the encoding " +
+                         std::to_string(e.base_num_vertices));
+    if (k == 1 ? (!e.over_limit_surface() || e.cage_faces != bands[0].cage.faces)
+               : (e.over_limit_surface() || e.base_faces != bands[k - 1].mesh.faces))
+      throw InvalidInput(name + ": the encoding's base is not band " + std::to_string(k - 1) + "'s surface");
+  }
+  LayeredModel model;
+  model.impl_->bands = std::move(bands);
+  model.impl_->options = std::move(options);
+  model.impl_->history = std::move(history);
+  return model;
+}
+
+CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string& provenance) {
+  if (impl_->drag) throw InvalidInput("edit() during a drag: end or cancel the drag first");
+  check_band_index(k, impl_->n(), true);
+  const auto t0 = Clock::now();
+  // Work on a copy, so that the model is unchanged on any error.
+  Impl work(*impl_);
+  work.deps = impl_->deps;
+  CascadeReport report;
+  report.edited_band = k;
+  std::vector<char> handle;
+  const std::vector<char> region = work.selection_flags(k, step.region, step.handle, handle);
+  Impl::BaseChange change;
+  change.old = work.points(k);
+  if (k == 0) {
+    // The handle's cage vertices (s = 1) move by exactly the transform; so do the parts of the
+    // finer bands that depend on them only.
+    Band& c = work.bands[0];
+    const std::vector<double> s = cage_blend_field(c.cage, region, handle);
+    c.cage.vertices = blend_transform(c.cage.vertices, s, step.transform);
+    change.rigid.resize(s.size());
+    for (std::size_t v = 0; v < s.size(); ++v) change.rigid[v] = s[v] == 1.0;
+    change.map = &step.transform;
+  } else {
+    RegionEditor editor(work.bands[k].mesh, region, handle, edit_options(work.options));
+    EditResult r = editor.apply(step.transform);
+    report.edit_volume = r.volume;
+    work.bands[k].mesh.vertices = std::move(r.positions);
+    work.reencode(k);
+  }
+  report.edit_seconds = seconds_since(t0);
+  if (k + 1 < work.n()) work.cascade(k + 1, std::move(change), report);
+  json h = {{"op", "edit"}, {"band", k}};
+  try {
+    h["edit"] = json::parse(provenance);
+  } catch (const json::exception&) {
+    h["edit"] = provenance;
+  }
+  work.history.push_back(h.dump());
+  report.total_seconds = seconds_since(t0);
+  std::swap(impl_->bands, work.bands);
+  std::swap(impl_->history, work.history);
+  std::swap(impl_->deps, work.deps);
+  return report;
+}
+
+CascadeReport LayeredModel::set_amplitude(int k, double amplitude) {
+  if (impl_->drag) throw InvalidInput("set_amplitude() during a drag: end or cancel the drag first");
+  check_band_index(k, impl_->n(), false);
+  if (!std::isfinite(amplitude)) throw InvalidInput("the amplitude must be a finite number");
+  const auto t0 = Clock::now();
+  Impl work(*impl_);
+  work.deps = impl_->deps;
+  CascadeReport report;
+  report.edited_band = k;
+  work.bands[k].amplitude = amplitude;
+  std::optional<Impl::BaseChange> change = work.rebuild(k, nullptr, report);
+  if (change && k + 1 < work.n()) work.cascade(k + 1, std::move(*change), report);
+  work.history.push_back(json({{"op", "amplitude"}, {"band", k}, {"scale", amplitude}}).dump());
+  report.total_seconds = seconds_since(t0);
+  std::swap(impl_->bands, work.bands);
+  std::swap(impl_->history, work.history);
+  std::swap(impl_->deps, work.deps);
+  return report;
+}
+
+void LayeredModel::begin_drag(int k, const Selection& region, const Selection& handle) {
+  Impl& m = *impl_;
+  if (m.drag) throw InvalidInput("begin_drag() during a drag");
+  check_band_index(k, m.n(), true);
+  auto d = std::make_unique<Impl::Drag>();
+  d->band = k;
+  d->step.region = region;
+  d->step.handle = handle;
+  std::vector<char> hflags;
+  const std::vector<char> rflags = m.selection_flags(k, region, handle, hflags);
+  std::vector<char> moved;
+  if (k == 0) {
+    d->cage_blend = cage_blend_field(m.bands[0].cage, rflags, hflags);
+    moved.resize(d->cage_blend.size());
+    for (std::size_t v = 0; v < moved.size(); ++v) moved[v] = d->cage_blend[v] != 0.0;
+  } else {
+    d->editor = std::make_unique<RegionEditor>(m.bands[k].mesh, rflags, hflags, edit_options(m.options));
+    d->editor->begin_drag();
+    moved = rflags;
+  }
+  // The finer bands' parts the region reaches, set up once for the whole drag.
+  for (int j = k + 1; j < m.n(); ++j) {
+    std::vector<char> reach = m.reached(j, moved);
+    d->finer.push_back(std::make_unique<PartSolve>(m.bands[j], reach, m.options));
+    moved = std::move(reach);
+  }
+  d->saved = m.bands;
+  m.drag = std::move(d);
+}
+
+void LayeredModel::update_drag(const EditTransform& transform) {
+  Impl& m = *impl_;
+  if (!m.drag) throw InvalidInput("update_drag() without begin_drag()");
+  Impl::Drag& d = *m.drag;
+  d.step.transform = transform;
+  if (d.band == 0)
+    m.bands[0].cage.vertices = blend_transform(d.saved[0].cage.vertices, d.cage_blend, transform);
+  else
+    m.bands[d.band].mesh.vertices = d.editor->update_drag(transform);
+  for (std::size_t t = 0; t < d.finer.size(); ++t) {
+    const int j = d.band + 1 + static_cast<int>(t);
+    d.finer[t]->solve_drag(m.points(j - 1), m.bands[j].amplitude);
+    d.finer[t]->scatter(m.bands[j].mesh.vertices);
+  }
+}
+
+CascadeReport LayeredModel::end_drag(const std::string& provenance) {
+  Impl& m = *impl_;
+  if (!m.drag) throw InvalidInput("end_drag() without begin_drag()");
+  std::unique_ptr<Impl::Drag> d = std::move(m.drag);
+  m.bands = std::move(d->saved);
+  return edit(d->band, d->step, provenance);
+}
+
+void LayeredModel::cancel_drag() {
+  Impl& m = *impl_;
+  if (!m.drag) return;
+  m.bands = std::move(m.drag->saved);
+  m.drag.reset();
+}
+
+bool LayeredModel::dragging() const { return impl_->drag != nullptr; }
+
+}  // namespace strata::layers

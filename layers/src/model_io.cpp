@@ -1,0 +1,372 @@
+// LayeredModel in .strata files (layers/FORMAT.md, "Model header and sections"). A band's
+// encoding is stored as its base points and its base at rest; everything else (target volumes,
+// offsets, weights) is recomputed on reading by encode_detail_at(), the code that computed it
+// first, so a model read back is bit for bit the model written.
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "strata/exceptions.h"
+#include "strata/layers/model.h"
+#include "strata/layers/strata_file.h"
+
+namespace strata::layers {
+namespace {
+
+using json = nlohmann::json;
+
+std::vector<double> flatten(const std::vector<Vec3>& x) {
+  std::vector<double> out;
+  out.reserve(3 * x.size());
+  for (const Vec3& p : x) out.insert(out.end(), {p.x(), p.y(), p.z()});
+  return out;
+}
+std::vector<Vec3> unflatten(const std::vector<double>& v) {
+  std::vector<Vec3> out(v.size() / 3);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+  return out;
+}
+std::vector<std::int32_t> flatten(const std::vector<Face>& faces) {
+  std::vector<std::int32_t> out;
+  out.reserve(3 * faces.size());
+  for (const Face& f : faces) out.insert(out.end(), {f[0], f[1], f[2]});
+  return out;
+}
+
+const char* scheme_name(SubdivScheme s) {
+  return s == SubdivScheme::Loop ? "loop" : s == SubdivScheme::CatmullClark ? "catmull-clark" : "auto";
+}
+const char* method_name(EditOptions::Method m) { return m == EditOptions::Method::Vectors ? "vectors" : "volumes"; }
+
+json options_json(const ModelOptions& o) {
+  const ReconstructOptions& r = o.reconstruct;
+  return {{"method", method_name(o.method)},
+          {"smoothing_fraction", o.smoothing_fraction},
+          {"handle_solved_rings", o.handle_solved_rings},
+          {"reconstruct",
+           {{"volume_scales", r.volume_scales},
+            {"max_levels", r.max_levels},
+            {"coarsest_vertices", r.coarsest_vertices},
+            {"coarsening_ratio", r.coarsening_ratio},
+            {"volume_iterations", r.volume_iterations},
+            {"regularization_iterations", r.regularization_iterations},
+            {"max_cycles", r.max_cycles},
+            {"final_max_cycles", r.final_max_cycles},
+            {"tangential_lambda", r.tangential_lambda},
+            {"length_lambda", r.length_lambda},
+            {"regularization_decay", r.regularization_decay},
+            {"level_tolerance", r.level_tolerance},
+            {"tolerance", r.tolerance},
+            {"max_final_steps", r.max_final_steps},
+            {"min_length_fraction", r.min_length_fraction},
+            {"fixed_point_tolerance", r.fixed_point_tolerance},
+            {"step_solver", r.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi-cg"},
+            {"direct_max_prisms", r.direct_max_prisms},
+            {"cg_tolerance", r.cg_tolerance},
+            {"cg_max_iterations", r.cg_max_iterations}}},
+          {"projection",
+           {{"seed_resolution", o.projection.seed_resolution},
+            {"max_iterations", o.projection.max_iterations},
+            {"orthogonality_tolerance", o.projection.orthogonality_tolerance},
+            {"seam_tolerance", o.projection.seam_tolerance}}},
+          {"encode",
+           {{"search_rings", o.encode.search_rings},
+            {"barycentric_tolerance", o.encode.barycentric_tolerance},
+            {"max_distance_ratio", o.encode.max_distance_ratio}}}};
+}
+
+// Reads the model part of the header, every access checked: a corrupted or hand-edited header
+// is an error naming the key, never an exception of the JSON library.
+class HeaderReader {
+ public:
+  explicit HeaderReader(std::string file) : file_(std::move(file)) {}
+  [[noreturn]] void fail(const std::string& what) const { throw InvalidInput(file_ + ": " + what); }
+  const json& at(const json& j, const char* key, const std::string& where) const {
+    if (!j.is_object() || !j.contains(key)) fail("missing '" + std::string(key) + "' in " + where);
+    return j.at(key);
+  }
+  long long integer(const json& j, const char* key, const std::string& where, long long lo, long long hi) const {
+    const json& v = at(j, key, where);
+    if (!v.is_number_integer()) fail("'" + std::string(key) + "' in " + where + " is not an integer");
+    const long long x = v.get<long long>();
+    if (x < lo || x > hi)
+      fail("'" + std::string(key) + "' in " + where + " is " + std::to_string(x) + ", outside " +
+           std::to_string(lo) + ".." + std::to_string(hi));
+    return x;
+  }
+  double number(const json& j, const char* key, const std::string& where) const {
+    const json& v = at(j, key, where);
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      fail("'" + std::string(key) + "' in " + where + " is not a finite number");
+    return v.get<double>();
+  }
+  std::string text(const json& j, const char* key, const std::string& where) const {
+    const json& v = at(j, key, where);
+    if (!v.is_string()) fail("'" + std::string(key) + "' in " + where + " is not a string");
+    return v.get<std::string>();
+  }
+  bool boolean(const json& j, const char* key, const std::string& where) const {
+    const json& v = at(j, key, where);
+    if (!v.is_boolean()) fail("'" + std::string(key) + "' in " + where + " is not true or false");
+    return v.get<bool>();
+  }
+
+ private:
+  std::string file_;
+};
+
+constexpr long long kMaxCount = 1LL << 30;
+
+ModelOptions read_options(const HeaderReader& h, const json& j) {
+  ModelOptions o;
+  const std::string w = "options";
+  const std::string method = h.text(j, "method", w);
+  if (method != "volumes" && method != "vectors") h.fail("options: unknown method '" + method + "'");
+  o.method = method == "vectors" ? EditOptions::Method::Vectors : EditOptions::Method::Volumes;
+  o.smoothing_fraction = h.number(j, "smoothing_fraction", w);
+  o.handle_solved_rings = static_cast<int>(h.integer(j, "handle_solved_rings", w, 0, 1000));
+  const json& r = h.at(j, "reconstruct", w);
+  const std::string wr = "options.reconstruct";
+  ReconstructOptions& ro = o.reconstruct;
+  ro.volume_scales = static_cast<int>(h.integer(r, "volume_scales", wr, 1, 1000));
+  ro.max_levels = static_cast<int>(h.integer(r, "max_levels", wr, 1, 100));
+  ro.coarsest_vertices = static_cast<int>(h.integer(r, "coarsest_vertices", wr, 1, kMaxCount));
+  ro.coarsening_ratio = h.number(r, "coarsening_ratio", wr);
+  ro.volume_iterations = static_cast<int>(h.integer(r, "volume_iterations", wr, 1, 100000));
+  ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
+  ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
+  ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));
+  ro.tangential_lambda = h.number(r, "tangential_lambda", wr);
+  ro.length_lambda = h.number(r, "length_lambda", wr);
+  ro.regularization_decay = h.number(r, "regularization_decay", wr);
+  ro.level_tolerance = h.number(r, "level_tolerance", wr);
+  ro.tolerance = h.number(r, "tolerance", wr);
+  ro.max_final_steps = static_cast<int>(h.integer(r, "max_final_steps", wr, 0, 100000));
+  ro.min_length_fraction = h.number(r, "min_length_fraction", wr);
+  ro.fixed_point_tolerance = h.number(r, "fixed_point_tolerance", wr);
+  const std::string solver = h.text(r, "step_solver", wr);
+  if (solver != "direct" && solver != "jacobi-cg") h.fail("options.reconstruct: unknown step_solver '" + solver + "'");
+  ro.step_solver = solver == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
+  ro.direct_max_prisms = static_cast<int>(h.integer(r, "direct_max_prisms", wr, 0, kMaxCount));
+  ro.cg_tolerance = h.number(r, "cg_tolerance", wr);
+  ro.cg_max_iterations = static_cast<int>(h.integer(r, "cg_max_iterations", wr, 1, 1000000));
+  const json& p = h.at(j, "projection", w);
+  const std::string wp = "options.projection";
+  o.projection.seed_resolution = static_cast<int>(h.integer(p, "seed_resolution", wp, 1, 64));
+  o.projection.max_iterations = static_cast<int>(h.integer(p, "max_iterations", wp, 1, 100000));
+  o.projection.orthogonality_tolerance = h.number(p, "orthogonality_tolerance", wp);
+  o.projection.seam_tolerance = h.number(p, "seam_tolerance", wp);
+  const json& e = h.at(j, "encode", w);
+  const std::string we = "options.encode";
+  o.encode.search_rings = static_cast<int>(h.integer(e, "search_rings", we, 0, 1000));
+  o.encode.barycentric_tolerance = h.number(e, "barycentric_tolerance", we);
+  o.encode.max_distance_ratio = h.number(e, "max_distance_ratio", we);
+  return o;
+}
+
+}  // namespace
+
+void write_model(const LayeredModel& model, const std::string& path) {
+  StrataContainer c;
+  json bands = json::array();
+  const Band& cage = model.band(0);
+  {
+    std::vector<std::int32_t> sizes, indices;
+    for (const auto& f : cage.cage.faces) {
+      sizes.push_back(static_cast<std::int32_t>(f.size()));
+      indices.insert(indices.end(), f.begin(), f.end());
+    }
+    json creases = json::array(), corners = json::array();
+    for (const auto& cr : cage.tags.creases) creases.push_back({{"edge", {cr.v0, cr.v1}}, {"sharpness", cr.sharpness}});
+    for (const auto& co : cage.tags.corners) corners.push_back({{"vertex", co.vertex}, {"sharpness", co.sharpness}});
+    bands.push_back({{"kind", "cage"},
+                     {"vertices", cage.cage.num_vertices()},
+                     {"faces", cage.cage.num_faces()},
+                     {"face_corners", indices.size()},
+                     {"scheme", scheme_name(cage.subdiv.scheme)},
+                     {"boundary", cage.subdiv.boundary == BoundaryRule::EdgeAndCorner ? "edge-and-corner" : "edge-only"},
+                     {"isolation_level", cage.subdiv.isolation_level},
+                     {"tags", {{"creases", creases}, {"corners", corners}}}});
+    c.sections.push_back({"band0.points", pack_f64(flatten(cage.cage.vertices))});
+    c.sections.push_back({"band0.face_sizes", pack_i32(sizes)});
+    c.sections.push_back({"band0.face_indices", pack_i32(indices)});
+  }
+  for (int k = 1; k < model.num_bands(); ++k) {
+    const Band& b = model.band(k);
+    const DetailEncoding& e = b.encoding;
+    const std::string p = "band" + std::to_string(k) + ".";
+    const bool at_rest = b.mesh.vertices.size() == e.detail_rest.size() &&
+                         std::memcmp(b.mesh.vertices.data(), e.detail_rest.data(), sizeof(Vec3) * e.detail_rest.size()) == 0;
+    const bool limit = e.over_limit_surface();
+    bands.push_back({{"kind", "triangles"},
+                     {"vertices", b.mesh.num_vertices()},
+                     {"faces", b.mesh.num_faces()},
+                     {"amplitude", b.amplitude},
+                     {"base", limit ? "limit" : "mesh"},
+                     {"base_vertices", b.base_rest.size()},
+                     {"positions_at_rest", at_rest},
+                     {"encoding_report",
+                      {{"projected", e.report.num_projected},
+                       {"fallback", e.report.num_fallback},
+                       {"ambiguous", e.report.num_ambiguous},
+                       {"max_tangential_offset", e.report.max_tangential_offset}}}});
+    c.sections.push_back({p + "faces", pack_i32(flatten(b.mesh.faces))});
+    c.sections.push_back({p + "rest", pack_f64(flatten(e.detail_rest))});
+    if (!at_rest) c.sections.push_back({p + "positions", pack_f64(flatten(b.mesh.vertices))});
+    std::vector<std::int32_t> faces;
+    std::vector<double> coords;
+    if (limit) {
+      for (const LimitPoint& q : e.limit_points) {
+        faces.push_back(q.face);
+        coords.insert(coords.end(), {q.u, q.v});
+      }
+    } else {
+      for (const BasePoint& q : e.base_points) {
+        faces.push_back(q.face);
+        coords.insert(coords.end(), {q.bary.x(), q.bary.y(), q.bary.z()});
+      }
+    }
+    c.sections.push_back({p + "base_faces", pack_i32(faces)});
+    c.sections.push_back({p + "base_coords", pack_f64(coords)});
+    c.sections.push_back({p + "base_rest", pack_f64(flatten(b.base_rest))});
+  }
+  json history = json::array();
+  for (const std::string& h : model.history()) {
+    try {
+      history.push_back(json::parse(h));
+    } catch (const json::exception&) {
+      history.push_back(h);
+    }
+  }
+  c.model_json = json({{"type", "strata.layered_model"},
+                       {"bands", bands},
+                       {"options", options_json(model.options())},
+                       {"history", history}})
+                     .dump();
+  write_strata_container(c, path);
+}
+
+LayeredModel read_model(const std::string& path) {
+  const StrataContainer c = read_strata_container(path);
+  const HeaderReader h(path);
+  json m;
+  try {
+    m = json::parse(c.model_json);
+  } catch (const json::exception& e) {
+    h.fail(std::string("malformed model header: ") + e.what());
+  }
+  if (h.text(m, "type", "the model header") != "strata.layered_model")
+    h.fail("not a layered model (type '" + m.at("type").get<std::string>() + "')");
+  const json& bands_j = h.at(m, "bands", "the model header");
+  if (!bands_j.is_array() || bands_j.size() < 2 || bands_j.size() > 64)
+    h.fail("'bands' must be an array of 2 to 64 bands");
+  const ModelOptions options = read_options(h, h.at(m, "options", "the model header"));
+  std::vector<std::string> history;
+  const json& hist = h.at(m, "history", "the model header");
+  if (!hist.is_array()) h.fail("'history' is not an array");
+  for (const json& e : hist) history.push_back(e.is_string() ? e.get<std::string>() : e.dump());
+
+  auto section = [&](const std::string& name) -> const Section& { return c.require(name, path); };
+  auto what = [&](const std::string& name) { return path + ": section '" + name + "'"; };
+  std::vector<Band> bands(bands_j.size());
+  // Band 0: the cage.
+  {
+    const json& b = bands_j[0];
+    const std::string w = "band 0";
+    if (h.text(b, "kind", w) != "cage") h.fail("band 0 is not a cage");
+    const long long nv = h.integer(b, "vertices", w, 1, kMaxCount);
+    const long long nf = h.integer(b, "faces", w, 1, kMaxCount);
+    const long long nc = h.integer(b, "face_corners", w, 3, kMaxCount);
+    Band& cage = bands[0];
+    cage.cage.vertices = unflatten(unpack_f64(section("band0.points"), 3 * nv, what("band0.points")));
+    const std::vector<std::int32_t> sizes = unpack_i32(section("band0.face_sizes"), nf, what("band0.face_sizes"));
+    const std::vector<std::int32_t> idx = unpack_i32(section("band0.face_indices"), nc, what("band0.face_indices"));
+    long long at = 0;
+    for (std::int32_t s : sizes) {
+      if (s < 3 || at + s > nc) h.fail("band 0: face sizes do not match the face corner count");
+      cage.cage.faces.emplace_back(idx.begin() + at, idx.begin() + at + s);
+      at += s;
+    }
+    if (at != nc) h.fail("band 0: face sizes do not match the face corner count");
+    const std::string scheme = h.text(b, "scheme", w);
+    if (scheme != "loop" && scheme != "catmull-clark") h.fail("band 0: unknown scheme '" + scheme + "'");
+    cage.subdiv.scheme = scheme == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark;
+    const std::string boundary = h.text(b, "boundary", w);
+    if (boundary != "edge-only" && boundary != "edge-and-corner") h.fail("band 0: unknown boundary rule '" + boundary + "'");
+    cage.subdiv.boundary = boundary == "edge-only" ? BoundaryRule::EdgeOnly : BoundaryRule::EdgeAndCorner;
+    cage.subdiv.isolation_level = static_cast<int>(h.integer(b, "isolation_level", w, 1, 10));
+    const json& tags = h.at(b, "tags", w);
+    const json& creases = h.at(tags, "creases", "band 0 tags");
+    const json& corners = h.at(tags, "corners", "band 0 tags");
+    if (!creases.is_array() || !corners.is_array()) h.fail("band 0: tags must hold arrays");
+    for (const json& cr : creases) {
+      const json& e = h.at(cr, "edge", "a crease");
+      if (!e.is_array() || e.size() != 2 || !e[0].is_number_integer() || !e[1].is_number_integer())
+        h.fail("band 0: a crease's edge is not two vertex numbers");
+      cage.tags.creases.push_back({e[0].get<int>(), e[1].get<int>(), h.number(cr, "sharpness", "a crease")});
+    }
+    for (const json& co : corners)
+      cage.tags.corners.push_back({static_cast<int>(h.integer(co, "vertex", "a corner", 0, nv - 1)),
+                                   h.number(co, "sharpness", "a corner")});
+  }
+  // Bands >= 1: meshes and encodings, coarsest first (each encoding needs its base's connectivity).
+  for (std::size_t k = 1; k < bands.size(); ++k) {
+    const json& b = bands_j[k];
+    const std::string w = "band " + std::to_string(k), p = "band" + std::to_string(k) + ".";
+    if (h.text(b, "kind", w) != "triangles") h.fail(w + " is not a triangle band");
+    const long long nv = h.integer(b, "vertices", w, 3, kMaxCount);
+    const long long nf = h.integer(b, "faces", w, 1, kMaxCount);
+    const long long nb = h.integer(b, "base_vertices", w, 1, kMaxCount);
+    Band& band = bands[k];
+    band.amplitude = h.number(b, "amplitude", w);
+    const std::string base_kind = h.text(b, "base", w);
+    if (base_kind != (k == 1 ? "limit" : "mesh"))
+      h.fail(w + ": its base must be " + (k == 1 ? "the cage's limit surface" : "the next coarser band's mesh"));
+    const std::vector<std::int32_t> f = unpack_i32(section(p + "faces"), 3 * nf, what(p + "faces"));
+    TriMesh rest;
+    for (long long j = 0; j < nf; ++j) rest.faces.push_back({f[3 * j], f[3 * j + 1], f[3 * j + 2]});
+    rest.vertices = unflatten(unpack_f64(section(p + "rest"), 3 * nv, what(p + "rest")));
+    band.base_rest = unflatten(unpack_f64(section(p + "base_rest"), 3 * nb, what(p + "base_rest")));
+    const std::vector<std::int32_t> bf = unpack_i32(section(p + "base_faces"), nv, what(p + "base_faces"));
+    try {
+      if (k == 1) {
+        const std::vector<double> uv = unpack_f64(section(p + "base_coords"), 2 * nv, what(p + "base_coords"));
+        std::vector<LimitPoint> lp(nv);
+        for (long long i = 0; i < nv; ++i) lp[i] = LimitPoint{bf[i], uv[2 * i], uv[2 * i + 1]};
+        PolyMesh base_cage = bands[0].cage;
+        if (static_cast<long long>(base_cage.vertices.size()) != nb) h.fail(w + ": base_vertices differs from the cage");
+        base_cage.vertices = band.base_rest;
+        const SubdivSurface surface(base_cage, bands[0].tags, bands[0].subdiv);
+        band.encoding = encode_detail_at(rest, surface, std::move(lp));
+      } else {
+        const std::vector<double> bc = unpack_f64(section(p + "base_coords"), 3 * nv, what(p + "base_coords"));
+        std::vector<BasePoint> bp(nv);
+        for (long long i = 0; i < nv; ++i) bp[i] = BasePoint{bf[i], Vec3(bc[3 * i], bc[3 * i + 1], bc[3 * i + 2])};
+        const TriMesh base{band.base_rest, bands[k - 1].mesh.faces};
+        if (static_cast<long long>(bands[k - 1].mesh.vertices.size()) != nb)
+          h.fail(w + ": base_vertices differs from band " + std::to_string(k - 1));
+        band.encoding = encode_detail_at(rest, base, std::move(bp));
+      }
+    } catch (const InvalidInput& e) {
+      h.fail(w + ": " + e.what());
+    } catch (const SolverError& e) {
+      h.fail(w + ": " + e.what());
+    }
+    const json& rep = h.at(b, "encoding_report", w);
+    band.encoding.report.num_projected = static_cast<int>(h.integer(rep, "projected", w, 0, nv));
+    band.encoding.report.num_fallback = static_cast<int>(h.integer(rep, "fallback", w, 0, nv));
+    band.encoding.report.num_ambiguous = static_cast<int>(h.integer(rep, "ambiguous", w, 0, nv));
+    band.encoding.report.max_tangential_offset = h.number(rep, "max_tangential_offset", w);
+    band.mesh.faces = rest.faces;
+    band.mesh.vertices = h.boolean(b, "positions_at_rest", w)
+                             ? rest.vertices
+                             : unflatten(unpack_f64(section(p + "positions"), 3 * nv, what(p + "positions")));
+  }
+  try {
+    return LayeredModel::assemble(std::move(bands), options, std::move(history));
+  } catch (const InvalidInput& e) {
+    h.fail(e.what());
+  }
+}
+
+}  // namespace strata::layers

@@ -1,0 +1,425 @@
+// Layered models (issue 5): `strata build`, `strata info`, `strata edit`, `strata amplitude` and
+// `strata export`.
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "common.h"
+#include "strata/atomic_file.h"
+#include "strata/edit_script.h"
+#include "strata/exceptions.h"
+#include "strata/layers/model.h"
+#include "strata/mesh_io.h"
+
+namespace strata::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using layers::LayeredModel;
+
+// --------------------------------------------------------------------------------------------
+// strata build
+
+struct BuildCmdOptions {
+  std::vector<std::string> scans;
+  std::string output;
+  std::string out_dir;
+  std::string report;
+  int bands = 3;
+  int cage_faces = 0;
+  bool quiet = false;
+};
+
+// A progress bar on stderr: redrawn in place on a terminal, one line per step otherwise.
+class ProgressBar {
+ public:
+  ProgressBar(int total, bool quiet) : total_(total), quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
+  void show(int done, const std::string& label) const {
+    if (quiet_) return;
+    constexpr int width = 30;
+    const int filled = total_ > 0 ? done * width / total_ : width;
+    std::string bar(filled, '#');
+    bar.resize(width, '-');
+    std::cerr << (tty_ ? "\r" : "") << "strata: [" << bar << "] " << done << "/" << total_ << " " << label
+              << (tty_ ? "\x1b[K" : "\n") << std::flush;
+  }
+  void finish() const {
+    if (!quiet_ && tty_) std::cerr << "\n";
+  }
+
+ private:
+  int total_;
+  bool quiet_, tty_;
+};
+
+json band_summary_json(const LayeredModel& model) {
+  json bands = json::array();
+  for (int k = 0; k < model.num_bands(); ++k) {
+    const layers::Band& b = model.band(k);
+    const layers::DetailMagnitude m = model.detail_magnitude(k);
+    json j{{"band", k}, {"mean_edge_length", m.mean_edge_length}};
+    if (k == 0) {
+      j["kind"] = "cage";
+      j["vertices"] = b.cage.num_vertices();
+      j["faces"] = b.cage.num_faces();
+      j["creases"] = b.tags.creases.size();
+      j["corners"] = b.tags.corners.size();
+    } else {
+      j["kind"] = "triangles";
+      j["vertices"] = b.mesh.num_vertices();
+      j["faces"] = b.mesh.num_faces();
+      j["amplitude"] = b.amplitude;
+      j["detail_rms"] = m.rms;
+      j["detail_max"] = m.max;
+      j["encoding"] = encoding_json(b.encoding.report);
+    }
+    bands.push_back(j);
+  }
+  return bands;
+}
+
+int run_build(const BuildCmdOptions& o) {
+  if (o.scans.size() > 1 && o.out_dir.empty())
+    throw InvalidInput("several scans need --out-dir (each model is written as DIR/<scan name>.strata)");
+  if (!o.output.empty() && !o.out_dir.empty()) throw InvalidInput("give either -o or --out-dir, not both");
+  if (o.output.empty() && o.out_dir.empty()) throw InvalidInput("give -o MODEL.strata or --out-dir DIR");
+  if (!o.out_dir.empty()) ensure_directory(o.out_dir);
+  if (!o.output.empty()) check_output_path(o.output);
+  if (!o.report.empty()) check_output_path(o.report);
+  const Log log(o.quiet);
+  ProgressBar bar(static_cast<int>(o.scans.size()), o.quiet);
+  json results = json::array();
+  int failed = 0;
+  for (std::size_t i = 0; i < o.scans.size(); ++i) {
+    const std::string& scan_path = o.scans[i];
+    const std::string out =
+        o.output.empty() ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string() : o.output;
+    bar.show(static_cast<int>(i), scan_path);
+    json r{{"scan", scan_path}, {"model", out}};
+    Stopwatch sw;
+    try {
+      const NamedMesh scan = read_named_mesh(scan_path);
+      layers::BuildOptions bo;
+      bo.bands = o.bands;
+      bo.cage.faces = o.cage_faces;
+      LayeredModel model = [&] {
+        try {
+          return LayeredModel::build(scan.mesh, bo);
+        } catch (const InvalidInput& e) {
+          throw InvalidInput(scan.name + ": " + e.what());
+        } catch (const SolverError& e) {
+          throw SolverError(scan.name + ": " + e.what());
+        }
+      }();
+      const double build_seconds = sw.seconds();
+      write_model(model, out);
+      r["ok"] = true;
+      r["faces"] = scan.mesh.num_faces();
+      r["vertices"] = scan.mesh.num_vertices();
+      r["bands"] = band_summary_json(model);
+      r["build_seconds"] = build_seconds;
+      r["seconds"] = sw.seconds();
+      r["bytes"] = fs::file_size(out);
+    } catch (const Error& e) {
+      ++failed;
+      r["ok"] = false;
+      r["error"] = e.what();
+      r["seconds"] = sw.seconds();
+      if (!o.quiet) std::cerr << (isatty(STDERR_FILENO) ? "\n" : "") << "strata: error: " << e.what() << std::endl;
+    }
+    results.push_back(r);
+  }
+  bar.show(static_cast<int>(o.scans.size()), "done");
+  bar.finish();
+  std::cout << "scan                          faces   bands  time [s]  model\n";
+  for (const json& r : results) {
+    std::string name = r["scan"].get<std::string>();
+    if (name.size() > 28) name = "..." + name.substr(name.size() - 25);
+    name.resize(28, ' ');
+    if (r["ok"].get<bool>())
+      std::cout << name << "  " << r["faces"].get<int>() << "  " << r["bands"].size() << "  "
+                << fixed(r["seconds"].get<double>(), 2) << "  " << r["model"].get<std::string>() << " ("
+                << r["bytes"].get<std::uintmax_t>() << " bytes)\n";
+    else
+      std::cout << name << "  FAILED: " << r["error"].get<std::string>() << "\n";
+  }
+  std::cout << results.size() - failed << " built, " << failed << " failed" << std::endl;
+  if (!o.report.empty()) write_json_report(json{{"command", "build"}, {"models", results}}, o.report);
+  return failed ? 1 : 0;
+}
+
+// --------------------------------------------------------------------------------------------
+// strata info
+
+struct InfoCmdOptions {
+  std::string model;
+  bool as_json = false;
+};
+
+int run_info(const InfoCmdOptions& o) {
+  const LayeredModel model = layers::read_model(o.model);
+  const json bands = band_summary_json(model);
+  const double diag = bbox_diagonal(model.band(model.num_bands() - 1).mesh.vertices);
+  if (o.as_json) {
+    json h = json::array();
+    for (const std::string& e : model.history()) h.push_back(json::parse(e, nullptr, false));
+    std::cout << json{{"model", o.model},
+                      {"bytes", fs::file_size(o.model)},
+                      {"bands", bands},
+                      {"finest_bbox_diagonal", diag},
+                      {"history", h}}
+                     .dump(2)
+              << std::endl;
+    return 0;
+  }
+  std::cout << o.model << ": " << model.num_bands() << " bands, " << fs::file_size(o.model) << " bytes\n"
+            << "band  kind       vertices     faces  amplitude  edge length  detail rms  detail max  fallbacks\n";
+  for (const json& b : bands) {
+    const bool cage = b["kind"] == "cage";
+    char line[256];
+    std::snprintf(line, sizeof line, "%4d  %-9s %9d %9d  %9s  %11.3e  %10s  %10s  %9s\n", b["band"].get<int>(),
+                  cage ? "cage" : "triangles", b["vertices"].get<int>(), b["faces"].get<int>(),
+                  cage ? "-" : fixed(b["amplitude"].get<double>(), 3).c_str(), b["mean_edge_length"].get<double>(),
+                  cage ? "-" : sci(b["detail_rms"].get<double>()).c_str(),
+                  cage ? "-" : sci(b["detail_max"].get<double>()).c_str(),
+                  cage ? "-" : std::to_string(b["encoding"]["fallback"].get<int>()).c_str());
+    std::cout << line;
+  }
+  std::cout << "Band 0 is the cage's limit surface (shape longer than about twice its edge length); band k\n"
+               "holds the detail between band k-1's resolution and its own, as displacement volumes over\n"
+               "band k-1. Detail magnitudes are |p - q| at rest (finest band bbox diagonal "
+            << sci(diag) << ").\n"
+            << "history: " << model.history().size() << " operations\n";
+  for (const std::string& e : model.history()) std::cout << "  " << e << "\n";
+  std::cout << std::flush;
+  return 0;
+}
+
+// --------------------------------------------------------------------------------------------
+// strata edit / strata amplitude
+
+struct EditCmdOptions {
+  std::string model;
+  std::string output;
+  std::string edit;
+  std::string report;
+  int band = 0;
+  double scale = 1.0;
+  bool intersections = false;
+  bool quiet = false;
+};
+
+json cascade_json(const layers::CascadeReport& r) {
+  json rebuilt = json::array();
+  for (const layers::BandRebuild& b : r.rebuilt)
+    rebuilt.push_back({{"band", b.band},
+                       {"solved_vertices", b.solved_vertices},
+                       {"rest_vertices", b.rest_vertices},
+                       {"solved_prisms", b.solved_prisms},
+                       {"volume_metrics", volume_metrics_json(b.volume)},
+                       {"solver_converged", b.stats.converged},
+                       {"seconds", b.seconds}});
+  return {{"edited_band", r.edited_band},
+          {"edit_seconds", r.edit_seconds},
+          {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
+          {"rebuilt", rebuilt},
+          {"total_seconds", r.total_seconds}};
+}
+
+void print_cascade(const layers::CascadeReport& r) {
+  std::cout << "band " << r.edited_band << " edited in " << fixed(r.edit_seconds, 2) << " s\n";
+  for (const layers::BandRebuild& b : r.rebuilt)
+    std::cout << "band " << b.band << ": " << b.solved_vertices << " vertices solved (" << b.solved_prisms
+              << " prisms), " << b.rest_vertices << " back at rest; volume error max "
+              << sci(b.volume.max_relative_error) << ", rms " << sci(b.volume.rms_relative_error) << "; "
+              << fixed(b.seconds, 2) << " s\n";
+}
+
+// Runs \p change on the model read from o.model, then writes it to o.output, with an optional
+// count of the finest band's new self-intersections and a JSON report.
+int run_change(const EditCmdOptions& o, const std::string& command,
+               const std::function<json(LayeredModel&, const Log&)>& change) {
+  check_output_path(o.output);
+  if (!o.report.empty()) check_output_path(o.report);
+  const Log log(o.quiet);
+  Stopwatch sw;
+  log.phase("reading " + o.model);
+  LayeredModel model = layers::read_model(o.model);
+  const int finest = model.num_bands() - 1;
+  const std::vector<Vec3> before = model.band(finest).mesh.vertices;
+  json r{{"command", command}, {"model", o.model}, {"output", o.output}, {"read_seconds", sw.seconds()}};
+  r["changes"] = change(model, log);
+  if (o.intersections) {
+    log.phase("counting self-intersections of the finest band");
+    const TimedIntersections in = find_intersections(before, model.band(finest).mesh.faces);
+    const TimedIntersections out = find_intersections(model.band(finest).mesh.vertices, model.band(finest).mesh.faces);
+    const std::size_t fresh = count_new_intersections(in.result, out.result);
+    r["finest_band_intersections"] = {{"input_pairs", in.result.num_pairs},
+                                      {"output_pairs", out.result.num_pairs},
+                                      {"new_pairs", fresh},
+                                      {"seconds", in.seconds + out.seconds}};
+    std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, " << out.result.num_pairs
+              << " after, " << fresh << " new\n";
+  }
+  sw.restart();
+  log.phase("writing " + o.output);
+  write_model(model, o.output);
+  r["write_seconds"] = sw.seconds();
+  if (!o.report.empty()) write_json_report(r, o.report);
+  std::cout << "wrote " << o.output << std::endl;
+  return 0;
+}
+
+int run_edit(const EditCmdOptions& o) {
+  const std::string text = read_file_bytes(o.edit);
+  const EditScript script = parse_edit_script(text, o.edit);
+  // The raw edits, for the model's history (provenance).
+  json raw = json::parse(text, nullptr, false);
+  if (raw.is_object() && raw.contains("edits")) raw = raw["edits"];
+  if (!raw.is_array()) raw = json::array({raw});
+  return run_change(o, "edit", [&](LayeredModel& model, const Log& log) {
+    json out = json::array();
+    for (std::size_t i = 0; i < script.edits.size(); ++i) {
+      log.phase("edit " + std::to_string(i + 1) + " of " + std::to_string(script.edits.size()) + " on band " +
+                std::to_string(o.band));
+      const json prov{{"script", o.edit}, {"index", i}, {"edit", i < raw.size() ? raw[i] : json()}};
+      try {
+        const layers::CascadeReport c = model.edit(o.band, script.edits[i], prov.dump());
+        print_cascade(c);
+        out.push_back(cascade_json(c));
+      } catch (const InvalidInput& e) {
+        throw InvalidInput(o.edit + ": edit " + std::to_string(i) + ": " + e.what());
+      }
+    }
+    return out;
+  });
+}
+
+int run_amplitude(const EditCmdOptions& o) {
+  return run_change(o, "amplitude", [&](LayeredModel& model, const Log& log) {
+    log.phase("band " + std::to_string(o.band) + " amplitude " + fixed(o.scale, 3));
+    const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
+    print_cascade(c);
+    return json::array({cascade_json(c)});
+  });
+}
+
+// --------------------------------------------------------------------------------------------
+// strata export
+
+struct ExportCmdOptions {
+  std::string model;
+  std::string output;
+  int band = -1;
+  int resolution = 4;
+  bool cage = false;
+};
+
+int run_export(const ExportCmdOptions& o) {
+  check_mesh_output_path(o.output);
+  const LayeredModel model = layers::read_model(o.model);
+  const int k = o.band < 0 ? model.num_bands() - 1 : o.band;
+  if (k >= model.num_bands())
+    throw InvalidInput(o.model + ": band " + std::to_string(k) + " out of range (the model has bands 0 .. " +
+                       std::to_string(model.num_bands() - 1) + ")");
+  TriMesh mesh;
+  if (o.cage) {
+    const PolyMesh& c = model.band(0).cage;
+    mesh.vertices = c.vertices;
+    for (const auto& f : c.faces)
+      for (std::size_t t = 1; t + 1 < f.size(); ++t) mesh.faces.push_back({f[0], f[t], f[t + 1]});
+  } else {
+    mesh = model.band_mesh(k, o.resolution);
+  }
+  write_mesh(mesh, o.output);
+  std::cout << "wrote " << o.output << " (" << (o.cage ? "control cage" : "band " + std::to_string(k)) << ", "
+            << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces)" << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Subcommand> register_model_commands(CLI::App& parent) {
+  std::vector<Subcommand> out;
+  {
+    auto o = std::make_shared<BuildCmdOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "build",
+        "Build layered models from scans: a control cage (band 0) fitted to the scan, smoother\n"
+        "intermediate bands, and the scan itself as the finest band, each encoded as displacement\n"
+        "volumes over the next coarser band. Several scans need --out-dir; a bad file is reported\n"
+        "and skipped, and the exit code is 1 if any failed.");
+    app->add_option("scans", o->scans, "Scan meshes (.obj, .off, .ply, .stl)")->required();
+    app->add_option("-o,--output", o->output, "Model to write (one scan)");
+    app->add_option("--out-dir", o->out_dir, "Directory for the models (DIR/<scan name>.strata)");
+    app->add_option("--bands", o->bands, "Bands in all, the cage included (2 to 8)")
+        ->check(CLI::Range(2, 8))
+        ->capture_default_str();
+    app->add_option("--cage-faces", o->cage_faces, "Cage faces (default: 1% of the scan's, at least 400)")
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--report", o->report, "Write a JSON report of every model");
+    app->add_flag("-q,--quiet", o->quiet, "No progress on stderr");
+    out.push_back({app, [o] { return run_build(*o); }});
+  }
+  {
+    auto o = std::make_shared<InfoCmdOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "info", "Describe a layered model: its bands, their sizes, amplitudes and detail magnitudes, and its history.");
+    app->add_option("model", o->model, "Model (.strata)")->required();
+    app->add_flag("--json", o->as_json, "Print JSON");
+    out.push_back({app, [o] { return run_info(*o); }});
+  }
+  {
+    auto o = std::make_shared<EditCmdOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "edit",
+        "Edit one band of a layered model with an edit script (the format of 'strata deform'): band 0\n"
+        "selects cage vertices, band k its vertices. The finer bands are rebuilt in cascade.");
+    app->add_option("model", o->model, "Model (.strata)")->required();
+    app->add_option("--band", o->band, "Band to edit")->required()->check(CLI::NonNegativeNumber);
+    app->add_option("--edit", o->edit, "Edit script (JSON)")->required();
+    app->add_option("-o,--output", o->output, "Model to write")->required();
+    app->add_option("--report", o->report, "Write a JSON report");
+    app->add_flag("--intersections", o->intersections,
+                  "Count the finest band's self-intersections before and after");
+    app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+    out.push_back({app, [o] { return run_edit(*o); }});
+  }
+  {
+    auto o = std::make_shared<EditCmdOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "amplitude",
+        "Scale one band's detail: 0 mutes it, 1 keeps it, above 1 exaggerates and below 0 inverts it.\n"
+        "The finer bands are rebuilt in cascade.");
+    app->add_option("model", o->model, "Model (.strata)")->required();
+    app->add_option("--band", o->band, "Band (1 or more)")->required()->check(CLI::PositiveNumber);
+    app->add_option("--scale", o->scale, "Amplitude")->required();
+    app->add_option("-o,--output", o->output, "Model to write")->required();
+    app->add_option("--report", o->report, "Write a JSON report");
+    app->add_flag("--intersections", o->intersections,
+                  "Count the finest band's self-intersections before and after");
+    app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+    out.push_back({app, [o] { return run_amplitude(*o); }});
+  }
+  {
+    auto o = std::make_shared<ExportCmdOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "export", "Write one band of a layered model as a mesh (default: the finest band, the edited scan).");
+    app->add_option("model", o->model, "Model (.strata)")->required();
+    app->add_option("-o,--output", o->output, "Mesh to write (.obj, .off, .ply, .stl)")->required();
+    app->add_option("--band", o->band, "Band (0: the cage's limit surface, tessellated)")
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--resolution", o->resolution, "Band 0: segments per ptex edge")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    app->add_flag("--cage", o->cage, "Write the control cage itself");
+    out.push_back({app, [o] { return run_export(*o); }});
+  }
+  return out;
+}
+
+}  // namespace strata::cli
