@@ -1,7 +1,652 @@
+#include "app.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#include <stb_image_write.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <thread>
 
-#include "options.h"
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
 
-int run_window(const strata::viewer::Options&) {
-  throw std::runtime_error("the window is not built yet");
+namespace strata::viewer {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+App* app_of(GLFWwindow* w) {
+  return static_cast<App*>(glfwGetWindowUserPointer(w));
 }
+
+void key_callback(GLFWwindow* w, int key, int, int action, int mods) {
+  if (action == GLFW_PRESS && !ImGui::GetIO().WantCaptureKeyboard) app_of(w)->on_key(key, mods);
+}
+void scroll_callback(GLFWwindow* w, double, double dy) {
+  if (!ImGui::GetIO().WantCaptureMouse) app_of(w)->on_scroll(dy);
+}
+void drop_callback(GLFWwindow* w, int count, const char** paths) {
+  if (count > 0) app_of(w)->on_drop(paths[0]);
+}
+
+//! The transform \p t applied to the fraction \p f: rotation angle, stretch and translation
+//! scaled (polar decomposition of the linear part), pivot kept.
+EditTransform partial_transform(const EditTransform& t, double f) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(t.linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+  const Eigen::Matrix3d s = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
+  const Eigen::AngleAxisd aa(r);
+  EditTransform p;
+  p.linear = Eigen::AngleAxisd(f * aa.angle(), aa.axis()).toRotationMatrix() *
+             (Eigen::Matrix3d::Identity() + f * (s - Eigen::Matrix3d::Identity()));
+  p.translation = f * t.translation;
+  p.pivot = t.pivot;
+  return p;
+}
+
+void copy_to(std::array<char, 512>& buffer, const std::string& text) {
+  std::snprintf(buffer.data(), buffer.size(), "%s", text.c_str());
+}
+
+bool ray_triangle(const Vec3& o, const Vec3& d, const Vec3& a, const Vec3& b, const Vec3& c, double& t) {
+  const Vec3 e1 = b - a, e2 = c - a, p = d.cross(e2);
+  const double det = e1.dot(p);
+  if (std::abs(det) < 1e-300) return false;
+  const double inv = 1.0 / det;
+  const Vec3 s = o - a;
+  const double u = s.dot(p) * inv;
+  if (u < 0 || u > 1) return false;
+  const Vec3 q = s.cross(e1);
+  const double v = d.dot(q) * inv;
+  if (v < 0 || u + v > 1) return false;
+  t = e2.dot(q) * inv;
+  return t > 0;
+}
+
+}  // namespace
+
+App::App(const Options& options, GLFWwindow* window) : options_(options), window_(window) {
+  glfwSetWindowUserPointer(window_, this);
+  glfwSetKeyCallback(window_, key_callback);
+  glfwSetScrollCallback(window_, scroll_callback);
+  glfwSetDropCallback(window_, drop_callback);
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui::StyleColorsDark();
+  // Installs its callbacks, chained to the ones above.
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  renderer_ = std::make_unique<Renderer>();
+  style_.smooth = options.smooth;
+  style_.wireframe = options.wireframe;
+  view_.vectors = options.vectors;
+  view_.color = options.color;
+  view_.error_scale = options.error_scale;
+  view_.cage = true;
+  edit_band_ = options.band;
+  copy_to(save_path_, "model.strata");
+  copy_to(export_prefix_, "strata_export");
+
+  Document document =
+      options.input.empty() ? Document::from_mesh(TriMesh{}, "(none)") : Document::load(options.input);
+  if (options.build_bands > 0) document = build_layers(document, options.build_bands);
+  for (const std::string& path : options.edits) {
+    const EditScript script = read_edit_script(path);
+    for (const EditStep& step : script.edits) document.edit(options.band, step);
+  }
+  for (const auto& [k, a] : options.amplitudes) document.set_amplitude(k, a);
+  document.check_band(edit_band_);
+  if (options.show >= 0) {
+    document.check_band(options.show);
+    view_.visible.assign(static_cast<std::size_t>(document.num_bands()), 0);
+    view_.visible[static_cast<std::size_t>(options.show)] = 1;
+  }
+  if (!options.script_drag.empty()) script_ = read_edit_script(options.script_drag);
+  copy_to(open_path_, options.input);
+  worker_ = std::make_unique<Worker>(std::move(document));
+  push_view();
+}
+
+App::~App() {
+  worker_.reset();  // joins the thread before the GL objects go
+  panels_.clear();
+  selection_points_ = GpuLines();
+  renderer_.reset();
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+}
+
+void App::push_view() {
+  worker_->set_view(view_);
+}
+
+int App::run() {
+  const bool scripted = !options_.script_drag.empty();
+  while (!glfwWindowShouldClose(window_)) {
+    const auto t0 = Clock::now();
+    frame();
+    ++frames_;
+    if (scripted) {
+      frame_ms_.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
+      frame_in_drag_.push_back(dragging_ ? 1 : 0);
+      if (script_done_) break;
+    }
+  }
+  if (scripted && options_.benchmark) {
+    nlohmann::json r;
+    std::vector<double> drag_ms, all = frame_ms_;
+    for (std::size_t i = 0; i < frame_ms_.size(); ++i)
+      if (frame_in_drag_[i]) drag_ms.push_back(frame_ms_[i]);
+    auto stats = [](std::vector<double> v) {
+      nlohmann::json s;
+      if (v.empty()) return s;
+      std::sort(v.begin(), v.end());
+      double sum = 0;
+      for (double x : v) sum += x;
+      s["count"] = v.size();
+      s["mean_ms"] = sum / static_cast<double>(v.size());
+      s["median_ms"] = v[v.size() / 2];
+      s["p95_ms"] = v[std::min(v.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(v.size())))];
+      s["max_ms"] = v.back();
+      return s;
+    };
+    r["frames"] = stats(all);
+    r["drag_frames"] = stats(drag_ms);
+    r["drag_steps_solved"] = worker_->drag_steps();
+    r["triangles"] = 0;
+    for (const auto& p : panels_) r["triangles"] = r["triangles"].get<int>() + p->mesh.triangles();
+    r["gl_errors"] = gl_error_count();
+    r["frame_ms"] = frame_ms_;
+    r["status"] = status_;
+    std::cout << r.dump() << std::endl;
+  }
+  if (gl_error_count() > 0)
+    throw std::runtime_error(std::to_string(gl_error_count()) + " OpenGL errors (listed above)");
+  if (scripted && status_error_) throw std::runtime_error(status_);
+  return 0;
+}
+
+void App::frame() {
+  glfwPollEvents();
+  take_snapshot();
+  if (!options_.script_drag.empty()) run_script_step();
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  handle_mouse();
+  draw_ui();
+  ImGui::Render();
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(window_, &width, &height);
+  draw_scene(width, height);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  check_gl_errors("frame");
+  if (script_done_ && !options_.screenshot.empty()) {
+    std::vector<unsigned char> pixels(4 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_BACK);
+    glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    std::vector<unsigned char> flipped(pixels.size());
+    const std::size_t row = 4 * static_cast<std::size_t>(width);
+    for (int y = 0; y < height; ++y)
+      std::memcpy(&flipped[row * static_cast<std::size_t>(y)],
+                  &pixels[row * static_cast<std::size_t>(height - 1 - y)], row);
+    write_file_atomically(options_.screenshot, [&](const std::string& tmp) {
+      if (!stbi_write_png(tmp.c_str(), width, height, 4, flipped.data(), static_cast<int>(row)))
+        throw IoError(options_.screenshot + ": cannot write the PNG");
+    });
+  }
+  glfwSwapBuffers(window_);
+}
+
+void App::take_snapshot() {
+  std::optional<Snapshot> s = worker_->take(version_);
+  if (!s) return;
+  version_ = s->version;
+  if (!s->message.empty()) {
+    status_ = s->message;
+    status_error_ = s->error;
+  }
+  if (s->committed) {
+    committed_ = s->committed;
+    amplitudes_.assign(static_cast<std::size_t>(committed_->num_bands()), 1.0f);
+    for (int k = 0; k < committed_->num_bands(); ++k)
+      amplitudes_[static_cast<std::size_t>(k)] = static_cast<float>(committed_->amplitude(k));
+    edit_band_ = std::clamp(edit_band_, 0, committed_->num_bands() - 1);
+    update_selection_points();
+  }
+  // Same panels and connectivity: move the vertices only; else upload anew.
+  const bool same = s->panels.size() == panels_.size() &&
+                    std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
+                               [](const SceneData& a, const std::unique_ptr<Panel>& b) {
+                                 return a.shown_band == b->band &&
+                                        a.mesh.faces.size() == b->scene.mesh.faces.size() &&
+                                        a.mesh.vertices.size() == b->scene.mesh.vertices.size() &&
+                                        a.colors.empty() == (b->mesh.color_mode() == 0) &&
+                                        (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
+                               });
+  if (!same) panels_.clear();
+  for (std::size_t i = 0; i < s->panels.size(); ++i) {
+    if (!same) panels_.push_back(std::make_unique<Panel>());
+    Panel& p = *panels_[i];
+    p.scene = std::move(s->panels[i]);
+    p.band = p.scene.shown_band;
+    p.vectors = view_.compare && i + 1 == s->panels.size() && !view_.vectors && s->panels.size() > 1;
+    if (same && p.scene.colors.empty())
+      p.mesh.update_positions(p.scene.mesh.vertices, p.scene.mesh.faces);
+    else
+      p.mesh.upload(p.scene.mesh.vertices, p.scene.mesh.faces, p.scene.colors, surface_color());
+    if (!p.scene.net.empty())
+      p.net.upload(p.scene.net, std::vector<Rgb>(p.scene.net.size(), Rgb(0.95f, 0.5f, 0.05f)));
+    else
+      p.net = GpuLines();
+  }
+  layout_panels(!same || !fitted_);
+}
+
+void App::layout_panels(bool refit) {
+  // Side by side along x, in panel order, with a gap of 10% of the widest.
+  double x = 0, widest = 0;
+  std::vector<std::pair<Vec3, Vec3>> boxes;
+  for (const auto& p : panels_) {
+    Vec3f lo, hi;
+    scene_bounds(p->scene, lo, hi);
+    boxes.push_back({lo.cast<double>(), hi.cast<double>()});
+    widest = std::max(widest, static_cast<double>(hi.x() - lo.x()));
+  }
+  if (!refit) return;
+  Vec3f all_lo = Vec3f::Constant(1e30f), all_hi = Vec3f::Constant(-1e30f);
+  for (std::size_t i = 0; i < panels_.size(); ++i) {
+    const auto& [lo, hi] = boxes[i];
+    panels_[i]->offset = Vec3(x - lo.x(), 0, 0);
+    all_lo = all_lo.cwiseMin((lo + panels_[i]->offset).cast<float>());
+    all_hi = all_hi.cwiseMax((hi + panels_[i]->offset).cast<float>());
+    x += (hi.x() - lo.x()) + 0.1 * widest;
+  }
+  if (!panels_.empty() && (refit && !fitted_)) {
+    camera_.fit(all_lo, all_hi);
+    camera_.set_view(options_.view);
+    fitted_ = true;
+  } else if (!panels_.empty() && refit) {
+    camera_.fit(all_lo, all_hi);
+  }
+}
+
+void App::fit_view() {
+  fitted_ = false;
+  layout_panels(true);
+}
+
+bool App::pick(double x, double y, Vec3& hit) const {
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  Vec3f of, df;
+  camera_.ray(static_cast<float>(x), static_cast<float>(y), static_cast<float>(w), static_cast<float>(h), of,
+              df);
+  const Vec3 o = of.cast<double>(), d = df.cast<double>();
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& p : panels_) {
+    if (p->band != edit_band_ || p->vectors) continue;
+    const auto& v = p->scene.mesh.vertices;
+    for (const Face& f : p->scene.mesh.faces) {
+      double t = 0;
+      if (ray_triangle(o, d, v[f[0]] + p->offset, v[f[1]] + p->offset, v[f[2]] + p->offset, t) && t < best) {
+        best = t;
+        hit = o + t * d - p->offset;
+      }
+    }
+  }
+  return std::isfinite(best);
+}
+
+void App::handle_mouse() {
+  ImGuiIO& io = ImGui::GetIO();
+  double x = 0, y = 0;
+  glfwGetCursorPos(window_, &x, &y);
+  const double dx = x - last_x_, dy = y - last_y_;
+  last_x_ = x;
+  last_y_ = y;
+  if (scroll_ != 0) {
+    camera_.zoom(static_cast<float>(scroll_));
+    scroll_ = 0;
+  }
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  if (drag_button_ < 0) {
+    if (io.WantCaptureMouse) return;
+    for (int b : {GLFW_MOUSE_BUTTON_LEFT, GLFW_MOUSE_BUTTON_RIGHT, GLFW_MOUSE_BUTTON_MIDDLE}) {
+      if (glfwGetMouseButton(window_, b) == GLFW_PRESS) {
+        drag_button_ = b;
+        press_x_ = x;
+        press_y_ = y;
+        drag_mods_ = (glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ? GLFW_MOD_CONTROL : 0) |
+                     (glfwGetKey(window_, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? GLFW_MOD_SHIFT : 0);
+        if (b == GLFW_MOUSE_BUTTON_LEFT && drag_mods_ != 0 && region_set_ && handle_set_) {
+          const Mat4 v = camera_.view();
+          view_axis_ = -v.block<1, 3>(2, 0).transpose().cast<double>();
+          axis_ = drag_mods_ & GLFW_MOD_SHIFT ? 3 : axis_;
+          gizmo_begin();
+        }
+        break;
+      }
+    }
+    return;
+  }
+  if (glfwGetMouseButton(window_, drag_button_) != GLFW_PRESS) {
+    const bool click = std::abs(x - press_x_) + std::abs(y - press_y_) < 4;
+    if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && dragging_) {
+      gizmo_end();
+    } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && click && pick_ != Pick::None) {
+      Vec3 hit;
+      if (pick(x, y, hit)) {
+        if (pick_ == Pick::Region) {
+          region_center_ = hit;
+          region_set_ = true;
+          if (region_radius_ <= 0) region_radius_ = 0.25f * camera_.radius();
+        } else {
+          handle_center_ = hit;
+          handle_set_ = true;
+          if (handle_radius_ <= 0) handle_radius_ = 0.08f * camera_.radius();
+        }
+        update_selection_points();
+      }
+    }
+    drag_button_ = -1;
+    return;
+  }
+  if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && dragging_) {
+    const float world_per_pixel =
+        2.0f * camera_.distance() * std::tan(0.5f * 0.61f) / static_cast<float>(std::max(h, 1));
+    if (drag_mods_ & GLFW_MOD_SHIFT) {
+      angle_ = std::clamp(angle_ + static_cast<float>(dx) * 0.5f, -180.0f, 180.0f);
+    } else {
+      const Mat4 v = camera_.view();
+      const Vec3f right = v.block<1, 3>(0, 0).transpose(), up = v.block<1, 3>(1, 0).transpose();
+      const Vec3f delta = world_per_pixel * (static_cast<float>(dx) * right - static_cast<float>(dy) * up);
+      for (int k = 0; k < 3; ++k) translation_[static_cast<std::size_t>(k)] += delta[k];
+    }
+    if (dx != 0 || dy != 0) gizmo_update();
+  } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT) {
+    camera_.orbit(static_cast<float>(dx), static_cast<float>(dy));
+  } else {
+    camera_.pan(static_cast<float>(dx), static_cast<float>(dy), static_cast<float>(h));
+  }
+}
+
+void App::draw_scene(int width, int height) {
+  renderer_->begin_frame(width, height, Rgb(0.16f, 0.17f, 0.19f));
+  const Mat4 view = camera_.view();
+  const Mat4 projection =
+      camera_.projection(static_cast<float>(width) / static_cast<float>(std::max(height, 1)));
+  for (const auto& p : panels_) {
+    Mat4 model = Mat4::Identity();
+    model.block<3, 1>(0, 3) = p->offset.cast<float>();
+    renderer_->set_camera(view * model, projection);
+    renderer_->draw_mesh(p->mesh, style_);
+    if (!p->net.empty()) renderer_->draw_lines(p->net);
+    if (p->band == edit_band_ && !p->vectors && !selection_points_.empty() && !dragging_)
+      renderer_->draw_points(selection_points_, 6.0f);
+  }
+}
+
+void App::update_selection_points() {
+  selection_points_ = GpuLines();
+  if (!committed_ || (!region_set_ && !handle_set_)) return;
+  try {
+    const std::vector<Vec3>& points = committed_->band_points(edit_band_);
+    std::vector<char> in_region(points.size(), 0), in_handle(points.size(), 0);
+    if (region_set_) in_region = select_vertices(points, Selection::sphere(region_center_, region_radius_));
+    if (handle_set_) in_handle = select_vertices(points, Selection::sphere(handle_center_, handle_radius_));
+    std::vector<Vec3> p;
+    std::vector<Rgb> c;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (in_handle[i] && in_region[i]) {
+        p.push_back(points[i]);
+        c.push_back(Rgb(0.95f, 0.1f, 0.1f));
+      } else if (in_region[i]) {
+        p.push_back(points[i]);
+        c.push_back(Rgb(0.95f, 0.85f, 0.1f));
+      }
+    }
+    if (!p.empty()) selection_points_.upload(p, c);
+  } catch (const std::exception& e) {
+    status_ = e.what();
+    status_error_ = true;
+  }
+}
+
+EditTransform App::gizmo_transform() const {
+  Vec3 axis = axis_ == 3 ? view_axis_ : Vec3::Unit(axis_);
+  return EditTransform::rotation(axis, angle_, handle_center_,
+                                 Vec3(translation_[0], translation_[1], translation_[2]));
+}
+
+void App::gizmo_begin() {
+  if (dragging_ || !region_set_ || !handle_set_) return;
+  checkpoint();
+  translation_ = {0, 0, 0};
+  angle_ = 0;
+  worker_->begin_drag(edit_band_, Selection::sphere(region_center_, region_radius_),
+                      Selection::sphere(handle_center_, handle_radius_));
+  dragging_ = true;
+}
+
+void App::gizmo_update() {
+  if (dragging_) worker_->update_drag(gizmo_transform());
+}
+
+void App::gizmo_end() {
+  if (!dragging_) return;
+  worker_->end_drag();
+  dragging_ = false;
+}
+
+void App::checkpoint() {
+  if (!committed_) return;
+  undo_.push_back(committed_);
+  if (undo_.size() > 32) undo_.erase(undo_.begin());
+  redo_.clear();
+}
+
+void App::undo() {
+  if (undo_.empty() || dragging_ || worker_->busy()) return;
+  redo_.push_back(committed_);
+  committed_ = undo_.back();
+  undo_.pop_back();
+  worker_->replace(*committed_);
+  status_ = "undo";
+  status_error_ = false;
+}
+
+void App::redo() {
+  if (redo_.empty() || dragging_ || worker_->busy()) return;
+  undo_.push_back(committed_);
+  committed_ = redo_.back();
+  redo_.pop_back();
+  worker_->replace(*committed_);
+  status_ = "redo";
+  status_error_ = false;
+}
+
+void App::on_key(int key, int mods) {
+  const bool ctrl = mods & GLFW_MOD_CONTROL;
+  switch (key) {
+    case GLFW_KEY_F1:
+      show_help_ = !show_help_;
+      break;
+    case GLFW_KEY_F:
+      fit_view();
+      break;
+    case GLFW_KEY_1:
+      camera_.set_view(ViewPreset::Front);
+      break;
+    case GLFW_KEY_2:
+      camera_.set_view(ViewPreset::Back);
+      break;
+    case GLFW_KEY_3:
+      camera_.set_view(ViewPreset::Left);
+      break;
+    case GLFW_KEY_4:
+      camera_.set_view(ViewPreset::Right);
+      break;
+    case GLFW_KEY_5:
+      camera_.set_view(ViewPreset::Top);
+      break;
+    case GLFW_KEY_6:
+      camera_.set_view(ViewPreset::Bottom);
+      break;
+    case GLFW_KEY_7:
+      camera_.set_view(ViewPreset::Iso);
+      break;
+    case GLFW_KEY_W:
+      style_.wireframe = !style_.wireframe;
+      break;
+    case GLFW_KEY_S:
+      if (ctrl) {
+        worker_->save(save_path_.data());
+      } else {
+        style_.smooth = !style_.smooth;
+      }
+      break;
+    case GLFW_KEY_C:
+      view_.cage = !view_.cage, push_view();
+      break;
+    case GLFW_KEY_V:
+      view_.vectors = !view_.vectors, push_view();
+      break;
+    case GLFW_KEY_B:
+      view_.compare = !view_.compare, push_view();
+      break;
+    case GLFW_KEY_E:
+      if (ctrl) {
+        worker_->export_meshes(export_prefix_.data(), export_format_ == 0   ? ".obj"
+                                                      : export_format_ == 1 ? ".ply"
+                                                                            : ".off");
+      } else {
+        view_.color = view_.color == ColorMode::Error ? ColorMode::None : ColorMode::Error;
+        push_view();
+      }
+      break;
+    case GLFW_KEY_I:
+      view_.color = view_.color == ColorMode::Intersections ? ColorMode::None : ColorMode::Intersections;
+      push_view();
+      break;
+    case GLFW_KEY_R:
+      pick_ = pick_ == Pick::Region ? Pick::None : Pick::Region;
+      break;
+    case GLFW_KEY_H:
+      pick_ = pick_ == Pick::Handle ? Pick::None : Pick::Handle;
+      break;
+    case GLFW_KEY_Z:
+      if (ctrl && (mods & GLFW_MOD_SHIFT))
+        redo();
+      else if (ctrl)
+        undo();
+      break;
+    case GLFW_KEY_Y:
+      if (ctrl) redo();
+      break;
+    case GLFW_KEY_ESCAPE:
+      if (dragging_) {
+        worker_->cancel_drag();
+        dragging_ = false;
+        if (!undo_.empty()) undo_.pop_back();
+      }
+      pick_ = Pick::None;
+      break;
+    default:
+      break;
+  }
+}
+
+void App::on_scroll(double dy) {
+  scroll_ += dy;
+}
+
+void App::on_drop(const std::string& path) {
+  if (dragging_) return;
+  checkpoint();
+  copy_to(open_path_, path);
+  region_set_ = handle_set_ = false;
+  selection_points_ = GpuLines();
+  view_.visible.clear();
+  fitted_ = false;
+  worker_->load(path);
+}
+
+void App::run_script_step() {
+  // Each edit step: begin, options.frames update steps (one per frame, the worker taking the
+  // newest), end; then frames until the worker is idle.
+  if (script_done_ || !committed_) return;
+  if (script_waiting_) {
+    if (!worker_->busy()) {
+      script_waiting_ = false;
+      ++script_step_;
+      script_frame_ = 0;
+    }
+    return;
+  }
+  if (script_step_ >= script_.edits.size()) {
+    // One more frame after the last snapshot so the final picture is drawn.
+    script_done_ = true;
+    return;
+  }
+  const EditStep& step = script_.edits[script_step_];
+  if (script_frame_ == 0) {
+    checkpoint();
+    worker_->begin_drag(edit_band_, step.region, step.handle);
+    dragging_ = true;
+  }
+  ++script_frame_;
+  worker_->update_drag(
+      partial_transform(step.transform, static_cast<double>(script_frame_) / options_.frames));
+  // Orbit a little so every frame draws a new view, as a user's camera would.
+  camera_.orbit(2.0f, 0.0f);
+  if (script_frame_ >= options_.frames) {
+    worker_->end_drag();
+    dragging_ = false;
+    script_waiting_ = true;
+  }
+}
+
+int run_window(const Options& options) {
+  glfwSetErrorCallback(
+      [](int code, const char* text) { std::fprintf(stderr, "strata-viewer: GLFW %d: %s\n", code, text); });
+  if (!glfwInit())
+    throw std::runtime_error("cannot initialize GLFW (no display? use --screenshot for headless renders)");
+  struct Terminate {
+    ~Terminate() { glfwTerminate(); }
+  } terminate;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  const std::string title = "strata-viewer" + (options.input.empty() ? std::string() : " - " + options.input);
+  GLFWwindow* window = glfwCreateWindow(options.width, options.height, title.c_str(), nullptr, nullptr);
+  if (window == nullptr) throw std::runtime_error("cannot create an OpenGL 3.3 core window");
+  struct Destroy {
+    GLFWwindow* w;
+    ~Destroy() { glfwDestroyWindow(w); }
+  } destroy{window};
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(options.script_drag.empty() ? 1 : 0);
+  App app(options, window);
+  return app.run();
+}
+
+}  // namespace strata::viewer

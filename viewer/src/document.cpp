@@ -69,6 +69,11 @@ const layers::LayeredModel& Document::model() const {
   return *model_;
 }
 
+layers::LayeredModel& Document::mutable_model() {
+  if (!model_) throw InvalidInput(name_ + " is a plain mesh, not a layered model");
+  return *model_;
+}
+
 int Document::num_bands() const {
   return model_ ? model_->num_bands() : 1;
 }

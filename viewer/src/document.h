@@ -34,6 +34,8 @@ class Document {
   const std::string& name() const { return name_; }
   bool is_model() const { return model_.has_value(); }
   const layers::LayeredModel& model() const;
+  //! The model, for drags in place. \throw InvalidInput for a plain mesh.
+  layers::LayeredModel& mutable_model();
   int num_bands() const;
   int finest_band() const { return num_bands() - 1; }
   //! \throw InvalidInput "band K is out of range (NAME has N bands: 0 .. N-1)".

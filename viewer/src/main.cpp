@@ -6,10 +6,9 @@
 #include <exception>
 #include <iostream>
 
+#include "app.h"
 #include "headless.h"
 #include "options.h"
-
-int run_window(const strata::viewer::Options& options);
 
 int main(int argc, char** argv) {
   using namespace strata::viewer;
@@ -19,7 +18,7 @@ int main(int argc, char** argv) {
       std::cout << usage_text();
       return 0;
     }
-    if (!options.screenshot.empty()) {
+    if (!options.screenshot.empty() && options.script_drag.empty()) {
       std::cout << run_headless(options) << std::endl;
       return 0;
     }

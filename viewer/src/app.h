@@ -1,0 +1,129 @@
+//! \file app.h
+//! The interactive window (GLFW, OpenGL 3.3 core, Dear ImGui): bands side by side, the band
+//! panel (visibility, live amplitude, mute, the band to edit), sphere selections of region and
+//! handle on the edited band's points, a translate/rotate gizmo (Ctrl/Shift + drag, or sliders)
+//! whose drags run on the Worker thread, undo/redo, open/save/export, drag and drop, help (F1).
+//! With --script-drag it drives a drag over --frames frames and (--benchmark) prints the frame
+//! times as JSON.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "camera.h"
+#include "options.h"
+#include "renderer.h"
+#include "worker.h"
+
+struct GLFWwindow;
+
+namespace strata::viewer {
+
+//! Runs the window until it is closed (or the script ends). Returns the exit code.
+//! \throw std::runtime_error if no window or GL context can be made; strata::Error for the input.
+int run_window(const Options& options);
+
+class App {
+ public:
+  App(const Options& options, GLFWwindow* window);
+  ~App();
+  App(const App&) = delete;
+  App& operator=(const App&) = delete;
+  //! The main loop. Returns the exit code.
+  int run();
+
+  // GLFW callbacks (forwarded from static functions).
+  void on_key(int key, int mods);
+  void on_scroll(double dy);
+  void on_drop(const std::string& path);
+
+ private:
+  struct Panel {
+    GpuMesh mesh;
+    GpuLines net;
+    SceneData scene;  // CPU copy for picking
+    Vec3 offset = Vec3::Zero();
+    int band = 0;
+    bool vectors = false;
+  };
+  enum class Pick { None, Region, Handle };
+
+  void frame();
+  void take_snapshot();
+  void layout_panels(bool refit);
+  void handle_mouse();
+  void draw_scene(int width, int height);
+  void draw_ui();
+  void draw_band_panel();
+  void draw_edit_panel();
+  void draw_file_panel();
+  void draw_help();
+  void draw_status();
+  void update_selection_points();
+  bool pick(double x, double y, Vec3& hit) const;
+  EditTransform gizmo_transform() const;
+  void gizmo_begin();
+  void gizmo_update();
+  void gizmo_end();
+  void checkpoint();
+  void undo();
+  void redo();
+  void push_view();
+  void fit_view();
+  void run_script_step();
+
+  Options options_;
+  GLFWwindow* window_;
+  std::unique_ptr<Renderer> renderer_;
+  std::unique_ptr<Worker> worker_;
+  std::vector<std::unique_ptr<Panel>> panels_;
+  long long version_ = 0;
+  std::shared_ptr<const Document> committed_;
+  std::vector<std::shared_ptr<const Document>> undo_, redo_;
+  Camera camera_;
+  bool fitted_ = false;
+  ViewSettings view_;
+  MeshStyle style_;
+  std::string status_;
+  bool status_error_ = false;
+
+  // Editing.
+  int edit_band_ = 0;
+  Pick pick_ = Pick::None;
+  Vec3 region_center_ = Vec3::Zero(), handle_center_ = Vec3::Zero();
+  float region_radius_ = 0.0f, handle_radius_ = 0.0f;
+  bool region_set_ = false, handle_set_ = false;
+  GpuLines selection_points_;
+  bool dragging_ = false;
+  std::array<float, 3> translation_{0, 0, 0};
+  int axis_ = 0;  // 0 x, 1 y, 2 z, 3 view direction
+  float angle_ = 0.0f;
+  Vec3 view_axis_ = Vec3::UnitZ();
+
+  // Mouse.
+  double last_x_ = 0, last_y_ = 0, press_x_ = 0, press_y_ = 0;
+  int drag_button_ = -1;
+  int drag_mods_ = 0;
+  double scroll_ = 0;
+
+  // Panels.
+  bool show_help_ = false;
+  std::array<char, 512> open_path_{}, save_path_{}, export_prefix_{};
+  int export_format_ = 0;
+  int build_bands_ = 3;
+  std::vector<float> amplitudes_;  // UI copy while sliding
+
+  // Script and benchmark.
+  EditScript script_;
+  std::size_t script_step_ = 0;
+  int script_frame_ = 0;
+  bool script_waiting_ = false;
+  bool script_done_ = false;
+  std::vector<double> frame_ms_;
+  std::vector<char> frame_in_drag_;
+  long long frames_ = 0;
+};
+
+}  // namespace strata::viewer

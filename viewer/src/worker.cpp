@@ -1,0 +1,294 @@
+#include "worker.h"
+
+#include <exception>
+#include <utility>
+
+#include "strata/exceptions.h"
+#include "strata/layers/model.h"
+#include "strata/mesh_io.h"
+
+namespace strata::viewer {
+
+Worker::Worker(Document document) : doc_(std::move(document)) {
+  publish(true, "", false);
+  thread_ = std::thread([this] { run(); });
+}
+
+Worker::~Worker() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    queue_.clear();
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void Worker::post(Job job, bool commits, const std::string& coalesce_key) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!coalesce_key.empty() && !queue_.empty() && queue_.back().key == coalesce_key) {
+      queue_.back().job = std::move(job);  // only the newest step of a run of them waits
+    } else {
+      queue_.push_back({std::move(job), commits, coalesce_key});
+    }
+  }
+  wake_.notify_one();
+}
+
+void Worker::run() {
+  for (;;) {
+    Pending p;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      p = std::move(queue_.front());
+      queue_.pop_front();
+      running_job_ = true;
+      job_start_ = std::chrono::steady_clock::now();
+    }
+    std::string message;
+    bool error = false;
+    try {
+      message = p.job(doc_);
+    } catch (const std::exception& e) {
+      message = e.what();
+      error = true;
+    }
+    try {
+      publish(p.commits && !error, message, error);
+    } catch (const std::exception& e) {
+      publish(false, e.what(), true);
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      running_job_ = false;
+      if (queue_.empty()) idle_.notify_all();
+    }
+  }
+}
+
+void Worker::publish(bool commit, std::string message, bool error) {
+  Snapshot s;
+  const int n = doc_.num_bands();
+  std::vector<char> visible = view_.visible;
+  visible.resize(static_cast<std::size_t>(n), 0);
+  bool any = false;
+  for (char v : visible) any = any || v;
+  if (!any) visible[static_cast<std::size_t>(n - 1)] = 1;
+  // Colour maps cost a solve-sized pass (intersections: a BVH search): not during drag steps.
+  const bool dragging = (doc_.is_model() && doc_.model().dragging()) || mesh_dragging_;
+  for (int k = 0; k < n; ++k) {
+    if (!visible[static_cast<std::size_t>(k)]) continue;
+    SceneSettings settings;
+    settings.show = k;
+    settings.vectors = view_.vectors;
+    settings.color = dragging ? ColorMode::None : view_.color;
+    settings.error_scale = view_.error_scale;
+    settings.cage = view_.cage && k == 0;
+    s.panels.push_back(make_scene(doc_, settings));
+  }
+  if (view_.compare && !view_.vectors) {
+    SceneSettings settings;
+    settings.show = n - 1;
+    settings.vectors = true;
+    settings.color = dragging ? ColorMode::None : view_.color;
+    settings.error_scale = view_.error_scale;
+    s.panels.push_back(make_scene(doc_, settings));
+  }
+  if (commit) s.committed = std::make_shared<const Document>(doc_);
+  s.message = std::move(message);
+  s.error = error;
+  std::lock_guard<std::mutex> lock(mutex_);
+  s.version = snapshot_.version + 1;
+  // A commit not yet taken by the UI survives later drag-step snapshots.
+  if (!s.committed) s.committed = std::move(snapshot_.committed);
+  if (s.message.empty() && !s.error) {
+    s.message = std::move(snapshot_.message);
+    s.error = snapshot_.error;
+  }
+  snapshot_ = std::move(s);
+}
+
+std::optional<Snapshot> Worker::take(long long version) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (snapshot_.version <= version) return std::nullopt;
+  Snapshot s = std::move(snapshot_);
+  snapshot_ = Snapshot();
+  snapshot_.version = s.version;
+  return s;
+}
+
+bool Worker::busy(double* seconds) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (seconds != nullptr)
+    *seconds = running_job_
+                   ? std::chrono::duration<double>(std::chrono::steady_clock::now() - job_start_).count()
+                   : 0;
+  return running_job_ || !queue_.empty();
+}
+
+long long Worker::drag_steps() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return drag_steps_;
+}
+
+void Worker::wait_idle() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [&] { return !running_job_ && queue_.empty(); });
+}
+
+void Worker::set_view(const ViewSettings& settings) {
+  post(
+      [this, settings](Document&) {
+        view_ = settings;
+        return std::string();
+      },
+      false, "view");
+}
+
+void Worker::begin_drag(int band, const Selection& region, const Selection& handle) {
+  post(
+      [this, band, region, handle](Document& d) {
+        d.check_band(band);
+        if (d.is_model()) {
+          d.mutable_model().begin_drag(band, region, handle);
+        } else {
+          const TriMesh mesh = d.band_mesh(0);
+          mesh_editor_ = std::make_unique<RegionEditor>(mesh, select_vertices(mesh.vertices, region),
+                                                        select_vertices(mesh.vertices, handle));
+          mesh_editor_->begin_drag();
+          mesh_dragging_ = true;
+        }
+        return std::string();
+      },
+      false);
+}
+
+void Worker::update_drag(const EditTransform& transform) {
+  post(
+      [this, transform](Document& d) {
+        if (d.is_model()) {
+          if (!d.model().dragging()) throw InvalidInput("no drag is active");
+          // The model is only reachable const through the document: drag on it in place.
+          d.mutable_model().update_drag(transform);
+        } else {
+          if (!mesh_editor_) throw InvalidInput("no drag is active");
+          d.set_mesh_positions(mesh_editor_->update_drag(transform));
+        }
+        last_transform_ = transform;
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++drag_steps_;
+        return std::string();
+      },
+      false, "drag");
+}
+
+void Worker::end_drag() {
+  post(
+      [this](Document& d) {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (d.is_model()) {
+          if (!d.model().dragging()) return std::string();
+          d.mutable_model().end_drag(R"({"source": "strata-viewer", "op": "drag"})");
+        } else if (mesh_editor_) {
+          EditResult r = mesh_editor_->end_drag();
+          d.set_mesh_positions(std::move(r.positions));
+          mesh_editor_.reset();
+          mesh_dragging_ = false;
+        }
+        return "exact solve: " +
+               std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()) +
+               " s";
+      },
+      true);
+}
+
+void Worker::cancel_drag() {
+  post(
+      [this](Document& d) {
+        if (d.is_model()) {
+          d.mutable_model().cancel_drag();
+        } else if (mesh_editor_) {
+          d.set_mesh_positions(mesh_editor_->mesh().vertices);
+          mesh_editor_.reset();
+          mesh_dragging_ = false;
+        }
+        return std::string("drag cancelled");
+      },
+      false);
+}
+
+void Worker::set_amplitude(int band, double amplitude) {
+  post(
+      [band, amplitude](Document& d) {
+        d.set_amplitude(band, amplitude);
+        return std::string();
+      },
+      true, "amplitude " + std::to_string(band));
+}
+
+void Worker::edit(int band, const EditStep& step) {
+  post(
+      [band, step](Document& d) {
+        d.edit(band, step, R"({"source": "strata-viewer", "op": "edit"})");
+        return std::string("edit applied to band ") + std::to_string(band);
+      },
+      true);
+}
+
+void Worker::replace(Document document) {
+  auto shared = std::make_shared<Document>(std::move(document));
+  post(
+      [this, shared](Document& d) {
+        mesh_editor_.reset();
+        mesh_dragging_ = false;
+        d = *shared;
+        return std::string();
+      },
+      false);
+}
+
+void Worker::load(const std::string& path) {
+  post(
+      [this, path](Document& d) {
+        Document loaded = Document::load(path);
+        mesh_editor_.reset();
+        mesh_dragging_ = false;
+        view_.visible.clear();
+        d = std::move(loaded);
+        return "opened " + path;
+      },
+      true);
+}
+
+void Worker::build_layers(int bands) {
+  post(
+      [bands](Document& d) {
+        d = viewer::build_layers(d, bands);
+        return "built a model of " + std::to_string(bands) + " bands";
+      },
+      true);
+}
+
+void Worker::save(const std::string& path) {
+  post(
+      [path](Document& d) {
+        layers::write_model(d.model(), path);
+        return "saved " + path;
+      },
+      false);
+}
+
+void Worker::export_meshes(const std::string& prefix, const std::string& extension) {
+  post(
+      [prefix, extension](Document& d) {
+        for (int k = 0; k < d.num_bands(); ++k)
+          write_mesh(d.band_mesh(k), prefix + "_band" + std::to_string(k) + extension);
+        return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension;
+      },
+      false);
+}
+
+}  // namespace strata::viewer

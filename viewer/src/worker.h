@@ -1,0 +1,105 @@
+//! \file worker.h
+//! The reconstruction thread of the window: it owns the working Document and runs every edit,
+//! drag step, amplitude change and rebuild off the UI thread. The UI posts requests (drag steps
+//! and amplitudes are coalesced: only the newest one waits) and takes the newest Snapshot under
+//! a mutex each frame, so the camera never waits for a solve. No OpenGL here.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "document.h"
+#include "scene.h"
+
+namespace strata::viewer {
+
+//! What the window draws, as of one worker state.
+struct Snapshot {
+  long long version = 0;
+  //! One scene per visible band (band order), then the vectors comparison if requested.
+  std::vector<SceneData> panels;
+  //! Set after an operation that finished (not a drag step): the document for undo and saving.
+  std::shared_ptr<const Document> committed;
+  std::string message;  //!< the last operation's outcome or error ("" if none)
+  bool error = false;
+};
+
+//! What the panels show (the UI's settings, applied by the worker).
+struct ViewSettings {
+  std::vector<char> visible;  //!< per band; empty: the finest band only
+  bool vectors = false;       //!< show bands rebuilt by displacement vectors instead
+  bool compare = false;       //!< add the finest band by displacement vectors beside it
+  ColorMode color = ColorMode::None;
+  double error_scale = 0.05;
+  bool cage = true;
+};
+
+class Worker {
+ public:
+  explicit Worker(Document document);
+  ~Worker();  //!< stops the thread after the running job (pending ones are dropped)
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+
+  // Requests; each returns at once. Errors come back in Snapshot::message.
+  void set_view(const ViewSettings& settings);
+  void begin_drag(int band, const Selection& region, const Selection& handle);
+  void update_drag(const EditTransform& transform);  //!< coalesced
+  void end_drag();
+  void cancel_drag();
+  void set_amplitude(int band, double amplitude);  //!< coalesced per band
+  void edit(int band, const EditStep& step);
+  void replace(Document document);  //!< undo, redo, open
+  void load(const std::string& path);
+  void build_layers(int bands);
+  void save(const std::string& path);
+  void export_meshes(const std::string& path_prefix, const std::string& extension);
+
+  //! The newest snapshot if it is newer than \p version, else nothing.
+  std::optional<Snapshot> take(long long version);
+  //! Whether a job runs or waits, and for how long the current one has run.
+  bool busy(double* seconds = nullptr) const;
+  //! Drag steps completed since the start (for the benchmark).
+  long long drag_steps() const;
+  //! Blocks until no job runs or waits.
+  void wait_idle();
+
+ private:
+  //! A job returns its success message ("" for none) or throws.
+  using Job = std::function<std::string(Document&)>;
+  void post(Job job, bool commits, const std::string& coalesce_key = "");
+  void run();
+  void publish(bool commit, std::string message, bool error);
+
+  struct Pending {
+    Job job;
+    bool commits = false;
+    std::string key;
+  };
+
+  Document doc_;  // worker thread only (and the constructor)
+  ViewSettings view_;
+  // Plain meshes are dragged with a RegionEditor kept between steps.
+  std::unique_ptr<RegionEditor> mesh_editor_;
+  EditTransform last_transform_;
+  bool mesh_dragging_ = false;
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::deque<Pending> queue_;
+  bool running_job_ = false, stop_ = false;
+  std::chrono::steady_clock::time_point job_start_;
+  Snapshot snapshot_;
+  long long drag_steps_ = 0;
+  std::thread thread_;
+};
+
+}  // namespace strata::viewer
