@@ -168,9 +168,17 @@ int App::run() {
     r["frames"] = stats(all);
     r["drag_frames"] = stats(drag_ms);
     r["drag_steps_solved"] = worker_->drag_steps();
+    r["drag_step_mean_s"] =
+        worker_->drag_seconds() / static_cast<double>(std::max(1LL, worker_->drag_steps()));
     r["triangles"] = 0;
     for (const auto& p : panels_) r["triangles"] = r["triangles"].get<int>() + p->mesh.triangles();
     r["gl_errors"] = gl_error_count();
+    const double n = static_cast<double>(std::max<std::size_t>(frame_ms_.size(), 1));
+    r["phase_mean_ms"] = {{"snapshot", 1e3 * phase_s_[0] / n},
+                          {"ui", 1e3 * phase_s_[1] / n},
+                          {"scene", 1e3 * phase_s_[2] / n},
+                          {"imgui_draw", 1e3 * phase_s_[3] / n},
+                          {"swap", 1e3 * phase_s_[4] / n}};
     r["frame_ms"] = frame_ms_;
     r["status"] = status_;
     std::cout << r.dump() << std::endl;
@@ -182,19 +190,31 @@ int App::run() {
 }
 
 void App::frame() {
+  const bool timing = options_.benchmark;
+  auto t = Clock::now();
+  auto lap = [&](int phase) {
+    if (!timing) return;  // CPU-side times: the GPU work of a frame lands in the swap
+    const auto now = Clock::now();
+    phase_s_[static_cast<std::size_t>(phase)] += std::chrono::duration<double>(now - t).count();
+    t = now;
+  };
   glfwPollEvents();
   take_snapshot();
   if (!options_.script_drag.empty()) run_script_step();
+  lap(0);
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   handle_mouse();
   draw_ui();
   ImGui::Render();
+  lap(1);
   int width = 0, height = 0;
   glfwGetFramebufferSize(window_, &width, &height);
   draw_scene(width, height);
+  lap(2);
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  lap(3);
   check_gl_errors("frame");
   if (script_done_ && !options_.screenshot.empty()) {
     std::vector<unsigned char> pixels(4 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
@@ -212,6 +232,7 @@ void App::frame() {
     });
   }
   glfwSwapBuffers(window_);
+  lap(4);
 }
 
 void App::take_snapshot() {
@@ -592,7 +613,8 @@ void App::on_drop(const std::string& path) {
 void App::run_script_step() {
   // Each edit step: begin, options.frames update steps (one per frame, the worker taking the
   // newest), end; then frames until the worker is idle.
-  if (script_done_ || !committed_) return;
+  // Starts once the first picture is up (its upload and shader compiles are not drag frames).
+  if (script_done_ || !committed_ || frames_ < 3) return;
   if (script_waiting_) {
     if (!worker_->busy()) {
       script_waiting_ = false;

@@ -122,6 +122,7 @@ class App {
   bool script_waiting_ = false;
   bool script_done_ = false;
   std::vector<double> frame_ms_;
+  std::array<double, 5> phase_s_{};  // snapshot, ui, scene, imgui draw, swap (benchmark)
   std::vector<char> frame_in_drag_;
   long long frames_ = 0;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <map>
 
 namespace strata::viewer {
 
@@ -113,6 +114,20 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
   }
   glBindVertexArray(vao_.get());
   vertex_count_ = static_cast<int>(vertices.size());
+  std::vector<int> gpu_index(vertices.size(), -1);
+  order_.clear();
+  order_.reserve(vertices.size());
+  for (const Face& f : faces)
+    for (int v : f)
+      if (gpu_index[static_cast<std::size_t>(v)] < 0) {
+        gpu_index[static_cast<std::size_t>(v)] = static_cast<int>(order_.size());
+        order_.push_back(v);
+      }
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (gpu_index[v] < 0) {
+      gpu_index[v] = static_cast<int>(order_.size());
+      order_.push_back(static_cast<int>(v));
+    }
   update_positions(vertices, faces);
   glBindVertexArray(vao_.get());
   glBindBuffer(GL_ARRAY_BUFFER, positions_.get());
@@ -120,7 +135,8 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
   attribute(1, 3, 6 * sizeof(float), 3 * sizeof(float));
   if (color_mode_ == 1) {
     std::vector<float> c(3 * colors.size());
-    for (std::size_t i = 0; i < colors.size(); ++i) put(&c[3 * i], colors[i]);
+    for (std::size_t i = 0; i < colors.size(); ++i)
+      put(&c[3 * i], colors[static_cast<std::size_t>(order_[i])]);
     glBindBuffer(GL_ARRAY_BUFFER, colors_.get());
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(c.size() * sizeof(float)), c.data(),
                  GL_STATIC_DRAW);
@@ -131,12 +147,21 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
   }
   std::vector<GLuint> idx(3 * faces.size());
   for (std::size_t f = 0; f < faces.size(); ++f)
-    for (int c = 0; c < 3; ++c) idx[3 * f + c] = static_cast<GLuint>(faces[f][c]);
+    for (int c = 0; c < 3; ++c)
+      idx[3 * f + c] = static_cast<GLuint>(gpu_index[static_cast<std::size_t>(faces[f][c])]);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices_.get());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)), idx.data(),
                GL_STATIC_DRAW);
   glBindVertexArray(0);
   triangles_ = static_cast<int>(faces.size());
+  // Closed: every undirected edge used by exactly two faces (then back faces are never seen).
+  {
+    std::map<std::pair<int, int>, int> uses;
+    for (const Face& f : faces)
+      for (int c = 0; c < 3; ++c) ++uses[{std::min(f[c], f[(c + 1) % 3]), std::max(f[c], f[(c + 1) % 3])}];
+    closed_ = !faces.empty();
+    for (const auto& [edge, n] : uses) closed_ = closed_ && n == 2;
+  }
   if (color_mode_ == 2) {
     std::vector<unsigned char> c(4 * colors.size());
     for (std::size_t i = 0; i < colors.size(); ++i)
@@ -159,8 +184,9 @@ void GpuMesh::update_positions(const std::vector<Vec3>& vertices, const std::vec
   const std::vector<Vec3> normals = vertex_normals(vertices, faces);
   std::vector<float> data(6 * vertices.size());
   for (std::size_t i = 0; i < vertices.size(); ++i) {
-    put(&data[6 * i], vertices[i]);
-    put(&data[6 * i + 3], normals[i]);
+    const auto v = static_cast<std::size_t>(order_[i]);
+    put(&data[6 * i], vertices[v]);
+    put(&data[6 * i + 3], normals[v]);
   }
   glBindBuffer(GL_ARRAY_BUFFER, positions_.get());
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
@@ -240,7 +266,10 @@ void Renderer::draw_mesh(const GpuMesh& mesh, const MeshStyle& style) {
   // Pushed back a little so that the wireframe, lines and points on the surface win the depth test.
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.0f, 1.0f);
+  // Back faces of a closed mesh are hidden anyway: culling them halves llvmpipe's triangle setup.
+  if (mesh.closed()) glEnable(GL_CULL_FACE);
   mesh.draw();
+  glDisable(GL_CULL_FACE);
   glDisable(GL_POLYGON_OFFSET_FILL);
   glBindTexture(GL_TEXTURE_BUFFER, 0);
   if (style.wireframe) {

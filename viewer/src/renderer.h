@@ -37,12 +37,18 @@ class GpuMesh {
   bool empty() const { return triangles_ == 0; }
   //! 0: uniform colour, 1: per vertex, 2: per face.
   int color_mode() const { return color_mode_; }
+  //! Every edge has exactly two faces: back faces are culled.
+  bool closed() const { return closed_; }
   const Rgb& color() const { return color_; }
   GLuint face_color_texture() const { return face_texture_.get(); }
 
  private:
   GlName vao_, positions_, colors_, indices_, face_buffer_, face_texture_;
+  // Vertices are stored in order of first use by the faces (locality for llvmpipe's vertex
+  // cache): order_[gpu index] = mesh index.
+  std::vector<int> order_;
   int triangles_ = 0, vertex_count_ = 0, color_mode_ = 0;
+  bool closed_ = false;
   Rgb color_ = Rgb(1, 1, 1);
 };
 

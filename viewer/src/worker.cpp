@@ -1,5 +1,10 @@
 #include "worker.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <exception>
 #include <utility>
 
@@ -37,6 +42,10 @@ void Worker::post(Job job, bool commits, const std::string& coalesce_key) {
 }
 
 void Worker::run() {
+  // Below the UI thread (and llvmpipe's rasterizer threads) in priority, so that drawing frames
+  // wins the CPU on small machines; threads the solvers start inherit it.
+  errno = 0;
+  if (setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10) != 0) errno = 0;
   for (;;) {
     Pending p;
     {
@@ -134,6 +143,11 @@ long long Worker::drag_steps() const {
   return drag_steps_;
 }
 
+double Worker::drag_seconds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return drag_seconds_;
+}
+
 void Worker::wait_idle() {
   std::unique_lock<std::mutex> lock(mutex_);
   idle_.wait(lock, [&] { return !running_job_ && queue_.empty(); });
@@ -169,6 +183,7 @@ void Worker::begin_drag(int band, const Selection& region, const Selection& hand
 void Worker::update_drag(const EditTransform& transform) {
   post(
       [this, transform](Document& d) {
+        const auto t0 = std::chrono::steady_clock::now();
         if (d.is_model()) {
           if (!d.model().dragging()) throw InvalidInput("no drag is active");
           // The model is only reachable const through the document: drag on it in place.
@@ -180,6 +195,7 @@ void Worker::update_drag(const EditTransform& transform) {
         last_transform_ = transform;
         std::lock_guard<std::mutex> lock(mutex_);
         ++drag_steps_;
+        drag_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         return std::string();
       },
       false, "drag");

@@ -69,6 +69,8 @@ class Worker {
   bool busy(double* seconds = nullptr) const;
   //! Drag steps completed since the start (for the benchmark).
   long long drag_steps() const;
+  //! Seconds spent in drag steps since the start.
+  double drag_seconds() const;
   //! Blocks until no job runs or waits.
   void wait_idle();
 
@@ -99,6 +101,7 @@ class Worker {
   std::chrono::steady_clock::time_point job_start_;
   Snapshot snapshot_;
   long long drag_steps_ = 0;
+  double drag_seconds_ = 0.0;
   std::thread thread_;
 };
 
