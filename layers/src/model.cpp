@@ -108,6 +108,7 @@ struct PartSolve {
   std::vector<int> vertices;     // part vertex -> band vertex
   std::unique_ptr<VolumeReconstructor> reconstructor;
   std::vector<Vec3> current;     // part positions (pinned ones fixed), warm start of drag steps
+  BaseFrames previous;           // the base frames of the last drag step
 
   PartSolve(const Band& band, const std::vector<char>& solve, const ModelOptions& o) {
     std::vector<int> faces;
@@ -149,11 +150,21 @@ struct PartSolve {
     return r;
   }
 
-  // One interactive step (section 5): warm-started from the previous step, volumes on the coarse
-  // levels only.
+  // One interactive step (section 5): warm-started from the previous step's solution carried
+  // along with its base frames (each displacement keeps its components in its frame), volumes on
+  // the coarse levels only.
   void solve_drag(const std::vector<Vec3>& base, double amplitude) {
     const BaseFrames frames = evaluate_base_frames(part, base);
     if (reconstructor) {
+      if (!previous.points.empty())
+        for (std::size_t v = 0; v < current.size(); ++v) {
+          if (part.pinned[v]) continue;
+          const Vec3 d = current[v] - previous.points[v];
+          const Vec3 &t0 = previous.tangents[v], &n0 = previous.normals[v], b0 = n0.cross(t0);
+          const Vec3 &t1 = frames.tangents[v], &n1 = frames.normals[v], b1 = n1.cross(t1);
+          current[v] = frames.points[v] + d.dot(t0) * t1 + d.dot(b0) * b1 + d.dot(n0) * n1;
+        }
+      previous = frames;
       ReconstructRequest req;
       req.amplitude = amplitude;
       req.pinned_positions = &current;

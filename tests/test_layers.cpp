@@ -1,0 +1,421 @@
+// Layered models (issue 5): building from real scans, lossless export, the cascade after band
+// edits and amplitude changes, .strata round trips, and corrupted .strata files.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "strata/edit_script.h"
+#include "strata/exceptions.h"
+#include "strata/intersections.h"
+#include "strata/layers/model.h"
+#include "strata/layers/strata_file.h"
+#include "strata/mesh_io.h"
+#include "strata/metrics.h"
+
+namespace strata {
+namespace {
+
+namespace fs = std::filesystem;
+using layers::LayeredModel;
+
+std::string scan_path(const std::string& name) { return std::string(STRATA_ASSETS_DIR) + "/scans/" + name + ".off"; }
+
+TriMesh read_scan(const std::string& name) {
+  const std::string path = scan_path(name);
+  if (!std::ifstream(path).good()) ADD_FAILURE() << path << " is missing: run tools/setup.sh (tools/fetch_scans.sh)";
+  return read_mesh(path);
+}
+
+bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
+}
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double d = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
+  return d;
+}
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() / ("strata_layers_" + std::to_string(::getpid()) + "_" +
+                                        std::to_string(std::random_device{}()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+// One model per scan, built once for the whole suite (a build takes about a second).
+const LayeredModel& model_of(const std::string& scan) {
+  static std::map<std::string, LayeredModel> models;
+  auto it = models.find(scan);
+  if (it == models.end()) it = models.emplace(scan, LayeredModel::build(read_scan(scan))).first;
+  return it->second;
+}
+
+// --- Lossless build and file round trip, on every test scan --------------------------------------
+
+class LayersOnScan : public testing::TestWithParam<const char*> {};
+
+TEST_P(LayersOnScan, FinestBandIsTheScanBitForBitThroughFileAndExport) {
+  const TriMesh scan = read_scan(GetParam());
+  const LayeredModel& model = model_of(GetParam());
+  ASSERT_EQ(model.num_bands(), 3);
+  const TriMesh& finest = model.band(2).mesh;
+  EXPECT_EQ(finest.faces, scan.faces);
+  EXPECT_TRUE(same_bits(finest.vertices, scan.vertices));
+
+  TempDir tmp;
+  layers::write_model(model, tmp.file("m.strata"));
+  const LayeredModel back = layers::read_model(tmp.file("m.strata"));
+  EXPECT_EQ(back.band(2).mesh.faces, scan.faces);
+  EXPECT_TRUE(same_bits(back.band(2).mesh.vertices, scan.vertices));
+  // Exported as OBJ (what `strata export` writes) and read back: still the scan.
+  write_mesh(back.band_mesh(2), tmp.file("finest.obj"));
+  const TriMesh exported = read_mesh(tmp.file("finest.obj"));
+  EXPECT_EQ(exported.faces, scan.faces);
+  EXPECT_TRUE(same_bits(exported.vertices, scan.vertices));
+
+  // The whole model reads back bit for bit: every band, its encoding's derived arrays included.
+  EXPECT_TRUE(same_bits(back.band(0).cage.vertices, model.band(0).cage.vertices));
+  EXPECT_EQ(back.band(0).cage.faces, model.band(0).cage.faces);
+  for (int k = 1; k < 3; ++k) {
+    const DetailEncoding& a = model.band(k).encoding;
+    const DetailEncoding& b = back.band(k).encoding;
+    EXPECT_TRUE(same_bits(a.target_volumes, b.target_volumes)) << "band " << k;
+    EXPECT_TRUE(same_bits(a.normal_offsets, b.normal_offsets)) << "band " << k;
+    EXPECT_TRUE(same_bits(a.weights, b.weights)) << "band " << k;
+    EXPECT_TRUE(same_bits(a.base_rest_points, b.base_rest_points)) << "band " << k;
+    EXPECT_EQ(a.report.num_fallback, b.report.num_fallback);
+  }
+}
+
+TEST_P(LayersOnScan, BandsGetCoarserAndSmootherAndEncodeWell) {
+  const LayeredModel& model = model_of(GetParam());
+  const int nv = model.band(2).mesh.num_vertices();
+  EXPECT_LT(model.band(0).cage.num_faces(), model.band(1).mesh.num_faces());
+  EXPECT_LT(model.band(1).mesh.num_faces(), model.band(2).mesh.num_faces());
+  EXPECT_TRUE(model.band(1).encoding.over_limit_surface());
+  EXPECT_FALSE(model.band(2).encoding.over_limit_surface());
+  // Fewer than 1% of the vertices of each band miss their normal projection (they keep their
+  // tangential offsets: nothing is lost, see the bit-for-bit test).
+  EXPECT_LE(model.band(1).encoding.report.num_fallback, 0.01 * model.band(1).mesh.num_vertices());
+  EXPECT_LE(model.band(2).encoding.report.num_fallback, 0.01 * nv);
+  // Each band's detail is small against the model: under 3% of the bounding-box diagonal (RMS).
+  const double diag = bbox_diagonal(model.band(2).mesh.vertices);
+  for (int k = 1; k < 3; ++k) {
+    const layers::DetailMagnitude m = model.detail_magnitude(k);
+    EXPECT_GT(m.rms, 0.0);
+    EXPECT_LT(m.rms, 0.03 * diag) << "band " << k;
+    EXPECT_LE(m.rms, m.max);
+  }
+  EXPECT_GT(model.detail_magnitude(0).mean_edge_length, model.detail_magnitude(1).mean_edge_length);
+  EXPECT_GT(model.detail_magnitude(1).mean_edge_length, model.detail_magnitude(2).mean_edge_length);
+}
+
+INSTANTIATE_TEST_SUITE_P(RealScans, LayersOnScan, testing::Values("camel", "man", "armadillo", "bear"),
+                         [](const testing::TestParamInfo<const char*>& i) { return std::string(i.param); });
+
+// --- Amplitudes ----------------------------------------------------------------------------------
+
+TEST(Layers, MutingABandAndRestoringItGivesTheOriginalBack) {
+  LayeredModel model = model_of("bear");
+  const std::vector<Vec3> original = model.band(2).mesh.vertices;
+  const double diag = bbox_diagonal(original);
+  const layers::CascadeReport muted = model.set_amplitude(1, 0.0);
+  // Band 1 lies on the cage's limit surface: its prisms are flat.
+  const DetailEncoding& e1 = model.band(1).encoding;
+  const BaseFrames f1 = evaluate_base_frames(e1, model.band(0).cage.vertices);
+  EXPECT_LT(max_distance(model.band(1).mesh.vertices, f1.points), 1e-12 * diag);
+  // Band 2 was rebuilt over the flattened band 1 with its own prism volumes.
+  ASSERT_EQ(muted.rebuilt.size(), 2u);
+  EXPECT_EQ(muted.rebuilt[1].band, 2);
+  EXPECT_LE(muted.rebuilt[1].volume.max_relative_error, 1e-3);
+  EXPECT_LE(muted.rebuilt[1].volume.rms_relative_error, 1e-4);
+  EXPECT_GT(max_distance(model.band(2).mesh.vertices, original), 2e-3 * diag) << "muting band 1 changed nothing";
+  model.set_amplitude(1, 1.0);
+  EXPECT_LE(max_distance(model.band(2).mesh.vertices, original), 1e-3 * diag);
+  EXPECT_TRUE(same_bits(model.band(2).mesh.vertices, original));
+}
+
+TEST(Layers, AmplitudeScalesTheBandsPrismVolumes) {
+  LayeredModel model = model_of("bear");
+  for (double a : {2.0, 0.5, -1.0}) {
+    LayeredModel m = model;
+    const layers::CascadeReport r = m.set_amplitude(2, a);
+    ASSERT_EQ(r.rebuilt.size(), 1u);
+    const DetailEncoding& e = m.band(2).encoding;
+    const BaseFrames f = evaluate_base_frames(e, m.band(1).mesh.vertices);
+    const VolumeMetrics v = volume_metrics(e, f, m.band(2).mesh.vertices, a);
+    EXPECT_LE(v.max_relative_error, 1e-3) << "amplitude " << a;
+    EXPECT_LE(v.rms_relative_error, 1e-4) << "amplitude " << a;
+    EXPECT_LE(std::abs(v.total_volume_change), 1e-3) << "amplitude " << a;
+    // The displacement from band 1 scales with the amplitude (RMS over the vertices).
+    double d2 = 0.0, r2 = 0.0;
+    for (int i = 0; i < e.num_detail_vertices(); ++i) {
+      d2 += (m.band(2).mesh.vertices[i] - f.points[i]).squaredNorm();
+      r2 += (e.detail_rest[i] - e.base_rest_points[i]).squaredNorm();
+    }
+    EXPECT_NEAR(std::sqrt(d2 / r2), std::abs(a), 0.25 * std::abs(a)) << "amplitude " << a;
+  }
+}
+
+TEST(Layers, BadAmplitudesAndBandsAreRejected) {
+  LayeredModel model = model_of("camel");
+  EXPECT_THROW(model.set_amplitude(0, 0.5), InvalidInput);
+  EXPECT_THROW(model.set_amplitude(3, 0.5), InvalidInput);
+  EXPECT_THROW(model.set_amplitude(1, std::nan("")), InvalidInput);
+  EXPECT_THROW(model.band(-1), InvalidInput);
+  EditStep step;
+  step.region = Selection::sphere(Vec3(100, 100, 100), 0.01);
+  step.handle = step.region;
+  EXPECT_THROW(model.edit(0, step), InvalidInput);  // empty selections
+  EXPECT_TRUE(same_bits(model.band(2).mesh.vertices, model_of("camel").band(2).mesh.vertices));
+  EXPECT_EQ(model.history().size(), model_of("camel").history().size());
+}
+
+// --- Edits and the cascade ---------------------------------------------------------------------
+
+EditStep camel_neck_bend() {
+  const EditScript s = read_edit_script(std::string(STRATA_TEST_DATA_DIR) + "/edits/camel_neck.json");
+  return s.edits.at(0);
+}
+
+TEST(Layers, NinetyDegreeNeckBendAtBandZeroAddsNoIntersectionsToTheFinestBand) {
+  LayeredModel model = model_of("camel");
+  const TriMesh before = model.band(2).mesh;
+  const std::vector<Vec3> cage_before = model.band(0).cage.vertices;
+  const EditStep step = camel_neck_bend();
+  const layers::CascadeReport r = model.edit(0, step);
+  ASSERT_EQ(r.rebuilt.size(), 2u);
+  for (const layers::BandRebuild& b : r.rebuilt) {
+    EXPECT_GT(b.solved_vertices, 0) << "band " << b.band;
+    EXPECT_LE(b.volume.max_relative_error, 1e-3) << "band " << b.band;
+    EXPECT_LE(b.volume.rms_relative_error, 1e-4) << "band " << b.band;
+  }
+  // The head turned: the handle's cage vertices moved by the full 90-degree map.
+  const std::vector<char> handle = select_vertices(cage_before, step.handle);
+  const std::vector<char> region = select_vertices(cage_before, step.region);
+  for (std::size_t v = 0; v < handle.size(); ++v)
+    if (handle[v] && region[v]) {
+      EXPECT_LT((model.band(0).cage.vertices[v] - step.transform.apply(cage_before[v])).norm(), 1e-12);
+    }
+  // Vertices whose base did not move kept their positions bit for bit.
+  int kept = 0;
+  for (int i = 0; i < before.num_vertices(); ++i) kept += before.vertices[i] == model.band(2).mesh.vertices[i];
+  EXPECT_GT(kept, before.num_vertices() / 3);
+  const IntersectionResult in = find_self_intersections(before.vertices, before.faces, {true});
+  const IntersectionResult out = find_self_intersections(model.band(2).mesh.vertices, before.faces, {true});
+  EXPECT_EQ(count_new_intersections(in, out), 0u);
+  EXPECT_EQ(model.history().size(), model_of("camel").history().size() + 1);
+}
+
+TEST(Layers, EditOfAnIntermediateBandIsReencodedAndTheFinerBandFollows) {
+  LayeredModel model = model_of("camel");
+  const TriMesh band1 = model.band(1).mesh;
+  const std::vector<Vec3> finest = model.band(2).mesh.vertices;
+  EditStep step = camel_neck_bend();
+  step.transform = EditTransform::rotation(Vec3(1, 0, 0), 30.0, step.transform.pivot);
+  const layers::CascadeReport r = model.edit(1, step);
+  // Band 1 is re-encoded at its edited positions: they are its new rest, amplitude 1.
+  EXPECT_TRUE(same_bits(model.band(1).mesh.vertices, model.band(1).encoding.detail_rest));
+  EXPECT_FALSE(same_bits(model.band(1).mesh.vertices, band1.vertices));
+  EXPECT_EQ(model.band(1).amplitude, 1.0);
+  EXPECT_LE(r.edit_volume.max_relative_error, 1e-3);
+  ASSERT_EQ(r.rebuilt.size(), 1u);
+  EXPECT_EQ(r.rebuilt[0].band, 2);
+  EXPECT_LE(r.rebuilt[0].volume.max_relative_error, 1e-3);
+  EXPECT_GT(max_distance(model.band(2).mesh.vertices, finest), 1e-2 * bbox_diagonal(finest));
+}
+
+TEST(Layers, SavedModelsContinueEditingExactlyAsInMemory) {
+  LayeredModel model = model_of("camel");
+  model.set_amplitude(2, 1.5);
+  TempDir tmp;
+  layers::write_model(model, tmp.file("a.strata"));
+  LayeredModel back = layers::read_model(tmp.file("a.strata"));
+  EXPECT_TRUE(same_bits(back.band(2).mesh.vertices, model.band(2).mesh.vertices));
+  EXPECT_EQ(back.band(2).amplitude, 1.5);
+  EXPECT_EQ(back.history(), model.history());
+  const EditStep step = camel_neck_bend();
+  model.edit(0, step);
+  back.edit(0, step);
+  for (int k = 1; k < 3; ++k) EXPECT_TRUE(same_bits(back.band(k).mesh.vertices, model.band(k).mesh.vertices)) << k;
+}
+
+TEST(Layers, DragPreviewsThenEndsWithTheExactEdit) {
+  LayeredModel model = model_of("camel");
+  LayeredModel exact = model;
+  const EditStep step = camel_neck_bend();
+  exact.edit(0, step);
+  model.begin_drag(0, step.region, step.handle);
+  EXPECT_TRUE(model.dragging());
+  EXPECT_THROW(model.set_amplitude(1, 0.5), InvalidInput);
+  const std::vector<Vec3> rest = model.band(2).mesh.vertices;
+  for (double a = 6.0; a <= 90.0; a += 6.0) {
+    model.update_drag(EditTransform::rotation(Vec3(1, 0, 0), a, step.transform.pivot));
+    EXPECT_FALSE(same_bits(model.band(2).mesh.vertices, rest));
+  }
+  // The preview is close to the exact result (coarse levels only), the end is the exact edit.
+  EXPECT_LT(max_distance(model.band(2).mesh.vertices, exact.band(2).mesh.vertices), 0.05 * bbox_diagonal(rest));
+  model.end_drag();
+  EXPECT_FALSE(model.dragging());
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(model.band_points(k), exact.band_points(k))) << k;
+  // A cancelled drag leaves the model as it was.
+  LayeredModel c = model_of("camel");
+  c.begin_drag(0, step.region, step.handle);
+  c.update_drag(step.transform);
+  c.cancel_drag();
+  EXPECT_TRUE(same_bits(c.band(2).mesh.vertices, model_of("camel").band(2).mesh.vertices));
+}
+
+// --- Corrupted and malformed .strata files ------------------------------------------------------
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// A small model (2 bands over the bear) written to a file.
+const std::string& small_model_bytes() {
+  static std::string bytes = [] {
+    layers::BuildOptions o;
+    o.bands = 2;
+    const LayeredModel m = LayeredModel::build(read_scan("bear"), o);
+    TempDir tmp;
+    layers::write_model(m, tmp.file("s.strata"));
+    return read_bytes(tmp.file("s.strata"));
+  }();
+  return bytes;
+}
+
+// Every read of a damaged file throws a strata::Error naming the file, never anything else.
+void expect_rejected(const std::string& path, const std::string& what) {
+  try {
+    layers::read_model(path);
+    ADD_FAILURE() << what << ": accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << what << ": " << e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << what << ": not a strata::Error: " << e.what();
+  }
+}
+
+TEST(LayersFile, TruncationAtEverySectionBoundaryIsNamed) {
+  const std::string& bytes = small_model_bytes();
+  TempDir tmp;
+  const std::string path = tmp.file("t.strata");
+  // The section table, from the header the container writes.
+  std::uint32_t header_length = 0;
+  std::memcpy(&header_length, bytes.data() + 12, 4);
+  const nlohmann::json header = nlohmann::json::parse(bytes.substr(20, header_length));
+  std::vector<std::size_t> cuts = {0, 8, 19, 20, 20 + header_length / 2, 20 + std::size_t{header_length}};
+  for (const auto& s : header.at("sections")) {
+    const std::size_t off = s.at("offset").get<std::size_t>(), size = s.at("size").get<std::size_t>();
+    cuts.insert(cuts.end(), {off, off + size / 2, off + size});
+  }
+  ASSERT_GE(header.at("sections").size(), 8u);
+  for (std::size_t cut : cuts) {
+    if (cut >= bytes.size()) continue;
+    write_bytes(path, bytes.substr(0, cut));
+    expect_rejected(path, "truncated at " + std::to_string(cut));
+  }
+}
+
+TEST(LayersFile, RandomByteFlipsAreDetected) {
+  const std::string& bytes = small_model_bytes();
+  TempDir tmp;
+  const std::string path = tmp.file("f.strata");
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string damaged = bytes;
+    const int flips = 1 + trial % 3;
+    for (int f = 0; f < flips; ++f)
+      damaged[std::uniform_int_distribution<std::size_t>(0, damaged.size() - 1)(rng)] ^=
+          static_cast<char>(1 + std::uniform_int_distribution<int>(0, 254)(rng));
+    write_bytes(path, damaged);
+    expect_rejected(path, "flip trial " + std::to_string(trial));
+  }
+}
+
+TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
+  // Files whose checksums are right but whose model does not hold together: what a buggy writer
+  // or a hand edit produces.
+  const std::string& bytes = small_model_bytes();
+  TempDir tmp;
+  const std::string good = tmp.file("good.strata");
+  write_bytes(good, bytes);
+  const layers::StrataContainer c = layers::read_strata_container(good);
+  auto variant = [&](const std::string& name, auto&& change) {
+    layers::StrataContainer v = c;
+    nlohmann::json m = nlohmann::json::parse(v.model_json);
+    change(m, v);
+    v.model_json = m.dump();
+    const std::string path = tmp.file(name + ".strata");
+    layers::write_strata_container(v, path);
+    expect_rejected(path, name);
+  };
+  variant("vertex_count", [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["vertices"] = 12; });
+  variant("no_bands", [](nlohmann::json& m, layers::StrataContainer&) { m.erase("bands"); });
+  variant("amplitude_text", [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["amplitude"] = "x"; });
+  variant("wrong_type", [](nlohmann::json& m, layers::StrataContainer&) { m["type"] = "something.else"; });
+  variant("bad_method", [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["method"] = "magic"; });
+  variant("missing_section", [](nlohmann::json&, layers::StrataContainer& v) {
+    v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),
+                                    [](const layers::Section& s) { return s.name == "band1.rest"; }),
+                     v.sections.end());
+  });
+  variant("face_index", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.faces") s.bytes[0] = 0xff, s.bytes[1] = 0xff, s.bytes[2] = 0xff, s.bytes[3] = 0x7f;
+  });
+  variant("nan_position", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.rest") {
+        const double nan = std::nan("");
+        std::memcpy(s.bytes.data(), &nan, sizeof nan);
+      }
+  });
+  variant("limit_face", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.base_faces") s.bytes[0] = 0xff, s.bytes[1] = 0xff, s.bytes[2] = 0xff, s.bytes[3] = 0x0f;
+  });
+  // The untouched container still reads.
+  EXPECT_NO_THROW(layers::read_model(good));
+}
+
+TEST(LayersFile, ForeignAndMissingFilesAreNamed) {
+  TempDir tmp;
+  write_bytes(tmp.file("scan.strata"), read_bytes(scan_path("bear")));
+  expect_rejected(tmp.file("scan.strata"), "an OFF file");
+  write_bytes(tmp.file("empty.strata"), "");
+  expect_rejected(tmp.file("empty.strata"), "an empty file");
+  expect_rejected(tmp.file("missing.strata"), "a missing file");
+  // A failed write leaves no file behind and does not replace an existing one.
+  const std::string target = tmp.file("keep.strata");
+  write_bytes(target, "old");
+  EXPECT_THROW(layers::write_model(model_of("camel"), tmp.file("no/such/dir/x.strata")), IoError);
+  EXPECT_EQ(read_bytes(target), "old");
+}
+
+}  // namespace
+}  // namespace strata
