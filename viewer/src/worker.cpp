@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <exception>
 #include <utility>
 
@@ -41,11 +42,20 @@ void Worker::post(Job job, bool commits, const std::string& coalesce_key) {
   wake_.notify_one();
 }
 
+namespace {
+// The worker's nice level: STRATA_VIEWER_WORKER_NICE (0 .. 19), default 5.
+int nice_level() {
+  const char* e = std::getenv("STRATA_VIEWER_WORKER_NICE");
+  const int n = e ? std::atoi(e) : 5;
+  return n < 0 ? 0 : n > 19 ? 19 : n;
+}
+}  // namespace
+
 void Worker::run() {
   // Below the UI thread (and llvmpipe's rasterizer threads) in priority, so that drawing frames
   // wins the CPU on small machines; threads the solvers start inherit it.
   errno = 0;
-  if (setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10) != 0) errno = 0;
+  if (setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice_level()) != 0) errno = 0;
   for (;;) {
     Pending p;
     {

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Tests of strata-viewer's window path under Xvfb (GLFW + ImGui on Mesa llvmpipe):
+#   usage: window_tests.sh VIEWER REPO_ROOT
+# Builds a 3-band model of the bumps-75 detail mesh (headless), then runs the window with a
+# scripted drag of the cage (--script-drag over 20 frames, then the exact solve) and checks the
+# benchmark JSON (frames drawn, drag steps solved, no GL errors, the exact solve's status) and
+# the screenshot of the last frame. Exits 77 (skipped) without xvfb-run.
+set -euo pipefail
+VIEWER=$1
+ROOT=$2
+command -v xvfb-run >/dev/null || { echo "SKIP: xvfb-run not installed"; exit 77; }
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cat > "$T/bend.json" <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 2.0], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 4.5], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 45, "pivot": [0, 0, 3.5]}}}
+JSON
+"$VIEWER" "$ROOT/assets/bumps-75/detail.obj" --layers 3 --save "$T/model.strata" --screenshot "$T/rest.png" \
+  --size 320x240 >/dev/null
+json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$T/model.strata" --band 0 --script-drag "$T/bend.json" \
+  --frames 20 --benchmark --size 800x600 --screenshot "$T/window.png")
+echo "$json" | python3 -c "
+import json, sys
+r = json.loads(sys.stdin.read())
+d = r['drag_frames']
+print('window: %d frames, drag frames mean %.1f ms, max %.1f ms, %d drag steps solved, %s'
+      % (r['frames']['count'], d['mean_ms'], d['max_ms'], r['drag_steps_solved'], r['status']))
+assert r['gl_errors'] == 0, 'GL errors'
+assert d['count'] >= 19, 'drag frames missing'
+assert r['drag_steps_solved'] >= 1, 'no drag step solved'
+assert r['status'].startswith('exact solve'), 'the exact solve did not finish: ' + r['status']
+"
+s=$(python3 "$(dirname "$0")/png_stats.py" "$T/window.png")
+python3 -c "
+import json, sys
+s = json.loads(sys.argv[1])
+assert s['width'] == 800 and s['height'] == 600, s
+assert s['foreground'] > 0.05, s
+print('window screenshot:', s)
+" "$s"
+echo "window tests passed"
