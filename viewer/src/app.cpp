@@ -321,8 +321,11 @@ bool App::pick(double x, double y, Vec3& hit) const {
               df);
   const Vec3 o = of.cast<double>(), d = df.cast<double>();
   double best = std::numeric_limits<double>::infinity();
+  // On the edited band's panel if it is shown, else on any band (they share one frame).
+  bool shown = false;
+  for (const auto& p : panels_) shown = shown || (p->band == edit_band_ && !p->vectors);
   for (const auto& p : panels_) {
-    if (p->band != edit_band_ || p->vectors) continue;
+    if ((shown && p->band != edit_band_) || p->vectors) continue;
     const auto& v = p->scene.mesh.vertices;
     for (const Face& f : p->scene.mesh.faces) {
       double t = 0;
