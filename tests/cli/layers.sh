@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# Layered models from the command line: `strata build` (one scan, a batch with a bad file),
+# `strata info`, `strata export` (the finest band is the scan, number for number), `strata edit`
+# at band 0, `strata amplitude` (mute and restore), and errors on bad models and arguments.
+# Usage: bash layers.sh <path-to-strata> <tests/data dir>
+set -euo pipefail
+STRATA=${1:?usage: layers.sh <path-to-strata> <tests/data dir>}
+STRATA=$(cd "$(dirname "$STRATA")" && pwd)/$(basename "$STRATA")
+DATA=$(cd "${2:?usage: layers.sh <path-to-strata> <tests/data dir>}" && pwd)
+SCANS=$(cd "$DATA/../../assets/scans" && pwd)
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+cd "$TMP"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# One scan.
+"$STRATA" build "$SCANS/camel.off" -o camel.strata -q --report build.json >build.txt || fail "build failed"
+grep -q "1 built, 0 failed" build.txt || fail "no build summary"
+"$STRATA" info camel.strata >info.txt || fail "info failed"
+grep -q "3 bands" info.txt || fail "info does not list 3 bands"
+"$STRATA" info camel.strata --json >info.json
+"$STRATA" export camel.strata -o finest.obj >/dev/null || fail "export failed"
+"$STRATA" export camel.strata --band 0 -o limit.obj >/dev/null || fail "export of band 0 failed"
+"$STRATA" export camel.strata --cage -o cage.obj >/dev/null || fail "export of the cage failed"
+python3 - "$SCANS/camel.off" <<'PY' || fail "info or export check failed"
+import json, sys
+def read_off(p):
+    t = open(p).read().split()
+    assert t[0] == "OFF"
+    nv, nf = int(t[1]), int(t[2]); i = 4
+    v = [tuple(float(x) for x in t[i + 3 * k:i + 3 * k + 3]) for k in range(nv)]; i += 3 * nv
+    f = []
+    for _ in range(nf):
+        n = int(t[i]); f.append(tuple(int(x) for x in t[i + 1:i + 1 + n])); i += n + 1
+    return v, f
+def read_obj(p):
+    v, f = [], []
+    for line in open(p):
+        s = line.split()
+        if s and s[0] == "v": v.append(tuple(float(x) for x in s[1:4]))
+        if s and s[0] == "f": f.append(tuple(int(x.split("/")[0]) - 1 for x in s[1:]))
+    return v, f
+sv, sf = read_off(sys.argv[1])
+ev, ef = read_obj("finest.obj")
+assert ev == sv, "exported vertices differ from the scan's"
+assert ef == sf, "exported faces differ from the scan's"
+info = json.load(open("info.json"))
+b = info["bands"]
+assert [x["kind"] for x in b] == ["cage", "triangles", "triangles"], b
+assert b[0]["faces"] < b[1]["faces"] < b[2]["faces"] == len(sf), b
+assert all(0 < x["detail_rms"] <= x["detail_max"] for x in b[1:]), b
+assert info["history"][0]["op"] == "build"
+r = json.load(open("build.json"))
+assert r["models"][0]["ok"] and r["models"][0]["bytes"] > 0, r
+PY
+
+# A 90-degree neck bend at band 0: no new intersecting pairs in the finest band.
+"$STRATA" edit camel.strata --band 0 --edit "$DATA/edits/camel_neck.json" -o bent.strata --intersections \
+  --report edit.json -q >edit.txt || fail "edit failed"
+python3 - <<'PY' || fail "edit report check failed"
+import json
+r = json.load(open("edit.json"))
+i = r["finest_band_intersections"]
+assert i["new_pairs"] == 0, i
+c = r["changes"][0]
+assert [b["band"] for b in c["rebuilt"]] == [1, 2], c
+for b in c["rebuilt"]:
+    assert b["solved_vertices"] > 0 and b["volume_metrics"]["max_relative_error"] <= 1e-3, b
+PY
+"$STRATA" info bent.strata --json | python3 -c "import json,sys; h=json.load(sys.stdin)['history']; assert h[-1]['op']=='edit' and h[-1]['edit']['script'].endswith('camel_neck.json'), h" \
+  || fail "the edit is not in the history"
+
+# Mute band 2 and restore it: the finest band comes back as it was.
+"$STRATA" amplitude bent.strata --band 2 --scale 0 -o muted.strata -q >/dev/null || fail "mute failed"
+"$STRATA" amplitude muted.strata --band 2 --scale 1 -o restored.strata -q >/dev/null || fail "restore failed"
+"$STRATA" export bent.strata -o a.obj >/dev/null && "$STRATA" export muted.strata -o b.obj >/dev/null &&
+  "$STRATA" export restored.strata -o c.obj >/dev/null || fail "exports failed"
+cmp -s a.obj c.obj || fail "muting and restoring band 2 changed the finest band"
+cmp -s a.obj b.obj && fail "muting band 2 changed nothing"
+
+# Batch: a bad file is reported and skipped, the others are built, the exit code is 1.
+printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n' >broken.off
+if "$STRATA" build "$SCANS/bear.off" broken.off --out-dir models -q >batch.txt 2>batch.err; then
+  fail "a batch with a broken file exited 0"
+fi
+[ -s models/bear.strata ] || fail "the good scan of the batch was not built"
+[ -e models/broken.strata ] && fail "a model was written for the broken scan"
+grep -q "1 built, 1 failed" batch.txt || fail "no batch summary"
+grep -q "broken.off" batch.txt || fail "the summary does not name the broken file"
+
+# Bad models and arguments: exit 1 (2 for usage), a message naming the file, no output written.
+head -c 1000 camel.strata >cut.strata
+for bad in cut.strata broken.off missing.strata; do
+  if "$STRATA" info "$bad" 2>err.txt; then fail "info accepted $bad"; fi
+  grep -q "strata: error: .*$bad" err.txt || fail "no error naming $bad: $(cat err.txt)"
+  if "$STRATA" amplitude "$bad" --band 1 --scale 0 -o out.strata 2>/dev/null; then fail "amplitude accepted $bad"; fi
+  [ -e out.strata ] && fail "an output was written for $bad"
+done
+if "$STRATA" edit camel.strata --band 7 --edit "$DATA/edits/camel_neck.json" -o out.strata 2>err.txt; then
+  fail "edit accepted band 7"
+fi
+grep -q "out of range" err.txt || fail "no message for band 7"
+set +e
+"$STRATA" amplitude camel.strata --band 0 --scale 0 -o out.strata 2>/dev/null
+code=$?
+set -e
+[ "$code" = 2 ] || fail "amplitude of band 0 should be a usage error (exit 2), got $code"
+[ -e out.strata ] && fail "an output was written after an error"
+echo "layers CLI: ok"
