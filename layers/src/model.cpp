@@ -355,8 +355,6 @@ class LayeredModel::Impl {
     handle_flags = select_vertices(points(k), handle);
     return r;
   }
-
-  static std::string entry(json j) { return j.dump(); }
 };
 
 LayeredModel::LayeredModel() : impl_(std::make_unique<Impl>()) {}

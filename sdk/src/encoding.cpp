@@ -239,31 +239,28 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
 
 }  // namespace
 
-DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  check_mesh(detail, "detail");
-  check_mesh(base, "base");
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The encoding over a triangle base with known base points (meshes and points checked by the
+// caller). Every vertex counts as projected; encode_detail() overrides the counts.
+DetailEncoding encoding_over_mesh(const TriMesh& detail, const TriMesh& base, std::vector<BasePoint> points) {
   DetailEncoding e;
   e.detail_faces = detail.faces;
   e.detail_rest = detail.vertices;
   e.base_num_vertices = base.num_vertices();
   e.base_faces = base.faces;
-  const int n = detail.num_vertices();
-  e.report.num_vertices = n;
-  e.base_points.resize(n);
-  {
-    Encoder enc(base, options);
-    for (int i = 0; i < n; ++i) e.base_points[i] = enc.project(i, detail.vertices[i], e.report);
-  }
+  e.base_points = std::move(points);
+  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
   finish_encoding(e, detail, evaluate_base_frames(e, base.vertices));
-  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
 }
 
-DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
-                             const ProjectOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  check_mesh(detail, "detail");
+// The same over a limit surface with known limit points.
+DetailEncoding encoding_over_limit(const TriMesh& detail, const SubdivSurface& base, std::vector<LimitPoint> points) {
   DetailEncoding e;
   e.detail_faces = detail.faces;
   e.detail_rest = detail.vertices;
@@ -272,14 +269,42 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
   e.cage_tags = base.tags();
   e.cage_options = base.options();
   e.cage_options.scheme = base.scheme();
+  e.limit_points = std::move(points);
+  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
+  finish_encoding(e, detail, evaluate_base_frames(e, base));
+  return e;
+}
+
+}  // namespace
+
+DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
+  check_mesh(base, "base");
   const int n = detail.num_vertices();
-  e.report.num_vertices = n;
+  EncodeReport report;
+  report.num_vertices = n;
+  std::vector<BasePoint> points(n);
+  {
+    Encoder enc(base, options);
+    for (int i = 0; i < n; ++i) points[i] = enc.project(i, detail.vertices[i], report);
+  }
+  DetailEncoding e = encoding_over_mesh(detail, base, std::move(points));
+  report.max_tangential_offset = e.report.max_tangential_offset;
+  e.report = report;
+  e.report.seconds = seconds_since(t0);
+  return e;
+}
+
+DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
+                             const ProjectOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh(detail, "detail");
   Projection pr = project_to_limit(base, detail.vertices, options);
-  e.limit_points = std::move(pr.points);
+  DetailEncoding e = encoding_over_limit(detail, base, std::move(pr.points));
   e.report.num_projected = pr.num_converged;
   e.report.num_fallback = pr.num_fallback;
-  finish_encoding(e, detail, evaluate_base_frames(e, base));
-  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  e.report.seconds = seconds_since(t0);
   return e;
 }
 
@@ -293,15 +318,8 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std:
   for (std::size_t i = 0; i < base_points.size(); ++i)
     if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() || !base_points[i].bary.allFinite())
       throw InvalidInput("encoding: base point " + std::to_string(i) + " is not on a base face");
-  DetailEncoding e;
-  e.detail_faces = detail.faces;
-  e.detail_rest = detail.vertices;
-  e.base_num_vertices = base.num_vertices();
-  e.base_faces = base.faces;
-  e.base_points = std::move(base_points);
-  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
-  finish_encoding(e, detail, evaluate_base_frames(e, base.vertices));
-  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  DetailEncoding e = encoding_over_mesh(detail, base, std::move(base_points));
+  e.report.seconds = seconds_since(t0);
   return e;
 }
 
@@ -317,18 +335,8 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base
     if (p.face < 0 || p.face >= base.num_ptex_faces() || !std::isfinite(p.u) || !std::isfinite(p.v))
       throw InvalidInput("encoding: limit point " + std::to_string(i) + " is not on a ptex face");
   }
-  DetailEncoding e;
-  e.detail_faces = detail.faces;
-  e.detail_rest = detail.vertices;
-  e.base_num_vertices = base.num_control_points();
-  e.cage_faces = base.cage().faces;
-  e.cage_tags = base.tags();
-  e.cage_options = base.options();
-  e.cage_options.scheme = base.scheme();
-  e.limit_points = std::move(limit_points);
-  e.report.num_vertices = e.report.num_projected = detail.num_vertices();
-  finish_encoding(e, detail, evaluate_base_frames(e, base));
-  e.report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  DetailEncoding e = encoding_over_limit(detail, base, std::move(limit_points));
+  e.report.seconds = seconds_since(t0);
   return e;
 }
 
