@@ -19,6 +19,7 @@
 #include "strata/layers/strata_file.h"
 #include "strata/mesh_io.h"
 #include "strata/metrics.h"
+#include "test_files.h"
 
 namespace strata {
 namespace {
@@ -47,19 +48,6 @@ double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return d;
 }
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("strata_layers_" + std::to_string(::getpid()) + "_" +
-                                        std::to_string(std::random_device{}()));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string& name) const { return (path / name).string(); }
-};
 
 // One model per scan, built once for the whole suite (a build takes about a second).
 const LayeredModel& model_of(const std::string& scan) {
@@ -81,7 +69,7 @@ TEST_P(LayersOnScan, FinestBandIsTheScanBitForBitThroughFileAndExport) {
   EXPECT_EQ(finest.faces, scan.faces);
   EXPECT_TRUE(same_bits(finest.vertices, scan.vertices));
 
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   layers::write_model(model, tmp.file("m.strata"));
   const LayeredModel back = layers::read_model(tmp.file("m.strata"));
   EXPECT_EQ(back.band(2).mesh.faces, scan.faces);
@@ -247,7 +235,7 @@ TEST(Layers, EditOfAnIntermediateBandIsReencodedAndTheFinerBandFollows) {
 TEST(Layers, SavedModelsContinueEditingExactlyAsInMemory) {
   LayeredModel model = model_of("camel");
   model.set_amplitude(2, 1.5);
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   layers::write_model(model, tmp.file("a.strata"));
   LayeredModel back = layers::read_model(tmp.file("a.strata"));
   EXPECT_TRUE(same_bits(back.band(2).mesh.vertices, model.band(2).mesh.vertices));
@@ -301,7 +289,7 @@ const std::string& small_model_bytes() {
     layers::BuildOptions o;
     o.bands = 2;
     const LayeredModel m = LayeredModel::build(read_scan("bear"), o);
-    TempDir tmp;
+    test::ScratchDir tmp("strata_layers");
     layers::write_model(m, tmp.file("s.strata"));
     return read_bytes(tmp.file("s.strata"));
   }();
@@ -322,7 +310,7 @@ void expect_rejected(const std::string& path, const std::string& what) {
 
 TEST(LayersFile, TruncationAtEverySectionBoundaryIsNamed) {
   const std::string& bytes = small_model_bytes();
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   const std::string path = tmp.file("t.strata");
   // The section table, from the header the container writes.
   std::uint32_t header_length = 0;
@@ -343,7 +331,7 @@ TEST(LayersFile, TruncationAtEverySectionBoundaryIsNamed) {
 
 TEST(LayersFile, RandomByteFlipsAreDetected) {
   const std::string& bytes = small_model_bytes();
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   const std::string path = tmp.file("f.strata");
   std::mt19937 rng(7);
   for (int trial = 0; trial < 300; ++trial) {
@@ -361,7 +349,7 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
   // Files whose checksums are right but whose model does not hold together: what a buggy writer
   // or a hand edit produces.
   const std::string& bytes = small_model_bytes();
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   const std::string good = tmp.file("good.strata");
   write_bytes(good, bytes);
   const layers::StrataContainer c = layers::read_strata_container(good);
@@ -404,7 +392,7 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
 }
 
 TEST(LayersFile, ForeignAndMissingFilesAreNamed) {
-  TempDir tmp;
+  test::ScratchDir tmp("strata_layers");
   write_bytes(tmp.file("scan.strata"), read_bytes(scan_path("bear")));
   expect_rejected(tmp.file("scan.strata"), "an OFF file");
   write_bytes(tmp.file("empty.strata"), "");

@@ -4,6 +4,7 @@
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
+#include "test_files.h"
 
 #include <gtest/gtest.h>
 
@@ -36,31 +37,6 @@ constexpr double kPi = 3.14159265358979323846;
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("strata_mesh_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-             (info ? std::string(info->name()) : std::string("x")));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::set<std::string> listing() const {
-    std::set<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_)) names.insert(e.path().filename().string());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
 
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -269,7 +245,7 @@ std::string encode(const Soup& s, Fmt fmt) {
 Soup tetra() { return {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}}; }
 
 struct Fixture {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   std::string put(const Soup& s, Fmt fmt, const std::string& stem = "mesh") {
     const std::string path = dir.file(stem + "_" + fmt_name(fmt) + fmt_ext(fmt));
     write_bytes(path, encode(s, fmt));
@@ -281,7 +257,7 @@ struct Fixture {
 // Round trips
 
 TEST(MeshIoRoundTrip, ExactForObjOffPly) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = awkward_octahedron();
   struct Case {
     std::string name;
@@ -306,7 +282,7 @@ TEST(MeshIoRoundTrip, ExactForObjOffPly) {
 }
 
 TEST(MeshIoRoundTrip, ExactAtExtremeScales) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   for (double scale : {1e-200, 1e-9, 1e9, 1e200}) {
     TriMesh m = awkward_octahedron(11);
     for (Vec3& p : m.vertices) p *= scale;
@@ -320,7 +296,7 @@ TEST(MeshIoRoundTrip, ExactAtExtremeScales) {
 }
 
 TEST(MeshIoRoundTrip, BinaryStlKeepsTrianglesToFloatPrecision) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = without_unreferenced(awkward_octahedron());
   const std::string path = dir.file("m.stl");
   write_mesh(m, path);  // Default: binary
@@ -346,7 +322,7 @@ TEST(MeshIoRoundTrip, BinaryStlKeepsTrianglesToFloatPrecision) {
 }
 
 TEST(MeshIoRoundTrip, AsciiStlIsExactPerCorner) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = awkward_octahedron();  // the unreferenced vertex cannot be stored in STL
   const std::string path = dir.file("m.stl");
   write_mesh(m, path, MeshEncoding::Ascii);
@@ -383,7 +359,7 @@ TEST(MeshIoRoundTrip, EveryFixtureFormatReadsTheSameTetrahedron) {
 }
 
 TEST(MeshIoRoundTrip, ObjSyntaxVariants) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   // CRLF, negative (relative) indices, v/vt/vn corners, a face before its vertices, comments,
   // a vertex color, an unknown statement, leading '+' and no final newline.
   const std::string text =
@@ -398,7 +374,7 @@ TEST(MeshIoRoundTrip, ObjSyntaxVariants) {
 }
 
 TEST(MeshIoRoundTrip, OffAndPlySyntaxVariants) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   // COFF with colors, counts on the header line, comments, blank lines, face colors, CRLF.
   write_bytes(dir.file("c.off"),
               "COFF 4 4 6\r\n# c\r\n\r\n0 0 0 1 0 0 1\r\n1 0 0 1 0 0 1\r\n0 1 0 1 0 0 1\r\n0 0 1 1 0 0 1\r\n"
@@ -444,7 +420,7 @@ TEST(MeshIoRoundTrip, BinaryStlWhoseHeaderStartsWithSolid) {
 }
 
 TEST(MeshIoRoundTrip, SupportedExtensionsAllWork) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const auto exts = supported_mesh_extensions();
   EXPECT_EQ(exts, (std::vector<std::string>{".obj", ".off", ".ply", ".stl"}));
   const TriMesh m = without_unreferenced(awkward_octahedron());
@@ -543,7 +519,7 @@ TEST(MeshIoErrors, NonFiniteCoordinate) {
     }
   }
   // Text spellings other than our own.
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   write_bytes(dir.file("n.obj"), "v 0 0 0\nv 1 0 NaN\nv 0 1 0\nf 1 2 3\n");
   EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("n.obj")); }, {"vertex 1 has a non-finite"}));
   write_bytes(dir.file("n.off"), "OFF\n3 1 0\n0 0 0\n-inf 0 0\n0 1 0\n3 0 1 2\n");
@@ -636,7 +612,7 @@ TEST(MeshIoErrors, InconsistentOrientation) {
 }
 
 TEST(MeshIoErrors, TruncatedFiles) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = without_unreferenced(awkward_octahedron());
   // Text formats losing their last line: a cut at a line boundary, no partial line to give it away.
   const std::pair<std::string, std::string> cases[] = {
@@ -687,7 +663,7 @@ TEST(MeshIoErrors, TruncatedFiles) {
 }
 
 TEST(MeshIoErrors, MissingFileAndUnknownExtension) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   for (const char* name : {"none.obj", "none.off", "none.ply", "none.stl"}) {
     const std::string path = dir.file(name);
     EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(path); }, {path + ": cannot open: No such file or directory"}));
@@ -707,7 +683,7 @@ TEST(MeshIoErrors, MissingFileAndUnknownExtension) {
 }
 
 TEST(MeshIoErrors, UnparsableContent) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const std::pair<std::string, std::vector<std::string>> cases[] = {
       {"a.obj", {"v 0 0 0\nv 1 0 0\nv 0 1 zero\nf 1 2 3\n", "line 3: cannot parse 'zero' as a number"}},
       {"b.obj", {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: cannot parse face corner 'x'"}},
@@ -754,7 +730,7 @@ TEST(MeshIoErrors, UnparsableContent) {
 }
 
 TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   std::mt19937 rng(12345);
   const std::string prefixes[] = {"", "v ", "f 1 2 3\n", "OFF\n", "OFF\n3 1 0\n", "ply\n",
                                   "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
@@ -780,7 +756,7 @@ TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
 }
 
 TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = without_unreferenced(awkward_octahedron());
   struct Case {
     std::string name;
@@ -816,7 +792,7 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
 }
 
 TEST(MeshIoFuzz, ByteFlipsInValidFiles) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   std::mt19937 rng(99);
   const TriMesh m = without_unreferenced(awkward_octahedron());
   for (const auto& [name, enc] : {std::pair<std::string, MeshEncoding>{"f.obj", MeshEncoding::Ascii},
@@ -901,7 +877,7 @@ TEST(MeshIoValidate, ExactMessages) {
 }
 
 TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   TriMesh bad = awkward_octahedron();
   bad.faces.push_back(bad.faces.front());  // every edge of face 0 now used three times
   write_text_file_atomically(dir.file("keep.obj"), "old");
@@ -927,7 +903,7 @@ TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
 // Atomic writes
 
 TEST(MeshIoAtomicFile, WritesAndReplacesWithoutLeftovers) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const std::string path = dir.file("out.txt");
   write_text_file_atomically(path, std::string("first\0line\n", 11));
   EXPECT_EQ(read_bytes(path), std::string("first\0line\n", 11));
@@ -953,7 +929,7 @@ TEST(MeshIoAtomicFile, WritesAndReplacesWithoutLeftovers) {
 }
 
 TEST(MeshIoAtomicFile, ThrowingWriterLeavesTargetAndNoTempFile) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const std::string path = dir.file("keep.txt");
   write_text_file_atomically(path, "original");
   std::string tmp_path;
@@ -977,7 +953,7 @@ TEST(MeshIoAtomicFile, ThrowingWriterLeavesTargetAndNoTempFile) {
 }
 
 TEST(MeshIoAtomicFile, FailedRenameIsIoErrorWithoutLeftovers) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   fs::create_directories(dir.file("occupied/child"));  // a non-empty directory cannot be replaced by a file
   EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("occupied"), "x"); },
                                    {dir.file("occupied") + ": cannot replace it"}));
@@ -989,7 +965,7 @@ TEST(MeshIoAtomicFile, FailedRenameIsIoErrorWithoutLeftovers) {
 }
 
 TEST(MeshIoAtomicFile, WriteMeshIsAtomic) {
-  TempDir dir;
+  test::ScratchDir dir{"strata_mesh_io"};
   const std::string path = dir.file("m.ply");
   const TriMesh a = awkward_octahedron(1), b = awkward_octahedron(2);
   write_mesh(a, path);

@@ -21,6 +21,7 @@
 
 #include "strata/exceptions.h"
 #include "strata/layers/strata_file.h"
+#include "test_files.h"
 
 namespace fs = std::filesystem;
 using strata::InvalidInput;
@@ -35,31 +36,6 @@ using OJson = nlohmann::ordered_json;
 // ---------------------------------------------------------------------------------------------
 // Helpers independent of the code under test
 
-//! A fresh directory per test, removed with everything in it.
-class ScratchDir {
- public:
-  ScratchDir() {
-    static int counter = 0;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("strata_file_" + std::to_string(::getpid()) + "_" +
-                                         std::to_string(counter++) + "_" + (info ? info->name() : "x"));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::set<std::string> listing() const {
-    std::set<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_)) names.insert(e.path().filename().string());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
 
 Bytes slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -261,7 +237,7 @@ TEST(StrataFile, ReferenceCrcIsZlibs) {
 }
 
 TEST(StrataFile, RoundTripIsBitExact) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   std::mt19937_64 rng(20240501);
   const StrataContainer written = sample_container(rng);
   const std::string path = dir.file("model.strata");
@@ -298,7 +274,7 @@ TEST(StrataFile, RoundTripIsBitExact) {
 }
 
 TEST(StrataFile, EmptyContainerEndsAtTheHeader) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string path = dir.file("empty.strata");
   write_strata_container(StrataContainer{}, path);
   const Bytes file = slurp(path);
@@ -311,7 +287,7 @@ TEST(StrataFile, EmptyContainerEndsAtTheHeader) {
 
 TEST(StrataFile, FormatMdExampleIsExact) {
   // The worked example of layers/FORMAT.md, byte for byte.
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string path = dir.file("example.strata");
   StrataContainer c;
   c.sections = {{"band0.positions", Bytes(9600, 0)}};
@@ -330,7 +306,7 @@ TEST(StrataFile, HeaderLengthCrossingDigitBoundariesIsConsistent) {
   // The header's length feeds the offsets, whose digits feed the length: grow the model one byte
   // at a time across the point where the first offset reaches 1000 (4 digits) and check the
   // layout every time.
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string path = dir.file("sweep.strata");
   auto write_padded = [&](std::size_t pad) {
     StrataContainer c;
@@ -355,7 +331,7 @@ TEST(StrataFile, HeaderLengthCrossingDigitBoundariesIsConsistent) {
 }
 
 TEST(StrataFile, HandBuiltFileFollowingFormatMdIsRead) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string path = dir.file("hand.strata");
   const std::vector<std::pair<std::string, Bytes>> sections = {
       {"x", {9, 8, 7}}, {"e", {}}, {"y", {1, 2, 3, 4, 5, 6, 7, 8, 9}}};
@@ -412,7 +388,7 @@ TEST(StrataFile, FindAndRequire) {
 }
 
 TEST(StrataFile, WriteRejectsBadInputAndLeavesTheTargetUntouched) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string path = dir.file("keep.strata");
   std::mt19937_64 rng(7);
   write_strata_container(sample_container(rng), path);
@@ -462,7 +438,7 @@ TEST(StrataFile, WriteRejectsBadInputAndLeavesTheTargetUntouched) {
 // Corruption
 
 TEST(StrataFile, TruncationIsReported) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   std::mt19937_64 rng(11);
   const std::string good = dir.file("good.strata"), cut = dir.file("cut.strata");
   write_strata_container(sample_container(rng), good);
@@ -494,7 +470,7 @@ TEST(StrataFile, TruncationIsReported) {
 }
 
 TEST(StrataFile, EverySingleByteFlipIsDetected) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   std::mt19937_64 rng(12345);
   const std::string good = dir.file("good.strata"), bad = dir.file("bad.strata");
   write_strata_container(sample_container(rng, 40), good);
@@ -529,7 +505,7 @@ TEST(StrataFile, EverySingleByteFlipIsDetected) {
 }
 
 TEST(StrataFile, ForeignFilesAreNotStrataFiles) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string p = dir.file("foreign");
   spit(p, {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A, 0, 0, 0, 0x0D,
            'I',  'H', 'D', 'R', 0,    0,    0,    1,    0, 0, 0, 1});
@@ -546,7 +522,7 @@ TEST(StrataFile, ForeignFilesAreNotStrataFiles) {
 }
 
 TEST(StrataFile, NewerAndZeroVersionsAreRefused) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string good = dir.file("good.strata"), patched = dir.file("patched.strata");
   std::mt19937_64 rng(3);
   write_strata_container(sample_container(rng), good);
@@ -572,7 +548,7 @@ TEST(StrataFile, NewerAndZeroVersionsAreRefused) {
 }
 
 TEST(StrataFile, TrailingBytesAreReported) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string good = dir.file("good.strata"), bad = dir.file("bad.strata");
   std::mt19937_64 rng(5);
   for (const bool with_sections : {true, false}) {
@@ -588,7 +564,7 @@ TEST(StrataFile, TrailingBytesAreReported) {
 }
 
 TEST(StrataFile, DirectoriesAndMissingFilesAreIoErrors) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string sub = dir.file("a_directory");
   fs::create_directories(sub);
   expect_io_error(sub, "");
@@ -596,7 +572,7 @@ TEST(StrataFile, DirectoriesAndMissingFilesAreIoErrors) {
 }
 
 TEST(StrataFile, MalformedHeadersAreReported) {
-  ScratchDir dir;
+  strata::test::ScratchDir dir{"strata_file"};
   const std::string p = dir.file("malformed.strata");
   const Bytes s1 = {1, 2, 3}, s2 = {4, 5, 6, 7, 8, 9, 10, 11, 12};
   const std::vector<std::pair<std::string, Bytes>> two = {{"one", s1}, {"two", s2}};
