@@ -360,7 +360,9 @@ void App::handle_mouse() {
         press_y_ = y;
         drag_mods_ = (glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ? GLFW_MOD_CONTROL : 0) |
                      (glfwGetKey(window_, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? GLFW_MOD_SHIFT : 0);
-        if (b == GLFW_MOUSE_BUTTON_LEFT && drag_mods_ != 0 && region_set_ && handle_set_) {
+        if (b == GLFW_MOUSE_BUTTON_LEFT && brush_) {
+          // painted below, every frame of the drag
+        } else if (b == GLFW_MOUSE_BUTTON_LEFT && drag_mods_ != 0 && region_ready() && handle_ready()) {
           const Mat4 v = camera_.view();
           view_axis_ = -v.block<1, 3>(2, 0).transpose().cast<double>();
           axis_ = drag_mods_ & GLFW_MOD_SHIFT ? 3 : axis_;
@@ -375,6 +377,8 @@ void App::handle_mouse() {
     const bool click = std::abs(x - press_x_) + std::abs(y - press_y_) < 4;
     if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && dragging_) {
       gizmo_end();
+    } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && brush_) {
+      // the brush painted during the drag
     } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && click && pick_ != Pick::None) {
       Vec3 hit;
       if (pick(x, y, hit)) {
@@ -405,6 +409,9 @@ void App::handle_mouse() {
       for (int k = 0; k < 3; ++k) translation_[static_cast<std::size_t>(k)] += delta[k];
     }
     if (dx != 0 || dy != 0) gizmo_update();
+  } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && brush_) {
+    Vec3 hit;
+    if (pick(x, y, hit)) brush_at(hit, drag_mods_ & GLFW_MOD_SHIFT, drag_mods_ & GLFW_MOD_CONTROL);
   } else if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT) {
     camera_.orbit(static_cast<float>(dx), static_cast<float>(dy));
   } else {
@@ -430,16 +437,15 @@ void App::draw_scene(int width, int height) {
 
 void App::update_selection_points() {
   selection_points_ = GpuLines();
-  if (!committed_ || (!region_set_ && !handle_set_)) return;
+  if (!committed_ || (!region_ready() && !handle_ready())) return;
   try {
     const std::vector<Vec3>& points = committed_->band_points(edit_band_);
-    std::vector<char> in_region(points.size(), 0), in_handle(points.size(), 0);
-    if (region_set_) in_region = select_vertices(points, Selection::sphere(region_center_, region_radius_));
-    if (handle_set_) in_handle = select_vertices(points, Selection::sphere(handle_center_, handle_radius_));
+    std::vector<char> in_region, in_handle;
+    if (!selection_flags(in_region, in_handle)) return;
     std::vector<Vec3> p;
     std::vector<Rgb> c;
     for (std::size_t i = 0; i < points.size(); ++i) {
-      if (in_handle[i] && in_region[i]) {
+      if (in_handle[i] && (in_region[i] || brush_handle_any_)) {
         p.push_back(points[i]);
         c.push_back(Rgb(0.95f, 0.1f, 0.1f));
       } else if (in_region[i]) {
@@ -454,19 +460,126 @@ void App::update_selection_points() {
   }
 }
 
+bool App::selection_flags(std::vector<char>& region, std::vector<char>& handle) const {
+  if (!committed_) return false;
+  const std::vector<Vec3>& points = committed_->band_points(edit_band_);
+  region.assign(points.size(), 0);
+  handle.assign(points.size(), 0);
+  if (region_set_) region = select_vertices(points, Selection::sphere(region_center_, region_radius_));
+  if (handle_set_) handle = select_vertices(points, Selection::sphere(handle_center_, handle_radius_));
+  const bool brushed = brushed_band();
+  for (std::size_t i = 0; brushed && i < points.size(); ++i) {
+    region[i] = region[i] || brush_region_[i];
+    handle[i] = handle[i] || brush_handle_[i];
+  }
+  return true;
+}
+
+bool App::brushed_band() const {
+  return committed_ && brush_band_ == edit_band_ &&
+         brush_region_.size() == committed_->band_points(edit_band_).size();
+}
+
+bool App::region_ready() const {
+  return region_set_ || (brushed_band() && brush_region_any_);
+}
+
+bool App::handle_ready() const {
+  return handle_set_ || (brushed_band() && brush_handle_any_);
+}
+
+namespace {
+Selection indices_of(const std::vector<char>& flags) {
+  std::vector<int> indices;
+  for (std::size_t i = 0; i < flags.size(); ++i)
+    if (flags[i]) indices.push_back(static_cast<int>(i));
+  return Selection::vertices(std::move(indices));
+}
+}  // namespace
+
+Selection App::region_selection() const {
+  if (!(brushed_band() && brush_region_any_))
+    return Selection::sphere(region_center_, region_radius_);
+  std::vector<char> region, handle;
+  selection_flags(region, handle);
+  return indices_of(region);
+}
+
+Selection App::handle_selection() const {
+  if (!(brushed_band() && brush_handle_any_))
+    return Selection::sphere(handle_center_, handle_radius_);
+  std::vector<char> region, handle;
+  selection_flags(region, handle);
+  return indices_of(handle);
+}
+
+Vec3 App::handle_pivot() const {
+  if (handle_set_ || !committed_) return handle_center_;
+  std::vector<char> region, handle;
+  if (!selection_flags(region, handle)) return handle_center_;
+  const std::vector<Vec3>& points = committed_->band_points(edit_band_);
+  Vec3 sum = Vec3::Zero();
+  double n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (handle[i]) sum += points[i], n += 1;
+  return n > 0 ? Vec3(sum / n) : handle_center_;
+}
+
+void App::clear_brush() {
+  brush_region_.clear();
+  brush_handle_.clear();
+  brush_band_ = -1;
+  brush_region_any_ = brush_handle_any_ = false;
+}
+
+void App::brush_at(const Vec3& hit, bool handle, bool erase) {
+  if (!committed_) return;
+  const std::vector<Vec3>& points = committed_->band_points(edit_band_);
+  if (brush_band_ != edit_band_ || brush_region_.size() != points.size()) {
+    clear_brush();
+    brush_band_ = edit_band_;
+    brush_region_.assign(points.size(), 0);
+    brush_handle_.assign(points.size(), 0);
+  }
+  if (brush_radius_ <= 0) brush_radius_ = 0.04f * camera_.radius();
+  const double r2 = static_cast<double>(brush_radius_) * brush_radius_;
+  bool changed = false;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if ((points[i] - hit).squaredNorm() > r2) continue;
+    if (erase) {
+      changed |= brush_region_[i] || brush_handle_[i];
+      brush_region_[i] = brush_handle_[i] = 0;
+    } else {
+      std::vector<char>& flags = handle ? brush_handle_ : brush_region_;
+      changed |= !flags[i];
+      flags[i] = 1;
+    }
+  }
+  if (!changed) return;
+  brush_region_any_ = std::find(brush_region_.begin(), brush_region_.end(), 1) != brush_region_.end();
+  brush_handle_any_ = std::find(brush_handle_.begin(), brush_handle_.end(), 1) != brush_handle_.end();
+  update_selection_points();
+}
+
 EditTransform App::gizmo_transform() const {
   Vec3 axis = axis_ == 3 ? view_axis_ : Vec3::Unit(axis_);
-  return EditTransform::rotation(axis, angle_, handle_center_,
+  return EditTransform::rotation(axis, angle_, pivot_,
                                  Vec3(translation_[0], translation_[1], translation_[2]));
 }
 
 void App::gizmo_begin() {
-  if (dragging_ || !region_set_ || !handle_set_) return;
+  if (dragging_ || !region_ready() || !handle_ready()) return;
   checkpoint();
   translation_ = {0, 0, 0};
   angle_ = 0;
-  worker_->begin_drag(edit_band_, Selection::sphere(region_center_, region_radius_),
-                      Selection::sphere(handle_center_, handle_radius_));
+  pivot_ = handle_pivot();
+  try {
+    worker_->begin_drag(edit_band_, region_selection(), handle_selection());
+  } catch (const std::exception& e) {
+    status_ = e.what();
+    status_error_ = true;
+    return;
+  }
   dragging_ = true;
 }
 
@@ -572,9 +685,15 @@ void App::on_key(int key, int mods) {
       break;
     case GLFW_KEY_R:
       pick_ = pick_ == Pick::Region ? Pick::None : Pick::Region;
+      brush_ = false;
       break;
     case GLFW_KEY_H:
       pick_ = pick_ == Pick::Handle ? Pick::None : Pick::Handle;
+      brush_ = false;
+      break;
+    case GLFW_KEY_P:
+      brush_ = !brush_;
+      if (brush_) pick_ = Pick::None;
       break;
     case GLFW_KEY_Z:
       if (ctrl && (mods & GLFW_MOD_SHIFT))
@@ -592,6 +711,7 @@ void App::on_key(int key, int mods) {
         if (!undo_.empty()) undo_.pop_back();
       }
       pick_ = Pick::None;
+      brush_ = false;
       break;
     default:
       break;
@@ -607,6 +727,7 @@ void App::on_drop(const std::string& path) {
   checkpoint();
   copy_to(open_path_, path);
   region_set_ = handle_set_ = false;
+  clear_brush();
   selection_points_ = GpuLines();
   view_.visible.clear();
   fitted_ = false;

@@ -1,7 +1,7 @@
 //! \file app.h
 //! The interactive window (GLFW, OpenGL 3.3 core, Dear ImGui): bands side by side, the band
 //! panel (visibility, live amplitude, mute, the band to edit), sphere selections of region and
-//! handle on the edited band's points, a translate/rotate gizmo (Ctrl/Shift + drag, or sliders)
+//! handle on the edited band's points and a brush (P) that paints them point by point, a translate/rotate gizmo (Ctrl/Shift + drag, or sliders)
 //! whose drags run on the Worker thread, undo/redo, open/save/export, drag and drop, help (F1).
 //! With --script-drag it drives a drag over --frames frames and (--benchmark) prints the frame
 //! times as JSON.
@@ -62,6 +62,20 @@ class App {
   void draw_help();
   void draw_status();
   void update_selection_points();
+  //! Per point of the edited band: in the region / handle (sphere or brush). False if no document.
+  bool selection_flags(std::vector<char>& region, std::vector<char>& handle) const;
+  bool brushed_band() const;  //!< the brush flags are for the edited band's points
+  bool region_ready() const;
+  bool handle_ready() const;
+  //! The region / handle as passed to the drag: the sphere alone, or the union of the sphere and
+  //! the brushed points as Selection::vertices.
+  Selection region_selection() const;
+  Selection handle_selection() const;
+  //! Adds (or, \p erase, removes) the edited band's points within brush_radius_ of \p hit.
+  void brush_at(const Vec3& hit, bool handle, bool erase);
+  void clear_brush();
+  //! The pivot of the gizmo: the handle sphere's centre, else the brushed handle's centroid.
+  Vec3 handle_pivot() const;
   bool pick(double x, double y, Vec3& hit) const;
   EditTransform gizmo_transform() const;
   void gizmo_begin();
@@ -96,11 +110,18 @@ class App {
   float region_radius_ = 0.0f, handle_radius_ = 0.0f;
   bool region_set_ = false, handle_set_ = false;
   GpuLines selection_points_;
+  // Brush selection (P): left drag paints the region, Shift paints the handle, Ctrl erases.
+  bool brush_ = false;
+  float brush_radius_ = 0.0f;  // world units (0: 4% of the scene radius when first used)
+  std::vector<char> brush_region_, brush_handle_;  // per point of band brush_band_
+  int brush_band_ = -1;
+  bool brush_region_any_ = false, brush_handle_any_ = false;
   bool dragging_ = false;
   std::array<float, 3> translation_{0, 0, 0};
   int axis_ = 0;  // 0 x, 1 y, 2 z, 3 view direction
   float angle_ = 0.0f;
   Vec3 view_axis_ = Vec3::UnitZ();
+  Vec3 pivot_ = Vec3::Zero();  // of the running drag
 
   // Mouse.
   double last_x_ = 0, last_y_ = 0, press_x_ = 0, press_y_ = 0;

@@ -101,13 +101,25 @@ void App::draw_edit_panel() {
   ImGui::SameLine();
   ImGui::RadioButton("handle (H)", &pick, 2);
   pick_ = static_cast<Pick>(pick);
+  if (pick_ != Pick::None) brush_ = false;
+  if (ImGui::Checkbox("brush (P)", &brush_) && brush_) pick_ = Pick::None;
+  ImGui::SameLine();
+  if (brush_radius_ <= 0) brush_radius_ = 0.04f * camera_.radius();
+  ImGui::SetNextItemWidth(120);
+  ImGui::SliderFloat("brush radius", &brush_radius_, 0.0f, 0.5f * camera_.radius(), "%.3f");
+  ImGui::SameLine();
+  if (ImGui::SmallButton("clear")) {
+    clear_brush();
+    update_selection_points();
+  }
+  if (brush_) ImGui::TextDisabled("drag: paint region, Shift: handle, Ctrl: erase");
   const float r = camera_.radius();
   if (ImGui::SliderFloat("region radius", &region_radius_, 0.0f, r, "%.3f")) update_selection_points();
   if (ImGui::SliderFloat("handle radius", &handle_radius_, 0.0f, r, "%.3f")) update_selection_points();
-  ImGui::TextDisabled(region_set_ ? "region: yellow points" : "region: not set");
+  ImGui::TextDisabled(region_ready() ? "region: yellow points" : "region: not set");
   ImGui::SameLine();
-  ImGui::TextDisabled(handle_set_ ? "handle: red points" : "handle: not set");
-  ImGui::BeginDisabled(!region_set_ || !handle_set_);
+  ImGui::TextDisabled(handle_ready() ? "handle: red points" : "handle: not set");
+  ImGui::BeginDisabled(!region_ready() || !handle_ready());
   ImGui::TextUnformatted("Gizmo: Ctrl+drag translates, Shift+drag rotates");
   ImGui::Combo("axis", &axis_, "x\0y\0z\0view\0");
   bool changed = ImGui::SliderFloat("angle", &angle_, -180.0f, 180.0f, "%.1f deg");
@@ -203,6 +215,8 @@ void App::draw_help() {
       {"E / I", "prism volume error / intersecting triangles"},
       {"V / B", "displacement vectors / compare side by side"},
       {"R / H", "click to place the region / handle sphere"},
+      {"P", "brush mode: left drag paints the region's points"},
+      {"P + Shift / Ctrl drag", "brush: paint the handle / erase (radius in Edit)"},
       {"Ctrl + left drag", "translate the handle (drag runs live)"},
       {"Shift + left drag", "rotate the handle about the view axis"},
       {"Esc", "cancel the drag / selection mode"},
