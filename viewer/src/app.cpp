@@ -27,6 +27,7 @@ namespace strata::viewer {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr double kPi = 3.14159265358979323846;
 
 App* app_of(GLFWwindow* w) {
   return static_cast<App*>(glfwGetWindowUserPointer(w));
@@ -125,6 +126,7 @@ App::~App() {
   worker_.reset();  // joins the thread before the GL objects go
   panels_.clear();
   selection_points_ = GpuLines();
+  gizmo_lines_ = GpuLines();
   renderer_.reset();
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
@@ -352,7 +354,9 @@ void App::handle_mouse() {
   int w = 0, h = 0;
   glfwGetWindowSize(window_, &w, &h);
   if (drag_button_ < 0) {
+    gizmo_hover_ = -1;
     if (io.WantCaptureMouse) return;
+    gizmo_hover_ = gizmo_hit(x, y);
     for (int b : {GLFW_MOUSE_BUTTON_LEFT, GLFW_MOUSE_BUTTON_RIGHT, GLFW_MOUSE_BUTTON_MIDDLE}) {
       if (glfwGetMouseButton(window_, b) == GLFW_PRESS) {
         drag_button_ = b;
@@ -362,6 +366,12 @@ void App::handle_mouse() {
                      (glfwGetKey(window_, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? GLFW_MOD_SHIFT : 0);
         if (b == GLFW_MOUSE_BUTTON_LEFT && brush_) {
           // painted below, every frame of the drag
+        } else if (b == GLFW_MOUSE_BUTTON_LEFT && drag_mods_ == 0 && (gizmo_hover_ = gizmo_hit(x, y)) >= 0) {
+          gizmo_begin();
+          if (dragging_) {
+            gizmo_part_ = gizmo_hover_;
+            if (gizmo_part_ >= 3) axis_ = gizmo_part_ - 3;
+          }
         } else if (b == GLFW_MOUSE_BUTTON_LEFT && drag_mods_ != 0 && region_ready() && handle_ready()) {
           const Mat4 v = camera_.view();
           view_axis_ = -v.block<1, 3>(2, 0).transpose().cast<double>();
@@ -400,7 +410,9 @@ void App::handle_mouse() {
   if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && dragging_) {
     const float world_per_pixel =
         2.0f * camera_.distance() * std::tan(0.5f * 0.61f) / static_cast<float>(std::max(h, 1));
-    if (drag_mods_ & GLFW_MOD_SHIFT) {
+    if (gizmo_part_ >= 0) {
+      gizmo_mouse(x, y, dx, dy);
+    } else if (drag_mods_ & GLFW_MOD_SHIFT) {
       angle_ = std::clamp(angle_ + static_cast<float>(dx) * 0.5f, -180.0f, 180.0f);
     } else {
       const Mat4 v = camera_.view();
@@ -433,12 +445,35 @@ void App::draw_scene(int width, int height) {
     if (p->band == edit_band_ && !p->vectors && !selection_points_.empty() && !dragging_)
       renderer_->draw_points(selection_points_, 6.0f);
   }
+  // The gizmo, over everything (no depth test); the hovered or dragged part in yellow.
+  const auto parts = gizmo_parts();
+  if (parts.empty()) return;
+  std::vector<Vec3> segments;
+  std::vector<Rgb> colors;
+  const int lit = gizmo_part_ >= 0 ? gizmo_part_ : gizmo_hover_;
+  for (const auto& [part, line] : parts) {
+    Rgb color = Rgb::Constant(0.15f);
+    color[part % 3] = 0.95f;
+    if (part == lit) color = Rgb(1.0f, 0.9f, 0.1f);
+    for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+      segments.push_back(line[i]);
+      segments.push_back(line[i + 1]);
+      colors.push_back(color);
+      colors.push_back(color);
+    }
+  }
+  gizmo_lines_.upload(segments, colors);
+  renderer_->set_camera(view, projection);
+  glDisable(GL_DEPTH_TEST);
+  renderer_->draw_lines(gizmo_lines_);
+  glEnable(GL_DEPTH_TEST);
 }
 
 void App::update_selection_points() {
   selection_points_ = GpuLines();
   if (!committed_ || (!region_ready() && !handle_ready())) return;
   try {
+    gizmo_pivot_ = handle_pivot();
     const std::vector<Vec3>& points = committed_->band_points(edit_band_);
     std::vector<char> in_region, in_handle;
     if (!selection_flags(in_region, in_handle)) return;
@@ -572,7 +607,7 @@ void App::gizmo_begin() {
   checkpoint();
   translation_ = {0, 0, 0};
   angle_ = 0;
-  pivot_ = handle_pivot();
+  pivot_ = gizmo_pivot_ = handle_pivot();
   try {
     worker_->begin_drag(edit_band_, region_selection(), handle_selection());
   } catch (const std::exception& e) {
@@ -583,11 +618,109 @@ void App::gizmo_begin() {
   dragging_ = true;
 }
 
+bool App::gizmo_frame(Vec3& center, double& size) const {
+  if (brush_ || !region_ready() || !handle_ready()) return false;
+  const Panel* panel = nullptr;
+  for (const auto& p : panels_)
+    if (p->band == edit_band_ && !p->vectors) panel = p.get();
+  if (panel == nullptr) return false;
+  center = (dragging_ ? gizmo_transform().apply(pivot_) : gizmo_pivot_) + panel->offset;
+  if (!center.allFinite()) return false;
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  const double distance = (center - camera_.eye().cast<double>()).norm();
+  // About 90 pixels long at any zoom.
+  size = 90.0 * 2.0 * distance * std::tan(0.5 * 0.61) / std::max(h, 1);
+  return size > 0;
+}
+
+std::vector<std::pair<int, std::vector<Vec3>>> App::gizmo_parts() const {
+  std::vector<std::pair<int, std::vector<Vec3>>> parts;
+  Vec3 c;
+  double size = 0;
+  if (!gizmo_frame(c, size)) return parts;
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 e = Vec3::Unit(a), u = Vec3::Unit((a + 1) % 3), v = Vec3::Unit((a + 2) % 3);
+    const Vec3 tip = c + size * e;
+    // Shaft and a four-line arrow head.
+    parts.push_back({a, {c + 0.25 * size * e, tip}});
+    for (const Vec3& side : {u, Vec3(-u), v, Vec3(-v)})
+      parts.push_back({a, {tip, tip - 0.15 * size * e + 0.06 * size * side}});
+    std::vector<Vec3> ring;
+    for (int i = 0; i <= 48; ++i) {
+      const double t = 2.0 * kPi * i / 48.0;
+      ring.push_back(c + 0.7 * size * (std::cos(t) * u + std::sin(t) * v));
+    }
+    parts.push_back({3 + a, std::move(ring)});
+  }
+  return parts;
+}
+
+bool App::to_screen(const Vec3& world, double& x, double& y) const {
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  const Mat4 m = camera_.projection(static_cast<float>(w) / static_cast<float>(std::max(h, 1))) * camera_.view();
+  const Eigen::Vector4f clip = m * Eigen::Vector4f(static_cast<float>(world.x()), static_cast<float>(world.y()),
+                                                   static_cast<float>(world.z()), 1.0f);
+  if (clip.w() <= 1e-6f) return false;
+  x = 0.5 * (clip.x() / clip.w() + 1.0) * w;
+  y = 0.5 * (1.0 - clip.y() / clip.w()) * h;
+  return true;
+}
+
+int App::gizmo_hit(double x, double y) const {
+  int best = -1;
+  double best_d = 8.0;
+  for (const auto& [part, line] : gizmo_parts()) {
+    for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+      double ax = 0, ay = 0, bx = 0, by = 0;
+      if (!to_screen(line[i], ax, ay) || !to_screen(line[i + 1], bx, by)) continue;
+      const double vx = bx - ax, vy = by - ay, len2 = vx * vx + vy * vy;
+      const double t = len2 > 0 ? std::clamp(((x - ax) * vx + (y - ay) * vy) / len2, 0.0, 1.0) : 0.0;
+      const double d = std::hypot(x - ax - t * vx, y - ay - t * vy);
+      // Arrows win ties with rings where they cross.
+      if (d < best_d || (d <= best_d && best >= 3 && part < 3)) {
+        best_d = d;
+        best = part;
+      }
+    }
+  }
+  return best;
+}
+
+void App::gizmo_mouse(double x, double y, double dx, double dy) {
+  Vec3 c;
+  double size = 0, cx = 0, cy = 0;
+  if (!gizmo_frame(c, size) || !to_screen(c, cx, cy)) return;
+  const int a = gizmo_part_ % 3;
+  const Vec3 e = Vec3::Unit(a);
+  if (gizmo_part_ < 3) {
+    // Along the arrow's screen direction: the world distance its pixels stand for.
+    double tx = 0, ty = 0;
+    if (!to_screen(c + size * e, tx, ty)) return;
+    const double sx = tx - cx, sy = ty - cy, len2 = sx * sx + sy * sy;
+    if (len2 < 4.0) return;  // the axis points at the eye
+    const double amount = (dx * sx + dy * sy) / len2 * size;
+    translation_[static_cast<std::size_t>(a)] += static_cast<float>(amount);
+  } else {
+    const double a0 = std::atan2(y - dy - cy, x - dx - cx), a1 = std::atan2(y - cy, x - cx);
+    double delta = a1 - a0;
+    if (delta > kPi) delta -= 2 * kPi;
+    if (delta < -kPi) delta += 2 * kPi;
+    // Screen y is down: a growing atan2 turns clockwise on screen, negative about an axis
+    // that faces the eye.
+    const bool facing = e.dot(camera_.eye().cast<double>() - c) > 0;
+    const double degrees = -delta * 180.0 / kPi * (facing ? 1.0 : -1.0);
+    angle_ = std::clamp(angle_ + static_cast<float>(degrees), -180.0f, 180.0f);
+  }
+}
+
 void App::gizmo_update() {
   if (dragging_) worker_->update_drag(gizmo_transform());
 }
 
 void App::gizmo_end() {
+  gizmo_part_ = -1;
   if (!dragging_) return;
   worker_->end_drag();
   dragging_ = false;
@@ -710,6 +843,7 @@ void App::on_key(int key, int mods) {
         dragging_ = false;
         if (!undo_.empty()) undo_.pop_back();
       }
+      gizmo_part_ = -1;
       pick_ = Pick::None;
       brush_ = false;
       break;

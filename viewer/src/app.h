@@ -1,7 +1,7 @@
 //! \file app.h
 //! The interactive window (GLFW, OpenGL 3.3 core, Dear ImGui): bands side by side, the band
 //! panel (visibility, live amplitude, mute, the band to edit), sphere selections of region and
-//! handle on the edited band's points and a brush (P) that paints them point by point, a translate/rotate gizmo (Ctrl/Shift + drag, or sliders)
+//! handle on the edited band's points and a brush (P) that paints them point by point, a translate/rotate gizmo (axis arrows and rings at the pivot, Ctrl/Shift + drag, or sliders)
 //! whose drags run on the Worker thread, undo/redo, open/save/export, drag and drop, help (F1).
 //! With --script-drag it drives a drag over --frames frames and (--benchmark) prints the frame
 //! times as JSON.
@@ -76,6 +76,17 @@ class App {
   void clear_brush();
   //! The pivot of the gizmo: the handle sphere's centre, else the brushed handle's centroid.
   Vec3 handle_pivot() const;
+  // The on-screen gizmo at the handle's pivot: parts 0-2 the x/y/z arrows (translate along the
+  // axis), 3-5 the rings about x/y/z (rotate). Drags feed gizmo_begin/update/end.
+  //! Whether it is shown; its centre (world, panel offset included) and arm length (world).
+  bool gizmo_frame(Vec3& center, double& size) const;
+  //! Its parts as polylines (world), with their part index.
+  std::vector<std::pair<int, std::vector<Vec3>>> gizmo_parts() const;
+  //! \p world in window pixels (origin top-left); false behind the eye.
+  bool to_screen(const Vec3& world, double& x, double& y) const;
+  //! The part within 8 pixels of (x, y), nearest first; -1 if none.
+  int gizmo_hit(double x, double y) const;
+  void gizmo_mouse(double x, double y, double dx, double dy);
   bool pick(double x, double y, Vec3& hit) const;
   EditTransform gizmo_transform() const;
   void gizmo_begin();
@@ -122,6 +133,9 @@ class App {
   float angle_ = 0.0f;
   Vec3 view_axis_ = Vec3::UnitZ();
   Vec3 pivot_ = Vec3::Zero();  // of the running drag
+  Vec3 gizmo_pivot_ = Vec3::Zero();  // handle_pivot(), updated with the selection points
+  int gizmo_part_ = -1, gizmo_hover_ = -1;
+  GpuLines gizmo_lines_;
 
   // Mouse.
   double last_x_ = 0, last_y_ = 0, press_x_ = 0, press_y_ = 0;

@@ -120,7 +120,7 @@ void App::draw_edit_panel() {
   ImGui::SameLine();
   ImGui::TextDisabled(handle_ready() ? "handle: red points" : "handle: not set");
   ImGui::BeginDisabled(!region_ready() || !handle_ready());
-  ImGui::TextUnformatted("Gizmo: Ctrl+drag translates, Shift+drag rotates");
+  ImGui::TextUnformatted("Gizmo: drag an arrow / ring, or Ctrl+drag translates, Shift+drag rotates");
   ImGui::Combo("axis", &axis_, "x\0y\0z\0view\0");
   bool changed = ImGui::SliderFloat("angle", &angle_, -180.0f, 180.0f, "%.1f deg");
   bool active = ImGui::IsItemActive(), activated = ImGui::IsItemActivated(),
@@ -217,6 +217,8 @@ void App::draw_help() {
       {"R / H", "click to place the region / handle sphere"},
       {"P", "brush mode: left drag paints the region's points"},
       {"P + Shift / Ctrl drag", "brush: paint the handle / erase (radius in Edit)"},
+      {"drag a gizmo arrow", "translate the handle along x / y / z"},
+      {"drag a gizmo ring", "rotate the handle about x / y / z"},
       {"Ctrl + left drag", "translate the handle (drag runs live)"},
       {"Shift + left drag", "rotate the handle about the view axis"},
       {"Esc", "cancel the drag / selection mode"},
