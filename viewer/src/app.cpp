@@ -585,9 +585,10 @@ void App::brush_at(const Vec3& hit, bool handle, bool erase) {
       changed |= brush_region_[i] || brush_handle_[i];
       brush_region_[i] = brush_handle_[i] = 0;
     } else {
-      std::vector<char>& flags = handle ? brush_handle_ : brush_region_;
-      changed |= !flags[i];
-      flags[i] = 1;
+      // The handle is part of the region: painting it paints both.
+      changed |= !brush_region_[i] || (handle && !brush_handle_[i]);
+      brush_region_[i] = 1;
+      if (handle) brush_handle_[i] = 1;
     }
   }
   if (!changed) return;
@@ -678,8 +679,9 @@ int App::gizmo_hit(double x, double y) const {
       const double vx = bx - ax, vy = by - ay, len2 = vx * vx + vy * vy;
       const double t = len2 > 0 ? std::clamp(((x - ax) * vx + (y - ay) * vy) / len2, 0.0, 1.0) : 0.0;
       const double d = std::hypot(x - ax - t * vx, y - ay - t * vy);
-      // Arrows win ties with rings where they cross.
-      if (d < best_d || (d <= best_d && best >= 3 && part < 3)) {
+      // Arrows win over rings where they cross (an edge-on ring lies along an arrow).
+      const bool better = best < 0 || (part < 3) == (best < 3) ? d < best_d : part < 3;
+      if (d < 8.0 && better) {
         best_d = d;
         best = part;
       }

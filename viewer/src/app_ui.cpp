@@ -112,7 +112,7 @@ void App::draw_edit_panel() {
     clear_brush();
     update_selection_points();
   }
-  if (brush_) ImGui::TextDisabled("drag: paint region, Shift: handle, Ctrl: erase");
+  if (brush_) ImGui::TextDisabled("drag: paint region, Shift: handle (and region), Ctrl: erase");
   const float r = camera_.radius();
   if (ImGui::SliderFloat("region radius", &region_radius_, 0.0f, r, "%.3f")) update_selection_points();
   if (ImGui::SliderFloat("handle radius", &handle_radius_, 0.0f, r, "%.3f")) update_selection_points();
