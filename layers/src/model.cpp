@@ -23,7 +23,9 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
 
-double mean_edge_length(const std::vector<Vec3>& x, const std::vector<std::vector<int>>& faces) {
+// Mean length of the face edges (each edge once per face it bounds); faces of any corner count.
+template <class Faces>
+double mean_edge_length(const std::vector<Vec3>& x, const Faces& faces) {
   double sum = 0.0;
   long long n = 0;
   for (const auto& f : faces)
@@ -32,13 +34,6 @@ double mean_edge_length(const std::vector<Vec3>& x, const std::vector<std::vecto
       ++n;
     }
   return n > 0 ? sum / n : 0.0;
-}
-
-std::vector<std::vector<int>> as_polygons(const std::vector<Face>& faces) {
-  std::vector<std::vector<int>> out;
-  out.reserve(faces.size());
-  for (const Face& f : faces) out.push_back({f[0], f[1], f[2]});
-  return out;
 }
 
 EditOptions edit_options(const ModelOptions& o) {
@@ -399,7 +394,7 @@ DetailMagnitude LayeredModel::detail_magnitude(int k) const {
     m.mean_edge_length = mean_edge_length(b.cage.vertices, b.cage.faces);
     return m;
   }
-  m.mean_edge_length = mean_edge_length(b.mesh.vertices, as_polygons(b.mesh.faces));
+  m.mean_edge_length = mean_edge_length(b.mesh.vertices, b.mesh.faces);
   const DetailEncoding& e = b.encoding;
   double sum = 0.0;
   for (int i = 0; i < e.num_detail_vertices(); ++i) {

@@ -53,8 +53,8 @@ TriMesh midpoint_subdivide(const TriMesh& m) {
   return out;
 }
 
-// The vertices of the largest sphere-selected region around the top of the model in +y, for a
-// generic bend: region = cage vertices above 60% of the height, handle above 80%.
+// A generic 90-degree bend of the top of the model (+y) at band 0: region = the cage vertices above
+// 60% of the cage's height, handle = those above 80%, rotated about x.
 layers::CascadeReport bend_top(layers::LayeredModel& model) {
   const std::vector<Vec3>& c = model.band_points(0);
   Vec3 lo = c[0], hi = c[0];

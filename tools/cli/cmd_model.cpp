@@ -219,6 +219,7 @@ json cascade_json(const layers::CascadeReport& r) {
     rebuilt.push_back({{"band", b.band},
                        {"solved_vertices", b.solved_vertices},
                        {"rest_vertices", b.rest_vertices},
+                       {"rigid_vertices", b.rigid_vertices},
                        {"solved_prisms", b.solved_prisms},
                        {"volume_metrics", volume_metrics_json(b.volume)},
                        {"solver_converged", b.stats.converged},
@@ -234,7 +235,8 @@ void print_cascade(const layers::CascadeReport& r) {
   std::cout << "band " << r.edited_band << " edited in " << fixed(r.edit_seconds, 2) << " s\n";
   for (const layers::BandRebuild& b : r.rebuilt)
     std::cout << "band " << b.band << ": " << b.solved_vertices << " vertices solved (" << b.solved_prisms
-              << " prisms), " << b.rest_vertices << " back at rest; volume error max "
+              << " prisms), " << b.rest_vertices << " back at rest, " << b.rigid_vertices
+              << " moved rigidly; volume error max "
               << sci(b.volume.max_relative_error) << ", rms " << sci(b.volume.rms_relative_error) << "; "
               << fixed(b.seconds, 2) << " s\n";
 }
@@ -341,6 +343,14 @@ int run_export(const ExportCmdOptions& o) {
   return 0;
 }
 
+// The options `edit` and `amplitude` share: the output model, the report, intersections, quiet.
+void add_change_options(CLI::App& app, EditCmdOptions& o) {
+  app.add_option("-o,--output", o.output, "Model to write")->required();
+  app.add_option("--report", o.report, "Write a JSON report");
+  app.add_flag("--intersections", o.intersections, "Count the finest band's self-intersections before and after");
+  app.add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
+}
+
 }  // namespace
 
 std::vector<Subcommand> register_model_commands(CLI::App& parent) {
@@ -382,11 +392,7 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("--band", o->band, "Band to edit")->required()->check(CLI::NonNegativeNumber);
     app->add_option("--edit", o->edit, "Edit script (JSON)")->required();
-    app->add_option("-o,--output", o->output, "Model to write")->required();
-    app->add_option("--report", o->report, "Write a JSON report");
-    app->add_flag("--intersections", o->intersections,
-                  "Count the finest band's self-intersections before and after");
-    app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+    add_change_options(*app, *o);
     out.push_back({app, [o] { return run_edit(*o); }});
   }
   {
@@ -398,11 +404,7 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("--band", o->band, "Band (1 or more)")->required()->check(CLI::PositiveNumber);
     app->add_option("--scale", o->scale, "Amplitude")->required();
-    app->add_option("-o,--output", o->output, "Model to write")->required();
-    app->add_option("--report", o->report, "Write a JSON report");
-    app->add_flag("--intersections", o->intersections,
-                  "Count the finest band's self-intersections before and after");
-    app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+    add_change_options(*app, *o);
     out.push_back({app, [o] { return run_amplitude(*o); }});
   }
   {
