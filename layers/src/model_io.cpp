@@ -49,6 +49,7 @@ json options_json(const ModelOptions& o) {
             {"coarsest_vertices", r.coarsest_vertices},
             {"coarsening_ratio", r.coarsening_ratio},
             {"volume_iterations", r.volume_iterations},
+            {"finest_volume_iterations", r.finest_volume_iterations},
             {"regularization_iterations", r.regularization_iterations},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
@@ -133,6 +134,11 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.coarsest_vertices = static_cast<int>(h.integer(r, "coarsest_vertices", wr, 1, kMaxCount));
   ro.coarsening_ratio = h.number(r, "coarsening_ratio", wr);
   ro.volume_iterations = static_cast<int>(h.integer(r, "volume_iterations", wr, 1, 100000));
+  // Files written before the option existed solved the finest level like the others.
+  ro.finest_volume_iterations =
+      r.contains("finest_volume_iterations")
+          ? static_cast<int>(h.integer(r, "finest_volume_iterations", wr, 1, 100000))
+          : ro.volume_iterations;
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));

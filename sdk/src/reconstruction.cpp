@@ -73,6 +73,7 @@ struct State {
   std::vector<Vec3> before;     // positions before a regularization round
   std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
   double amplitude = 1.0;       // scales every target and rest offset (ReconstructRequest)
+  int volume_iterations = 0;    // volume steps per cycle on the level being solved
   GnScratch gn;
 };
 
@@ -178,6 +179,7 @@ class VolumeReconstructor::Impl {
         // The exact solve from a nearby start: the finest level only, so that a start which
         // already solves the problem stays put (coarse levels have their own targets).
         const Level& F = levels_.back();
+        s.volume_iterations = opt_.volume_iterations;
         st.finest_cycles_per_scale.push_back(
             solve_level(F, s, a, warm->tolerance, opt_.final_max_cycles, st, V));
         polish(F, s, warm->tolerance, st, V);
@@ -230,7 +232,8 @@ class VolumeReconstructor::Impl {
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
-        opt_.regularization_iterations < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
+        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 ||
+        !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
         !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
         opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 ||
         opt_.length_lambda < 0)
@@ -432,6 +435,7 @@ class VolumeReconstructor::Impl {
         continue;
       }
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
+      s.volume_iterations = finest && !full_scale ? opt_.finest_volume_iterations : opt_.volume_iterations;
       const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
@@ -485,7 +489,7 @@ class VolumeReconstructor::Impl {
               std::vector<double>& V) const {
     const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
                         static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
-    return project(L, s, h, tol, opt_.volume_iterations, direct, st, V);
+    return project(L, s, h, tol, s.volume_iterations, direct, st, V);
   }
 
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the

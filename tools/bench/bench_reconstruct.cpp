@@ -77,6 +77,7 @@ struct Args {
   cases::DetailKind detail = cases::DetailKind::Bumps;
   std::string out;
   double max_seconds = 900.0;
+  ReconstructOptions reconstruct;  // defaults, but for --finest-volume-iterations
 };
 
 Args parse_args(int argc, char** argv) {
@@ -104,6 +105,8 @@ Args parse_args(int argc, char** argv) {
       a.detail = *kind;
     } else if (opt == "--out") {
       a.out = value(i);
+    } else if (opt == "--finest-volume-iterations") {
+      a.reconstruct.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
@@ -145,7 +148,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   c = {};  // an application keeps only the encoding and the edited base
 
   log("setup (hierarchy + factorization analysis)...");
-  const VolumeReconstructor rec(std::move(enc));
+  const VolumeReconstructor rec(std::move(enc), args.reconstruct);
   sec["setup"] = rec.setup_seconds();
   rss["setup"] = max_rss_bytes();
   const DetailEncoding& e = rec.encoding();
@@ -311,7 +314,8 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv);
   } catch (const std::exception& ex) {
     std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
-              << "[--case bumps|rings|cuboid] [--out FILE.json] [--max-seconds S]" << std::endl;
+              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--out FILE.json] "
+              << "[--max-seconds S]" << std::endl;
     return 2;
   }
   try {
@@ -325,7 +329,7 @@ int main(int argc, char** argv) {
       errors = errors || results.back().contains("error");
     }
 
-    const ReconstructOptions ro;
+    const ReconstructOptions& ro = args.reconstruct;
     const json* r100k = find_size(results, 100000);
     const json* r1m = find_size(results, 1000000);
     auto reconstruct_seconds = [](const json* r) { return (*r)["seconds"]["reconstruct"].get<double>(); };
@@ -377,6 +381,7 @@ int main(int argc, char** argv) {
          {{"volume_scales", ro.volume_scales},
           {"max_levels", ro.max_levels},
           {"volume_iterations", ro.volume_iterations},
+          {"finest_volume_iterations", ro.finest_volume_iterations},
           {"regularization_iterations", ro.regularization_iterations},
           {"max_cycles", ro.max_cycles},
           {"final_max_cycles", ro.final_max_cycles},

@@ -41,6 +41,11 @@ struct ReconstructOptions {
   //! n: volume-preservation steps (Gauss-Newton projections onto the prism volumes, section 4.1)
   //! per cycle at most; a cycle's volume steps stop once the level's tolerance holds.
   int volume_iterations = 5;
+  //! Volume steps per cycle at most on the finest level at the intermediate volume scales. One
+  //! step between regularization rounds is enough there to grow the detail without folds (the
+  //! full scale and the polish reach the tolerance); more steps cost time (measured on the 100k
+  //! bends: 5 steps take about 1.6 times as long, with the same intersection counts).
+  int finest_volume_iterations = 1;
   //! m: regularization sweeps per cycle.
   int regularization_iterations = 2;
   //! Cycles (volume steps, then m regularization sweeps) per level and volume scale at most.
