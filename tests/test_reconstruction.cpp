@@ -178,3 +178,68 @@ TEST(Reconstruction, RejectsBadInput) {
   broken.target_volumes.pop_back();
   EXPECT_THROW(VolumeReconstructor{broken}, InvalidInput);
 }
+
+// Interactive drags (paper, section 5) through a DragState.
+TEST(DragState, StepsBeforeResetOrOfAnotherSizeAreRejected) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 2000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  DragState state;
+  EXPECT_FALSE(state.started());
+  EXPECT_THROW(rec.drag_step(c.base.vertices, state), InvalidInput);
+  const BaseFrames rest = rec.base_frames(c.base.vertices);
+  std::vector<Vec3> short_start(e.detail_rest.begin(), e.detail_rest.end() - 1);
+  EXPECT_THROW(state.reset(rest, short_start), InvalidInput);
+  std::vector<Vec3> nan_start = e.detail_rest;
+  nan_start[3].x() = std::nan("");
+  EXPECT_THROW(state.reset(rest, nan_start), InvalidInput);
+  // A state started for another encoding.
+  const cases::CylinderCase other = make_case(cases::DetailKind::Bumps, 4000);
+  const DetailEncoding oe = encode_detail(other.detail, other.base);
+  state.reset(VolumeReconstructor(oe).base_frames(other.base.vertices), oe.detail_rest);
+  EXPECT_TRUE(state.started());
+  EXPECT_THROW(rec.drag_step(c.base.vertices, state), InvalidInput);
+}
+
+// Over the unedited base every level's state is the rest detail, which holds every level's target
+// volumes and is a fixed point of the regularization: a step gives the detail back.
+TEST(DragState, AStepOverTheUneditedBaseKeepsTheDetail) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 4000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  DragState state;
+  state.reset(rec.base_frames(c.base.vertices), e.detail_rest);
+  WarmStartOptions preview{true, 1e-2, 1, 30};
+  for (int k = 0; k < 3; ++k) {
+    const ReconstructResult r = rec.drag_step(c.base.vertices, state, preview);
+    EXPECT_LT(max_distance(r.positions, e.detail_rest), 1e-9 * bbox_diagonal(e.detail_rest)) << k;
+    EXPECT_LE(r.stats.max_relative_error, 1e-6);
+  }
+}
+
+// A drag from the base to the paper's 90-degree bend in small steps: at release the preview has
+// followed the bend (much closer to the exact result than the unbent detail is) and is finite.
+// (Known limit: held over an unchanged base, the preview drifts instead of converging, since one
+// inexact volume step per coarse level and frame does not settle against the regularization.)
+TEST(DragState, PreviewsFollowTheDrag) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  const std::vector<Vec3>& b0 = c.base.vertices;
+  const std::vector<Vec3>& b1 = c.edited_base.vertices;
+  const std::vector<Vec3> exact = rec.reconstruct(b1).positions;
+  DragState state;
+  state.reset(rec.base_frames(b0), e.detail_rest);
+  const WarmStartOptions preview{true, 1e-2, 1, 30};
+  const int steps = 15;
+  ReconstructResult r;
+  for (int k = 1; k <= steps; ++k) {
+    std::vector<Vec3> b(b0.size());
+    const double t = static_cast<double>(k) / steps;
+    for (std::size_t v = 0; v < b.size(); ++v) b[v] = (1 - t) * b0[v] + t * b1[v];
+    r = rec.drag_step(b, state, preview);
+    ASSERT_EQ(r.positions.size(), e.detail_rest.size());
+    for (const Vec3& p : r.positions) ASSERT_TRUE(p.allFinite());
+  }
+  EXPECT_LT(max_distance(r.positions, exact), 0.1 * max_distance(e.detail_rest, exact));
+}

@@ -103,7 +103,7 @@ struct PartSolve {
   std::vector<int> vertices;     // part vertex -> band vertex
   std::unique_ptr<VolumeReconstructor> reconstructor;
   std::vector<Vec3> current;     // part positions (pinned ones fixed), warm start of drag steps
-  BaseFrames previous;           // the base frames of the last drag step
+  DragState drag;                // every multigrid level's last drag solution
 
   PartSolve(const Band& band, const std::vector<char>& solve, const ModelOptions& o) {
     std::vector<int> faces;
@@ -145,25 +145,21 @@ struct PartSolve {
     return r;
   }
 
-  // One interactive step (section 5): warm-started from the previous step's solution carried
-  // along with its base frames (each displacement keeps its components in its frame), volumes on
-  // the coarse levels only.
+  // Starts a drag from the current positions over \p base, the band's base before the drag.
+  void begin_drag(const std::vector<Vec3>& base) {
+    if (reconstructor) drag.reset(evaluate_base_frames(part, base), current);
+  }
+
+  // One interactive step (section 5): each multigrid level goes on from its own last solution
+  // carried along with the base frames (DragState), volumes on the coarse levels only, with the
+  // editors' step budget (EditOptions::drag).
   void solve_drag(const std::vector<Vec3>& base, double amplitude) {
     const BaseFrames frames = evaluate_base_frames(part, base);
     if (reconstructor) {
-      if (!previous.points.empty())
-        for (std::size_t v = 0; v < current.size(); ++v) {
-          if (part.pinned[v]) continue;
-          const Vec3 d = current[v] - previous.points[v];
-          const Vec3 &t0 = previous.tangents[v], &n0 = previous.normals[v], b0 = n0.cross(t0);
-          const Vec3 &t1 = frames.tangents[v], &n1 = frames.normals[v], b1 = n1.cross(t1);
-          current[v] = frames.points[v] + d.dot(t0) * t1 + d.dot(b0) * b1 + d.dot(n0) * n1;
-        }
-      previous = frames;
       ReconstructRequest req;
       req.amplitude = amplitude;
       req.pinned_positions = &current;
-      current = reconstructor->reconstruct_from(frames, current, WarmStartOptions{true, 1e-2}, req).positions;
+      current = reconstructor->drag_step(frames, drag, EditOptions().drag, req).positions;
     } else {
       std::vector<Vec3> x = reconstruct_vectors(part, frames, amplitude);
       for (std::size_t v = 0; v < x.size(); ++v)
@@ -589,6 +585,7 @@ void LayeredModel::begin_drag(int k, const Selection& region, const Selection& h
   for (int j = k + 1; j < m.n(); ++j) {
     std::vector<char> reach = m.reached(j, moved);
     d->finer.push_back(std::make_unique<PartSolve>(m.bands[j], reach, m.options));
+    d->finer.back()->begin_drag(m.points(j - 1));
     moved = std::move(reach);
   }
   d->saved = m.bands;

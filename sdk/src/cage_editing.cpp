@@ -112,7 +112,7 @@ class CageEditor::Impl {
   }
 
   void begin_drag() {
-    detail_.begin_drag();
+    detail_.begin_drag(edited_cage(EditTransform{}));
     drag_positions_ = mesh_.vertices;
     drag_transform_ = EditTransform{};
     dragging_ = true;
@@ -125,8 +125,7 @@ class CageEditor::Impl {
     return drag_positions_;
   }
 
-  // The exact solve from the clean start, as RegionEditor::end_drag (warm-started exact solves
-  // drift into folds over long drags).
+  // The exact solve from the clean start, as RegionEditor::end_drag (apply() of the same transform).
   EditResult end_drag() {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
     dragging_ = false;

@@ -53,6 +53,7 @@ struct Level {
 
 // Scratch of one Gauss-Newton step, reused across steps.
 struct GnScratch {
+  int cg_max_iterations = 0;  // 0: the options'; a drag step's own budget otherwise
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<double> r, y, z, p, Ap, diag, values;
   std::vector<Vec3> delta;
@@ -77,7 +78,47 @@ struct State {
   GnScratch gn;
 };
 
+// p carried along from the frame (from) of vertex i to its frame (to): the displacement keeps
+// its tangent, bitangent and normal components.
+Vec3 carry(const Vec3& p, const BaseFrames& from, const BaseFrames& to, int i) {
+  const Vec3 d = p - from.points[i];
+  const Vec3 &t0 = from.tangents[i], &n0 = from.normals[i];
+  const Vec3 &t1 = to.tangents[i], &n1 = to.normals[i];
+  return to.points[i] + d.dot(t0) * t1 + d.dot(n0.cross(t0)) * n1.cross(t1) + d.dot(n0) * n1;
+}
+
 }  // namespace
+
+struct DragState::Impl {
+  BaseFrames frames;                     // the frames the positions below are over
+  std::vector<Vec3> start;               // reset()'s positions, until the first step
+  std::vector<std::vector<Vec3>> level;  // per level, indexed by detail vertex (the level's own)
+  bool started = false;
+};
+
+DragState::DragState() : impl_(std::make_unique<Impl>()) {}
+DragState::~DragState() = default;
+DragState::DragState(DragState&&) noexcept = default;
+DragState& DragState::operator=(DragState&&) noexcept = default;
+
+void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
+  const std::size_t n = start.size();
+  if (frames.points.size() != n || frames.normals.size() != n || frames.tangents.size() != n)
+    throw InvalidInput("drag start has " + std::to_string(n) + " positions but " +
+                       std::to_string(frames.points.size()) + " base frames");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!start[i].allFinite() || !frames.points[i].allFinite() || !frames.normals[i].allFinite() ||
+        !frames.tangents[i].allFinite())
+      throw InvalidInput("drag start: vertex " + std::to_string(i) + " or its base frame is not finite");
+  impl_->frames = frames;
+  impl_->start = std::move(start);
+  impl_->level.clear();
+  impl_->started = true;
+}
+
+bool DragState::started() const {
+  return impl_->started;
+}
 
 class VolumeReconstructor::Impl {
  public:
@@ -181,7 +222,8 @@ class VolumeReconstructor::Impl {
         const Level& F = levels_.back();
         s.volume_iterations = opt_.volume_iterations;
         st.finest_cycles_per_scale.push_back(
-            solve_level(F, s, a, warm->tolerance, opt_.final_max_cycles, st, V));
+            solve_level(F, s, a, warm->tolerance, warm->max_cycles > 0 ? warm->max_cycles : opt_.final_max_cycles,
+                        st, V));
         polish(F, s, warm->tolerance, st, V);
       }
     }
@@ -190,6 +232,99 @@ class VolumeReconstructor::Impl {
     compute_volumes(F, s, V);
     st.max_relative_error = relative_error(F, a, V, &st.rms_relative_error);
     st.converged = st.max_relative_error <= (start ? warm->tolerance : opt_.tolerance);
+    for (const Vec3& p : s.P)
+      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
+    st.seconds_solve = seconds_since(t0);
+    res.positions = std::move(s.P);
+    return res;
+  }
+
+  // One drag step (section 5) with per-level warm starts; see VolumeReconstructor::drag_step().
+  ReconstructResult drag(const BaseFrames& fr, DragState::Impl& ds, const WarmStartOptions& warm,
+                         const ReconstructRequest& request) const {
+    const int n = enc_.num_detail_vertices();
+    if (!ds.started) throw InvalidInput("drag_step() before DragState::reset()");
+    if (static_cast<int>(ds.frames.points.size()) != n)
+      throw InvalidInput("drag state has " + std::to_string(ds.frames.points.size()) + " vertices, the detail has " +
+                         std::to_string(n));
+    ReconstructResult res;
+    ReconstructStats& st = res.stats;
+    auto t0 = Clock::now();
+    State s;
+    init_state(fr, request, s);
+    const int nl = static_cast<int>(levels_.size());
+    st.levels = nl;
+    for (const Level& L : levels_) {
+      st.level_vertices.push_back(static_cast<int>(L.verts.size()));
+      st.level_faces.push_back(static_cast<int>(L.faces.size()));
+    }
+    if (ds.level.empty()) {
+      // The first step: every level starts from the drag's start positions.
+      ds.level.assign(nl, {});
+      for (int l = 0; l < nl; ++l) {
+        ds.level[l].assign(n, Vec3::Zero());
+        for (int i : levels_[l].verts) ds.level[l][i] = ds.start[i];
+      }
+      ds.start = {};
+    }
+    // Every level's last solution, carried along with the base frames.
+    for (int l = 0; l < nl; ++l)
+      for (int i : levels_[l].verts)
+        ds.level[l][i] = pinned(i) ? s.pinned_at[i] : carry(ds.level[l][i], ds.frames, fr, i);
+    ds.frames = fr;
+    st.seconds_frames = seconds_since(t0);
+    t0 = Clock::now();
+    const double a = s.amplitude;
+    std::vector<double> V;
+    s.P.assign(n, Vec3::Zero());
+    s.P0.assign(n, Vec3::Zero());
+    s.gn.cg_max_iterations = warm.cg_max_iterations;
+    for (int l = 0; l < nl; ++l) {
+      const Level& L = levels_[l];
+      const std::vector<Vec3>& start = ds.level[l];
+      if (l == 0) {
+        for (int i : L.verts) s.P[i] = s.P0[i] = start[i];
+      } else {
+        // The coarser level's correction (its solution minus its start) carried to this level's
+        // own start: added as is on the shared vertices, prolongated to the inserted ones.
+        const Level& C = levels_[l - 1];
+        for (int i : L.inserted) s.P[i] = s.P0[i] = start[i];
+        prolongate(L, C, s);
+        for (int i : C.verts) {
+          s.P[i] = pinned(i) ? start[i] : Vec3(start[i] + (s.P[i] - s.P0[i]));
+          s.P0[i] = start[i];
+        }
+      }
+      const bool finest = l + 1 == nl;
+      if (a == 0.0) {
+        for (int i : L.verts) s.P[i] = pinned(i) ? s.pinned_at[i] : s.Q[i];
+      } else if (!finest && !warm.coarse_levels_only) {
+        // The exact solve: the coarse levels only serve the previews; carried along, unsolved.
+      } else if (finest && warm.coarse_levels_only && nl > 1) {
+        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
+        st.regularization_sweeps += opt_.regularization_iterations;
+      } else if (!finest && warm.level_steps > 0) {
+        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
+        st.regularization_sweeps += opt_.regularization_iterations;
+        project(L, s, a, opt_.level_tolerance, warm.level_steps,
+                static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms, st, V);
+        ++st.cycles;
+      } else {
+        s.volume_iterations = opt_.volume_iterations;
+        const int final_cycles = warm.max_cycles > 0 ? warm.max_cycles : opt_.final_max_cycles;
+        const int cycles = solve_level(L, s, a, finest ? warm.tolerance : opt_.level_tolerance,
+                                       finest ? final_cycles : opt_.max_cycles, st, V);
+        if (finest) {
+          st.finest_cycles_per_scale.push_back(cycles);
+          polish(L, s, warm.tolerance, st, V);
+        }
+      }
+      for (int i : L.verts) ds.level[l][i] = s.P[i];
+    }
+    const Level& F = levels_.back();
+    compute_volumes(F, s, V);
+    st.max_relative_error = relative_error(F, a, V, &st.rms_relative_error);
+    st.converged = st.max_relative_error <= warm.tolerance;
     for (const Vec3& p : s.P)
       if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
     st.seconds_solve = seconds_since(t0);
@@ -616,7 +751,8 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) rz += res[j] * w.z[j];
     const double stop = opt_.cg_tolerance * opt_.cg_tolerance * rr;
     int it = 0;
-    for (; it < opt_.cg_max_iterations && rr > stop; ++it) {
+    const int max_it = w.cg_max_iterations > 0 ? w.cg_max_iterations : opt_.cg_max_iterations;
+    for (; it < max_it && rr > stop; ++it) {
       apply(w.p, w.Ap);
       double pAp = 0.0;
       for (std::size_t j = 0; j < m; ++j) pAp += w.p[j] * w.Ap[j];
@@ -749,6 +885,24 @@ ReconstructResult VolumeReconstructor::reconstruct_from(const std::vector<Vec3>&
                                                         const WarmStartOptions& warm,
                                                         const ReconstructRequest& request) const {
   return impl_->run(edited_base, &start, &warm, request);
+}
+ReconstructResult VolumeReconstructor::drag_step(const BaseFrames& edited_frames, DragState& state,
+                                                 const WarmStartOptions& warm,
+                                                 const ReconstructRequest& request) const {
+  return impl_->drag(edited_frames, *state.impl_, warm, request);
+}
+ReconstructResult VolumeReconstructor::drag_step(const std::vector<Vec3>& edited_base, DragState& state,
+                                                 const WarmStartOptions& warm,
+                                                 const ReconstructRequest& request) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  const BaseFrames fr = impl_->frames_for(edited_base);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ReconstructResult r = impl_->drag(fr, *state.impl_, warm, request);
+  r.stats.seconds_frames += seconds;
+  return r;
+}
+BaseFrames VolumeReconstructor::base_frames(const std::vector<Vec3>& edited_base) const {
+  return impl_->frames_for(edited_base);
 }
 const DetailEncoding& VolumeReconstructor::encoding() const {
   return impl_->encoding();

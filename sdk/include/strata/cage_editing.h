@@ -29,8 +29,8 @@ struct CageEditOptions {
   ProjectOptions projection;
   //! Reconstruction (exact solves: apply() and end_drag()).
   ReconstructOptions reconstruct;
-  //! Interactive steps (update_drag()).
-  WarmStartOptions drag{true, 1e-2};
+  //! Interactive steps (update_drag()), as EditOptions::drag.
+  WarmStartOptions drag{true, 1e-2, 1, 30};
 };
 
 //! The blend field of an edit on a cage (paper, section 5, with the cage as the base): s is

@@ -104,8 +104,10 @@ struct EditOptions {
   //! Reconstruction of the region's detail (exact solves: apply() and end_drag()).
   ReconstructOptions reconstruct;
   //! Interactive steps (update_drag()): volumes on the coarse levels only, the finest level by
-  //! regularization (section 5). The tolerance applies to the coarse levels.
-  WarmStartOptions drag{true, 1e-2};
+  //! regularization (section 5); one volume step of at most 30 conjugate-gradient iterations per
+  //! coarse level and step, each level going on from its own last solution, so that a step's time
+  //! is bounded and the levels converge over the drag's frames.
+  WarmStartOptions drag{true, 1e-2, 1, 30};
 };
 
 //! Timings of one edit, in seconds.

@@ -122,6 +122,16 @@ struct WarmStartOptions {
   bool coarse_levels_only = false;
   //! Max relative volume error to stop at on the finest level (when it is solved).
   double tolerance = 1e-4;
+  //! drag_step() only: volume steps per coarse level and step at most, after one regularization
+  //! round (0: solve each level to the level tolerance, up to max_cycles cycles). A small budget
+  //! bounds the time of a step; the levels keep converging over the following steps, since each
+  //! starts from its own last solution (the computation is spread over the frames, section 5).
+  int level_steps = 0;
+  //! drag_step() only: conjugate-gradient iterations per volume step at most (0: the
+  //! reconstruction's own ReconstructOptions::cg_max_iterations).
+  int cg_max_iterations = 0;
+  //! Cycles on the finest level at most when it is solved (0: ReconstructOptions::final_max_cycles).
+  int max_cycles = 0;
 };
 
 //! Per-call inputs of a clean-start reconstruction beyond the edited base (layered models).
@@ -135,6 +145,33 @@ struct ReconstructRequest {
   //! layered model pins the vertices of a band whose base did not change at their current
   //! positions, which need not be the displacement vectors' after earlier edits.
   const std::vector<Vec3>* pinned_positions = nullptr;
+};
+
+class VolumeReconstructor;
+
+//! What an interactive drag carries from one step to the next (paper, section 5): every multigrid
+//! level's own last solution and the base frames it was solved over. Each step starts every level
+//! from its previous solution carried along with the base frames (each displacement keeps its
+//! components in its frame), so a small change of the base costs a few steps per level instead of
+//! a solve from the finest level's positions. Belongs to one VolumeReconstructor.
+class DragState {
+ public:
+  DragState();
+  ~DragState();
+  DragState(DragState&&) noexcept;
+  DragState& operator=(DragState&&) noexcept;
+
+  //! Starts a drag from \p start, the detail positions (one per detail vertex) over \p frames
+  //! (e.g. the encoded detail over the base at rest). Every level starts from these positions.
+  //! \throw InvalidInput if the sizes differ or a value is not finite.
+  void reset(const BaseFrames& frames, std::vector<Vec3> start);
+  //! Whether reset() was called.
+  bool started() const;
+
+ private:
+  friend class VolumeReconstructor;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 //! The volumetric reconstruction operator for one encoding. Construction builds the multigrid
@@ -179,6 +216,25 @@ class VolumeReconstructor {
                                      const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
   ReconstructResult reconstruct_from(const BaseFrames& edited_frames, const std::vector<Vec3>& start,
                                      const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+
+  //! One step of an interactive drag over \p edited_frames (paper, section 5). With
+  //! warm.coarse_levels_only (a preview), every coarse level starts from its own solution of the
+  //! previous step carried along with the base frames, plus the correction prolongated from the
+  //! next coarser level, and takes volume steps (warm.level_steps of them, or until the level
+  //! tolerance); the finest level starts from its previous positions carried along, plus the
+  //! prolongated correction, and is regularized only. Without it (the exact solve at the drag's
+  //! end), the finest level alone is solved to warm.tolerance from its carried positions. Updates
+  //! \p state. No volume scaling: a drag's steps are small.
+  //! \pre state.reset() was called with this encoding's vertex count.
+  //! \throw InvalidInput as reconstruct_from(), or if the state was not started or has another size.
+  ReconstructResult drag_step(const BaseFrames& edited_frames, DragState& state, const WarmStartOptions& warm = {},
+                              const ReconstructRequest& request = {}) const;
+  //! The same over an edited base given by its vertices (or its cage's control points).
+  ReconstructResult drag_step(const std::vector<Vec3>& edited_base, DragState& state,
+                              const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+  //! The base frames over an edited base given by its vertices (or its cage's control points), as
+  //! the reconstruction evaluates them (keeping the subdivision surface's patch table).
+  BaseFrames base_frames(const std::vector<Vec3>& edited_base) const;
 
   const DetailEncoding& encoding() const;
   const ReconstructOptions& options() const;

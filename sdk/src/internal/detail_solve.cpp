@@ -37,14 +37,16 @@ std::vector<Vec3> DetailSolve::solve(const std::vector<Vec3>& base, EditResult& 
   return sub;
 }
 
-void DetailSolve::begin_drag() {
+void DetailSolve::begin_drag(const std::vector<Vec3>& rest_base) {
   drag_sub_ = enc_.detail_rest;
-  if (method_ == EditOptions::Method::Volumes) ensure_reconstructor();
+  if (method_ != EditOptions::Method::Volumes) return;
+  ensure_reconstructor();
+  drag_state_.reset(rec_->base_frames(rest_base), enc_.detail_rest);
 }
 
 const std::vector<Vec3>& DetailSolve::drag_step(const std::vector<Vec3>& base) {
   if (method_ == EditOptions::Method::Volumes)
-    drag_sub_ = rec_->reconstruct_from(base, drag_sub_, drag_).positions;
+    drag_sub_ = rec_->drag_step(base, drag_state_, drag_).positions;
   else
     drag_sub_ = reconstruct_vectors(enc_, base);
   return drag_sub_;

@@ -22,8 +22,9 @@ class DetailSolve {
   //! from the clean start for volumes. Fills res.stats, res.times.setup/solve and res.volume.
   std::vector<Vec3> solve(const std::vector<Vec3>& base, EditResult& res) const;
 
-  //! Starts a drag from the encoded detail at rest.
-  void begin_drag();
+  //! Starts a drag from the encoded detail at rest, over \p rest_base (the encoding's base vertices
+  //! or the cage's control points at rest).
+  void begin_drag(const std::vector<Vec3>& rest_base);
   //! One warm-started step over \p base; returns the detail positions.
   const std::vector<Vec3>& drag_step(const std::vector<Vec3>& base);
 
@@ -37,6 +38,7 @@ class DetailSolve {
   DetailEncoding enc_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
   std::vector<Vec3> drag_sub_;
+  DragState drag_state_;  // every multigrid level's last drag solution (volumes)  // the detail's own intersecting pairs at rest
 };
 
 }  // namespace strata::internal
