@@ -222,8 +222,8 @@ class VolumeReconstructor::Impl {
         const Level& F = levels_.back();
         s.volume_iterations = opt_.volume_iterations;
         st.finest_cycles_per_scale.push_back(
-            solve_level(F, s, a, warm->tolerance, warm->max_cycles > 0 ? warm->max_cycles : opt_.final_max_cycles,
-                        st, V));
+            solve_level(F, s, a, warm->tolerance,
+                        warm->max_cycles > 0 ? warm->max_cycles : opt_.final_max_cycles, st, V));
         polish(F, s, warm->tolerance, st, V);
       }
     }
@@ -245,8 +245,8 @@ class VolumeReconstructor::Impl {
     const int n = enc_.num_detail_vertices();
     if (!ds.started) throw InvalidInput("drag_step() before DragState::reset()");
     if (static_cast<int>(ds.frames.points.size()) != n)
-      throw InvalidInput("drag state has " + std::to_string(ds.frames.points.size()) + " vertices, the detail has " +
-                         std::to_string(n));
+      throw InvalidInput("drag state has " + std::to_string(ds.frames.points.size()) +
+                         " vertices, the detail has " + std::to_string(n));
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
@@ -555,8 +555,8 @@ class VolumeReconstructor::Impl {
   // cycles of (at most) n volume steps and m regularization sweeps, then prolongated to the next
   // level.
   // h: the volume scale times the amplitude; full_scale: the last scale (h = amplitude).
-  void multigrid_pass(State& s, double h, bool full_scale, double final_tol, bool coarse_only, ReconstructStats& st,
-                      std::vector<double>& V) const {
+  void multigrid_pass(State& s, double h, bool full_scale, double final_tol, bool coarse_only,
+                      ReconstructStats& st, std::vector<double>& V) const {
     s.P0 = s.P;
     const int nl = static_cast<int>(levels_.size());
     for (int l = 0; l < nl; ++l) {

@@ -40,7 +40,9 @@ int main(int argc, char** argv) {
   cases::CylinderCaseOptions co;
   co.target_detail_triangles = region_triangles * 3 / 2;
   const TriMesh m = cases::make_cylinder_case(co).detail;
-  auto above = [&](double z) { return select_vertices(m.vertices, Selection::halfspace(Vec3(0, 0, z), Vec3::UnitZ())); };
+  auto above = [&](double z) {
+    return select_vertices(m.vertices, Selection::halfspace(Vec3(0, 0, z), Vec3::UnitZ()));
+  };
   const Vec3 pivot(1.2, 0, 2.5);
   auto t0 = Clock::now();
   RegionEditor ed(m, above(2.0), above(3.5));

@@ -204,7 +204,8 @@ class VolumeReconstructor {
   //! does not depend on either, so changing the amplitude rebuilds nothing.
   //! \throw InvalidInput as reconstruct(), or if the amplitude is not finite or pinned_positions
   //!        does not have one finite position per detail vertex.
-  ReconstructResult reconstruct(const std::vector<Vec3>& edited_base, const ReconstructRequest& request) const;
+  ReconstructResult reconstruct(const std::vector<Vec3>& edited_base,
+                                const ReconstructRequest& request) const;
   ReconstructResult reconstruct(const BaseFrames& edited_frames, const ReconstructRequest& request) const;
 
   //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
@@ -213,7 +214,8 @@ class VolumeReconstructor {
   //! The request's amplitude scales the targets; its pinned positions replace the displacement
   //! vectors' placement of the pinned vertices.
   ReconstructResult reconstruct_from(const std::vector<Vec3>& edited_base, const std::vector<Vec3>& start,
-                                     const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+                                     const WarmStartOptions& warm = {},
+                                     const ReconstructRequest& request = {}) const;
   ReconstructResult reconstruct_from(const BaseFrames& edited_frames, const std::vector<Vec3>& start,
                                      const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
 
@@ -227,8 +229,8 @@ class VolumeReconstructor {
   //! \p state. No volume scaling: a drag's steps are small.
   //! \pre state.reset() was called with this encoding's vertex count.
   //! \throw InvalidInput as reconstruct_from(), or if the state was not started or has another size.
-  ReconstructResult drag_step(const BaseFrames& edited_frames, DragState& state, const WarmStartOptions& warm = {},
-                              const ReconstructRequest& request = {}) const;
+  ReconstructResult drag_step(const BaseFrames& edited_frames, DragState& state,
+                              const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
   //! The same over an edited base given by its vertices (or its cage's control points).
   ReconstructResult drag_step(const std::vector<Vec3>& edited_base, DragState& state,
                               const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;

@@ -38,7 +38,7 @@ class DetailSolve {
   DetailEncoding enc_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
   std::vector<Vec3> drag_sub_;
-  DragState drag_state_;  // every multigrid level's last drag solution (volumes)  // the detail's own intersecting pairs at rest
+  DragState drag_state_;  // every multigrid level's last drag solution (volumes)
 };
 
 }  // namespace strata::internal
