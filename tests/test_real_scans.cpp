@@ -106,5 +106,6 @@ TEST_P(RealScanFold, VectorsFoldWhereVolumesDoNot) {
 INSTANTIATE_TEST_SUITE_P(Scans, RealScanFold,
                          ::testing::Values(ScanEdit{"bear_arm_80", "bear", "bear_arm_80.json", 1.0},
                                            ScanEdit{"man_arm_80", "man", "man_arm.json", 0.75},
-                                           ScanEdit{"man_arm_90", "man", "man_arm_90.json", 0.75}),
+                                           ScanEdit{"man_arm_90", "man", "man_arm_90.json", 0.75},
+                                           ScanEdit{"armadillo_arm_75", "armadillo", "armadillo_arm.json", 0.7}),
                          name_of);

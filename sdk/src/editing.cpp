@@ -365,12 +365,41 @@ class RegionEditor::Impl {
     DetailEncoding& enc = detail_.encoding();
     enc = encode_detail(detail, base, opt_.encode);
     // The handle moves rigidly, and so does its detail: its vertices farther than a few rings
-    // from the blended part are placed by the (then exact) vector rule, not solved.
+    // from the blended part are placed by the (then exact) vector rule, not solved. Exact only if
+    // the base frame moves rigidly too: the vertex's base point must lie on a base face whose
+    // vertices (and so their interpolated normals) are at least two rings inside the handle. A
+    // thick detail layer projects farther than that, onto the blended part.
+    // Around a vertex whose base frame is not rigid, the same rings as at the handle's border are
+    // solved too, so that no solved vertex is left among pinned ones with more prisms than it can
+    // satisfy.
     const std::vector<int> depth = handle_depth(adj, opt_.handle_solved_rings + 1);
+    std::vector<int> solve_ring(n, -1), frontier, next;
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
+      const int v = sub_vertices_[k];
+      if (!in_region_[v] || depth[v] <= opt_.handle_solved_rings) continue;
+      for (int c : enc.base_faces[enc.base_points[k].face])
+        if (depth[sub_vertices_[c]] < 2) {
+          solve_ring[v] = 0;
+          frontier.push_back(v);
+          break;
+        }
+    }
+    for (int r = 1; r <= opt_.handle_solved_rings && !frontier.empty(); ++r) {
+      next.clear();
+      for (int v : frontier)
+        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
+          const int u = adj.neighbors[t];
+          if (solve_ring[u] < 0) {
+            solve_ring[u] = r;
+            next.push_back(u);
+          }
+        }
+      frontier.swap(next);
+    }
     enc.pinned.resize(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
-      enc.pinned[k] = !in_region_[v] || depth[v] > opt_.handle_solved_rings;
+      enc.pinned[k] = !in_region_[v] || (depth[v] > opt_.handle_solved_rings && solve_ring[v] < 0);
     }
   }
 

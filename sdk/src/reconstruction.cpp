@@ -51,9 +51,15 @@ struct Level {
   mutable std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> llt;
 };
 
+// Relative diagonal shift of the exact steps' system J J^T + eps I (eps = damping * max diagonal):
+// at least enough to factorize the singular clean start, at most a short gradient-like step.
+constexpr double kMinDamping = 1e-10;
+constexpr double kMaxDamping = 1e-2;
+
 // Scratch of one Gauss-Newton step, reused across steps.
 struct GnScratch {
-  int cg_max_iterations = 0;  // 0: the options'; a drag step's own budget otherwise
+  double damping = kMinDamping;  // of the exact steps, adapted step by step
+  int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<double> r, y, z, p, Ap, diag, values;
   std::vector<Vec3> delta;
@@ -487,8 +493,8 @@ class VolumeReconstructor::Impl {
     }
   }
 
-  // Writes the lower triangle of J J^T (+ a tiny diagonal shift) into L.jj's fixed pattern.
-  static void assemble(const Level& L, const std::vector<double>& values) {
+  // Writes the lower triangle of J J^T (+ the damping's diagonal shift) into L.jj's fixed pattern.
+  static void assemble(const Level& L, const std::vector<double>& values, double damping) {
     const std::size_t m = L.faces.size();
     double* val = L.jj.valuePtr();
     std::fill(val, val + L.jj.nonZeros(), 0.0);
@@ -498,7 +504,7 @@ class VolumeReconstructor::Impl {
         if (L.jj_slot[t] >= 0) val[L.jj_slot[t]] += values[t];
       max_diag = std::max(max_diag, val[L.jj_diag_slot[j]]);
     }
-    const double eps = 1e-10 * max_diag + 1e-300;
+    const double eps = damping * max_diag + 1e-300;
     for (std::size_t j = 0; j < m; ++j) val[L.jj_diag_slot[j]] += eps;
   }
 
@@ -700,13 +706,30 @@ class VolumeReconstructor::Impl {
     }
     double alpha = 1.0;
     for (int i : L.verts) s.P[i] += w.delta[i];
+    bool full_step = false;
     for (int halvings = 0;; ++halvings) {
       compute_volumes(L, s, V);
-      if (halvings == 4 || residual_norm2(L, h, V) <= rr0) break;
+      if (residual_norm2(L, h, V) <= rr0) {
+        full_step = halvings == 0;
+        break;
+      }
+      if (halvings == 4) {
+        // An exact step that does not reduce the residual even when halved 4 times is undone (the
+        // damping below then grows); an inexact one is kept, as the cycles' regularization expects.
+        if (direct) {
+          for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
+          compute_volumes(L, s, V);
+        }
+        break;
+      }
       alpha *= 0.5;
       for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
       ++st.step_halvings;
     }
+    // Levenberg-Marquardt: exact steps that overshoot (the constraints are only multi-affine) are
+    // damped more next time, steps taken in full less.
+    if (direct)
+      w.damping = full_step ? std::max(0.1 * w.damping, kMinDamping) : std::min(100 * w.damping, kMaxDamping);
     st.constraint_updates += static_cast<long long>(m);
   }
 
@@ -722,7 +745,7 @@ class VolumeReconstructor::Impl {
   // gradients are normal and J J^T is singular, factorizable.
   void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
     const std::size_t m = L.faces.size();
-    assemble(L, w.values);
+    assemble(L, w.values, w.damping);
     L.llt->factorize(L.jj);
     if (L.llt->info() != Eigen::Success)
       throw SolverError("Cholesky factorization of the volume step failed");
