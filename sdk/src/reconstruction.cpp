@@ -706,19 +706,18 @@ class VolumeReconstructor::Impl {
     }
     double alpha = 1.0;
     for (int i : L.verts) s.P[i] += w.delta[i];
-    bool full_step = false;
-    for (int halvings = 0;; ++halvings) {
+    int halvings = 0;
+    bool undone = false;
+    for (;; ++halvings) {
       compute_volumes(L, s, V);
-      if (residual_norm2(L, h, V) <= rr0) {
-        full_step = halvings == 0;
-        break;
-      }
+      if (residual_norm2(L, h, V) <= rr0) break;
       if (halvings == 4) {
         // An exact step that does not reduce the residual even when halved 4 times is undone (the
         // damping below then grows); an inexact one is kept, as the cycles' regularization expects.
         if (direct) {
           for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
           compute_volumes(L, s, V);
+          undone = true;
         }
         break;
       }
@@ -726,10 +725,13 @@ class VolumeReconstructor::Impl {
       for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
       ++st.step_halvings;
     }
-    // Levenberg-Marquardt: exact steps that overshoot (the constraints are only multi-affine) are
-    // damped more next time, steps taken in full less.
-    if (direct)
-      w.damping = full_step ? std::max(0.1 * w.damping, kMinDamping) : std::min(100 * w.damping, kMaxDamping);
+    // Levenberg-Marquardt: after an exact step that had to be undone (the constraints are only
+    // multi-affine, and a nearly singular J J^T gives long steps) the next is damped more; after
+    // one taken in full, less.
+    if (undone)
+      w.damping = std::min(100 * w.damping, kMaxDamping);
+    else if (direct && halvings == 0)
+      w.damping = std::max(0.1 * w.damping, kMinDamping);
     st.constraint_updates += static_cast<long long>(m);
   }
 
