@@ -218,7 +218,8 @@ TEST(DragState, AStepOverTheUneditedBaseKeepsTheDetail) {
 }
 
 // A drag from the base to the paper's 90-degree bend in small steps: at release the preview has
-// followed the bend (much closer to the exact result than the unbent detail is) and is finite.
+// followed the bend (much closer to the exact result than the unbent detail is) and is finite;
+// the exact step from the drag's state then holds the volumes to the tolerance without folds.
 // (Known limit: held over an unchanged base, the preview drifts instead of converging, since one
 // inexact volume step per coarse level and frame does not settle against the regularization.)
 TEST(DragState, PreviewsFollowTheDrag) {
@@ -242,4 +243,11 @@ TEST(DragState, PreviewsFollowTheDrag) {
     for (const Vec3& p : r.positions) ASSERT_TRUE(p.allFinite());
   }
   EXPECT_LT(max_distance(r.positions, exact), 0.1 * max_distance(e.detail_rest, exact));
+  // The exact step from the drag's state: the finest level solved to the tolerance.
+  const ReconstructResult x = rec.drag_step(b1, state, WarmStartOptions{false, 1e-4, 0, 0, 3});
+  EXPECT_TRUE(x.stats.converged);
+  const BaseFrames fr = evaluate_base_frames(e, b1);
+  EXPECT_LE(volume_metrics(e, fr, x.positions).max_relative_error, 1e-4);
+  EXPECT_EQ(0u, find_self_intersections(x.positions, c.detail.faces).num_pairs);
+  EXPECT_LT(max_distance(x.positions, exact), 0.1 * max_distance(e.detail_rest, exact));
 }

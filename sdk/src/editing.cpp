@@ -372,59 +372,23 @@ class RegionEditor::Impl {
     // Around a vertex whose base frame is not rigid, the same rings as at the handle's border are
     // solved too, so that no solved vertex is left among pinned ones with more prisms than it can
     // satisfy.
-    const std::vector<int> depth = handle_depth(adj, opt_.handle_solved_rings + 1);
-    std::vector<int> solve_ring(n, -1), frontier, next;
+    const int rings = opt_.handle_solved_rings;
+    std::vector<char> outside_handle(n);
+    for (int i = 0; i < n; ++i) outside_handle[i] = !in_handle_[i];
+    const std::vector<int> depth = internal::ring_distance(adj, outside_handle, rings + 1);
+    std::vector<char> nonrigid(n, 0);
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
-      if (!in_region_[v] || depth[v] <= opt_.handle_solved_rings) continue;
+      if (!in_region_[v] || depth[v] <= rings) continue;
       for (int c : enc.base_faces[enc.base_points[k].face])
-        if (depth[sub_vertices_[c]] < 2) {
-          solve_ring[v] = 0;
-          frontier.push_back(v);
-          break;
-        }
+        if (depth[sub_vertices_[c]] < 2) nonrigid[v] = 1;
     }
-    for (int r = 1; r <= opt_.handle_solved_rings && !frontier.empty(); ++r) {
-      next.clear();
-      for (int v : frontier)
-        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
-          const int u = adj.neighbors[t];
-          if (solve_ring[u] < 0) {
-            solve_ring[u] = r;
-            next.push_back(u);
-          }
-        }
-      frontier.swap(next);
-    }
+    const std::vector<int> near_nonrigid = internal::ring_distance(adj, nonrigid, rings + 1);
     enc.pinned.resize(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
-      enc.pinned[k] = !in_region_[v] || (depth[v] > opt_.handle_solved_rings && solve_ring[v] < 0);
+      enc.pinned[k] = !in_region_[v] || (depth[v] > rings && near_nonrigid[v] > rings);
     }
-  }
-
-  // Edge distance of each vertex from the nearest vertex outside the handle, capped at cap.
-  std::vector<int> handle_depth(const internal::Adjacency& adj, int cap) const {
-    const int n = mesh_.num_vertices();
-    std::vector<int> depth(n, cap), frontier, next;
-    for (int i = 0; i < n; ++i)
-      if (!in_handle_[i]) {
-        depth[i] = 0;
-        frontier.push_back(i);
-      }
-    for (int d = 1; d < cap && !frontier.empty(); ++d) {
-      next.clear();
-      for (int v : frontier)
-        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
-          const int u = adj.neighbors[t];
-          if (depth[u] > d) {
-            depth[u] = d;
-            next.push_back(u);
-          }
-        }
-      frontier.swap(next);
-    }
-    return depth;
   }
 
   std::vector<Vec3> gather(const std::vector<Vec3>& whole) const {

@@ -103,4 +103,27 @@ std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const s
   return w;
 }
 
+std::vector<int> ring_distance(const Adjacency& adj, const std::vector<char>& seeds, int cap) {
+  const int n = adj.num_vertices();
+  std::vector<int> dist(n, cap), frontier, next;
+  for (int i = 0; i < n; ++i)
+    if (seeds[i]) {
+      dist[i] = 0;
+      frontier.push_back(i);
+    }
+  for (int d = 1; d < cap && !frontier.empty(); ++d) {
+    next.clear();
+    for (int v : frontier)
+      for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
+        const int u = adj.neighbors[t];
+        if (dist[u] > d) {
+          dist[u] = d;
+          next.push_back(u);
+        }
+      }
+    frontier.swap(next);
+  }
+  return dist;
+}
+
 }  // namespace strata::internal

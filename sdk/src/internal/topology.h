@@ -25,6 +25,10 @@ Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces);
 //! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary).
 std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vector<Face>& faces);
 
+//! Edge distance of each vertex from the nearest seed (seeds[i] != 0), capped at cap: vertices
+//! farther than cap - 1 edges (or unreachable) get cap.
+std::vector<int> ring_distance(const Adjacency& adj, const std::vector<char>& seeds, int cap);
+
 //! One flag per vertex: whether it lies on a boundary edge (an edge of one face only).
 std::vector<char> boundary_vertices(int num_vertices, const std::vector<Face>& faces);
 
