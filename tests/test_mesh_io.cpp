@@ -471,6 +471,68 @@ TEST(MeshIoTriangulate, NonConvexQuadGetsNoFlippedTriangle) {
   }
 }
 
+TEST(MeshIoPolygons, ReadKeepsPolygonsAsListedInEveryFormat) {
+  Fixture fx;
+  Soup s;
+  s.v = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (int k = 0; k < 5; ++k) s.v.push_back({3 + std::cos(2 * kPi * k / 5), std::sin(2 * kPi * k / 5), 0});
+  s.v.push_back({1.5, -1, 0});
+  s.f = {{1, 2, 3, 0}, {4, 5, 6, 7, 8}, {0, 9, 1}};
+  const std::vector<std::vector<int>> expected = {{1, 2, 3, 0}, {4, 5, 6, 7, 8}, {0, 9, 1}};
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::PlyBinBE}) {
+    std::vector<std::vector<int>> polygons{{7, 7, 7}};  // replaced, not appended to
+    const TriMesh r = read_mesh(fx.put(s, fmt), &polygons);
+    EXPECT_EQ(polygons, expected) << fmt_name(fmt);
+    EXPECT_EQ(r.num_faces(), 2 + 3 + 1) << fmt_name(fmt);
+  }
+  // STL has triangles only: they are its polygons.
+  std::vector<std::vector<int>> polygons;
+  const TriMesh r = read_mesh(fx.put(tetra(), Fmt::StlBinary), &polygons);
+  ASSERT_EQ(polygons.size(), 4u);
+  for (int f = 0; f < 4; ++f)
+    EXPECT_EQ(polygons[f], std::vector<int>(r.faces[f].begin(), r.faces[f].end()));
+}
+
+TEST(MeshIoPolygons, WriteReadRoundTripIsExact) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  // A cube of quads with one face split into a triangle pair, at awkward coordinates.
+  std::vector<Vec3> v;
+  for (int k = 0; k < 8; ++k) v.push_back(Vec3(k & 1 ? 1.0 / 3 : -0.1, k & 2 ? 2.0 / 7 : 1e-17, k & 4 ? 1e5 + 0.1 : 0.3));
+  const std::vector<std::vector<int>> faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                               {2, 6, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7, 5}};
+  for (const char* name : {"cube.obj", "cube.off", "cube.ply"}) {
+    for (MeshEncoding enc : {MeshEncoding::Default, MeshEncoding::Ascii}) {
+      if (enc == MeshEncoding::Ascii && std::string(name) != "cube.ply") continue;
+      const std::string path = dir.file(name);
+      write_polygon_mesh(v, faces, path, enc);
+      std::vector<std::vector<int>> back;
+      const TriMesh r = read_mesh(path, &back);
+      EXPECT_EQ(r.vertices, v) << name;
+      EXPECT_EQ(back, faces) << name;
+    }
+  }
+  // STL: triangles only.
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, faces, dir.file("cube.stl")); },
+                                        {"cube.stl", "triangles only"}));
+  EXPECT_FALSE(fs::exists(dir.file("cube.stl")));
+}
+
+TEST(MeshIoPolygons, WriteRefusesWhatReadWouldReject) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const std::string path = dir.file("bad.obj");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1}}, path); }, {"bad.obj", "face 0", "2 corners"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 4}}, path); }, {"bad.obj", "out of range"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 1}}, path); }, {"bad.obj", "repeats"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {}, path); }, {"bad.obj"}));
+  std::vector<Vec3> nan = v;
+  nan[2][1] = std::nan("");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(nan, {{0, 1, 2, 3}}, path); }, {"bad.obj"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 3}}, dir.file("q.obj"), MeshEncoding::Binary); },
+                                        {"q.obj", "no binary"}));
+  EXPECT_FALSE(fs::exists(path));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Errors, for every reader where the format can express the problem
 

@@ -84,26 +84,13 @@ SubdivTags read_subdiv_tags(const std::string& path) {
 }
 
 PolyMesh read_cage(const std::string& path) {
-  const TriMesh m = read_mesh(path);
   PolyMesh cage;
-  cage.vertices = m.vertices;
-  cage.faces.reserve(m.faces.size());
-  for (const Face& f : m.faces) cage.faces.push_back({f[0], f[1], f[2]});
+  cage.vertices = read_mesh(path, &cage.faces).vertices;
   return cage;
 }
 
 void write_cage(const PolyMesh& cage, const std::string& path) {
-  TriMesh m;
-  m.vertices = cage.vertices;
-  m.faces.reserve(cage.faces.size());
-  for (std::size_t k = 0; k < cage.faces.size(); ++k) {
-    const auto& f = cage.faces[k];
-    if (f.size() != 3)
-      throw InvalidInput(path + ": cage face " + std::to_string(k) +
-                         " is not a triangle (only triangle cages are written)");
-    m.faces.push_back({f[0], f[1], f[2]});
-  }
-  write_mesh(m, path);
+  write_polygon_mesh(cage.vertices, cage.faces, path);
 }
 
 }  // namespace strata

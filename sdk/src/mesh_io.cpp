@@ -253,11 +253,14 @@ class TextCursor {
 // into triangles, keeping file order. Polygons with more than three corners are triangulated at
 // the end, when all positions are known (OBJ and PLY may list faces before vertices).
 
+using Polygons = std::vector<std::vector<int>>;
+
 class FaceBuilder {
  public:
   //! \param index_base added to 0-based indices when quoting them (1 for OBJ).
-  FaceBuilder(const std::string& name, long long num_vertices, int index_base)
-      : name_(name), num_vertices_(num_vertices), index_base_(index_base) {}
+  //! \param polygons if given, receives every polygon as listed (before triangulation).
+  FaceBuilder(const std::string& name, long long num_vertices, int index_base, Polygons* polygons = nullptr)
+      : name_(name), num_vertices_(num_vertices), index_base_(index_base), polygons_(polygons) {}
 
   //! Adds one polygon with 0-based corner indices; \p where() names it in messages.
   //! \throw InvalidInput for fewer than 3 corners, an index out of range or a repeated index.
@@ -284,6 +287,7 @@ class FaceBuilder {
     }
     if (static_cast<long long>(faces_.size()) + static_cast<long long>(n - 2) > kMaxIndexCount)
       fail_io(name_, "too many faces (more than " + std::to_string(kMaxIndexCount) + ")");
+    if (polygons_) polygons_->emplace_back(c.begin(), c.end());
     if (n == 3) {
       faces_.push_back({static_cast<int>(c[0]), static_cast<int>(c[1]), static_cast<int>(c[2])});
       return;
@@ -303,6 +307,7 @@ class FaceBuilder {
   std::string name_;
   long long num_vertices_;
   int index_base_;
+  Polygons* polygons_;
   std::vector<Face> faces_;
   std::vector<Pending> pending_;
   std::vector<int> pending_corners_;
@@ -372,7 +377,7 @@ bool parse_obj_count_comment(std::string_view line, ObjCountComment& out) {
   return out.present;
 }
 
-TriMesh read_obj(const std::string& name, std::string_view text) {
+TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polygons) {
   reject_nul_bytes(text, name, "OBJ");
   TriMesh mesh;
   ObjCountComment declared;
@@ -415,7 +420,7 @@ TriMesh read_obj(const std::string& name, std::string_view text) {
   }
 
   // Pass 2: faces. Negative indices count back from the last vertex defined before the line.
-  FaceBuilder faces(name, mesh.num_vertices(), 1);
+  FaceBuilder faces(name, mesh.num_vertices(), 1, polygons);
   std::vector<long long> corners;
   LineReader lines(text);
   std::string_view raw;
@@ -456,7 +461,7 @@ TriMesh read_obj(const std::string& name, std::string_view text) {
 // OFF (ASCII; optional ST/C/N prefixes, whose extra per-vertex values are ignored). One vertex or
 // face per line, as written by all common tools; '#' starts a comment.
 
-TriMesh read_off(const std::string& name, std::string_view text) {
+TriMesh read_off(const std::string& name, std::string_view text, Polygons* polygons) {
   reject_nul_bytes(text, name, "OFF");
   LineReader lines(text);
   std::string_view raw;
@@ -521,7 +526,7 @@ TriMesh read_off(const std::string& name, std::string_view text) {
     mesh.vertices.push_back(p);
   }
 
-  FaceBuilder faces(name, nv, 0);
+  FaceBuilder faces(name, nv, 0, polygons);
   std::vector<long long> corners;
   for (long long f = 0; f < nf; ++f) {
     if (!next_data_line(line))
@@ -761,14 +766,14 @@ std::string plural_element(const PlyElement& e) {
 }
 
 template <class Source>
-TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src) {
+TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, Polygons* polygons) {
   long long num_vertices = 0;
   for (const PlyElement& e : h.elements)
     if (e.name == "vertex") num_vertices = e.count;
   check_vertex_count(num_vertices, name);
 
   TriMesh mesh;
-  FaceBuilder faces(name, num_vertices, 0);
+  FaceBuilder faces(name, num_vertices, 0, polygons);
   std::vector<long long> corners;
   PlyValue value;
   for (const PlyElement& e : h.elements) {
@@ -828,16 +833,16 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src) 
   return mesh;
 }
 
-TriMesh read_ply(const std::string& name, std::string_view data) {
+TriMesh read_ply(const std::string& name, std::string_view data, Polygons* polygons) {
   const PlyHeader h = parse_ply_header(name, data);
   const std::string_view body = data.substr(h.body_offset);
   if (h.encoding == PlyEncoding::Ascii) {
     reject_nul_bytes(body, name, "ascii PLY body");
     PlyAsciiSource src(name, body, h.body_first_line);
-    return read_ply_body(name, h, src);
+    return read_ply_body(name, h, src, polygons);
   }
   PlyBinarySource src(body, h.encoding == PlyEncoding::BinaryBE);
-  return read_ply_body(name, h, src);
+  return read_ply_body(name, h, src, polygons);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1118,57 +1123,60 @@ void write_vec(ChunkedWriter& w, const Vec3& p) {
   w.number(p[2]);
 }
 
-void write_obj(const TriMesh& m, ChunkedWriter& w) {
+// Faces are triangles (Face) or polygons (std::vector<int>): anything with size() and [].
+template <class F>
+void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w) {
   // The count comment lets read_mesh detect truncation (OBJ has no counts of its own).
-  w.text("# " + std::to_string(m.num_vertices()) + " vertices, " + std::to_string(m.num_faces()) + " faces\n");
-  for (const Vec3& p : m.vertices) {
+  w.text("# " + std::to_string(vertices.size()) + " vertices, " + std::to_string(faces.size()) + " faces\n");
+  for (const Vec3& p : vertices) {
     w.text("v ");
     write_vec(w, p);
     w.text("\n");
     w.maybe_flush();
   }
-  for (const Face& f : m.faces) {
-    w.text("f ");
-    w.integer(f[0] + 1ll);
-    w.text(" ");
-    w.integer(f[1] + 1ll);
-    w.text(" ");
-    w.integer(f[2] + 1ll);
+  for (const F& f : faces) {
+    w.text("f");
+    for (int i : f) {
+      w.text(" ");
+      w.integer(i + 1ll);
+    }
     w.text("\n");
     w.maybe_flush();
   }
 }
 
-// "3 a b c\n": a triangle in OFF's and ASCII PLY's face syntax (0-based).
-void write_face_line(ChunkedWriter& w, const Face& f) {
-  w.text("3 ");
-  w.integer(f[0]);
-  w.text(" ");
-  w.integer(f[1]);
-  w.text(" ");
-  w.integer(f[2]);
+// "n a b c ..\n": a face in OFF's and ASCII PLY's face syntax (0-based).
+template <class F>
+void write_face_line(ChunkedWriter& w, const F& f) {
+  w.integer(static_cast<long long>(f.size()));
+  for (int i : f) {
+    w.text(" ");
+    w.integer(i);
+  }
   w.text("\n");
 }
 
-void write_off(const TriMesh& m, ChunkedWriter& w) {
-  w.text("OFF\n" + std::to_string(m.num_vertices()) + " " + std::to_string(m.num_faces()) + " 0\n");
-  for (const Vec3& p : m.vertices) {
+template <class F>
+void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w) {
+  w.text("OFF\n" + std::to_string(vertices.size()) + " " + std::to_string(faces.size()) + " 0\n");
+  for (const Vec3& p : vertices) {
     write_vec(w, p);
     w.text("\n");
     w.maybe_flush();
   }
-  for (const Face& f : m.faces) {
+  for (const F& f : faces) {
     write_face_line(w, f);
     w.maybe_flush();
   }
 }
 
-void write_ply(const TriMesh& m, ChunkedWriter& w, bool binary) {
+template <class F>
+void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w, bool binary) {
   w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
-         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(m.num_vertices()) +
-         "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(m.num_faces()) +
+         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(vertices.size()) +
+         "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(faces.size()) +
          "\nproperty list uchar int vertex_indices\nend_header\n");
-  for (const Vec3& p : m.vertices) {
+  for (const Vec3& p : vertices) {
     if (binary) {
       w.binary_le(p[0]);
       w.binary_le(p[1]);
@@ -1179,9 +1187,9 @@ void write_ply(const TriMesh& m, ChunkedWriter& w, bool binary) {
     }
     w.maybe_flush();
   }
-  for (const Face& f : m.faces) {
+  for (const F& f : faces) {
     if (binary) {
-      w.binary_le(static_cast<uint8_t>(3));
+      w.binary_le(static_cast<uint8_t>(f.size()));  // at most 255 corners: checked by the caller
       for (int i : f) w.binary_le(static_cast<int32_t>(i));
     } else {
       write_face_line(w, f);
@@ -1266,14 +1274,23 @@ void validate_mesh(const TriMesh& mesh, const std::string& name) {
 }
 
 TriMesh read_mesh(const std::string& path) {
+  return read_mesh(path, nullptr);
+}
+
+TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons) {
   const Format format = format_of(path);
   const std::string data = internal::read_whole_file(path);
   TriMesh mesh;
+  if (polygons) polygons->clear();
   switch (format) {
-    case Format::Obj: mesh = read_obj(path, data); break;
-    case Format::Off: mesh = read_off(path, data); break;
-    case Format::Ply: mesh = read_ply(path, data); break;
-    case Format::Stl: mesh = read_stl(path, data); break;
+    case Format::Obj: mesh = read_obj(path, data, polygons); break;
+    case Format::Off: mesh = read_off(path, data, polygons); break;
+    case Format::Ply: mesh = read_ply(path, data, polygons); break;
+    case Format::Stl:
+      mesh = read_stl(path, data);
+      if (polygons)
+        for (const Face& f : mesh.faces) polygons->push_back({f[0], f[1], f[2]});
+      break;
   }
   validate_mesh(mesh, path);
   return mesh;
@@ -1300,10 +1317,51 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
   write_file_atomically(path, [&](const std::string& tmp) {
     ChunkedWriter w(path, tmp);
     switch (format) {
-      case Format::Obj: write_obj(mesh, w); break;
-      case Format::Off: write_off(mesh, w); break;
-      case Format::Ply: write_ply(mesh, w, binary); break;
+      case Format::Obj: write_obj(mesh.vertices, mesh.faces, w); break;
+      case Format::Off: write_off(mesh.vertices, mesh.faces, w); break;
+      case Format::Ply: write_ply(mesh.vertices, mesh.faces, w, binary); break;
       case Format::Stl: write_stl(mesh, w, binary); break;
+    }
+    w.close();
+  });
+}
+
+void write_polygon_mesh(const std::vector<Vec3>& vertices, const std::vector<std::vector<int>>& polygons,
+                        const std::string& path, MeshEncoding encoding) {
+  const Format format = format_of(path);
+  if (encoding == MeshEncoding::Binary && (format == Format::Obj || format == Format::Off))
+    fail_input(path, "OBJ and OFF have no binary encoding");
+  // The triangles read_mesh would make of these polygons must pass validation.
+  TriMesh tri;
+  tri.vertices = vertices;
+  const long long nv = static_cast<long long>(vertices.size());
+  FaceBuilder builder(path, nv, 0);
+  std::vector<long long> corners;
+  bool all_triangles = true;
+  for (std::size_t k = 0; k < polygons.size(); ++k) {
+    const auto& f = polygons[k];
+    if (f.size() > 255 && format == Format::Ply)
+      fail_input(path, "face " + std::to_string(k) + " has " + std::to_string(f.size()) +
+                           " corners; PLY stores at most 255");
+    all_triangles = all_triangles && f.size() == 3;
+    corners.assign(f.begin(), f.end());
+    builder.add_checked(corners, [&] { return "face " + std::to_string(k); });
+  }
+  tri.faces = builder.finish(vertices);
+  if (format == Format::Stl) {
+    if (!all_triangles) fail_input(path, "STL stores triangles only; write polygons as OBJ, OFF or PLY");
+    write_mesh(tri, path, encoding);
+    return;
+  }
+  validate_mesh(tri, path);
+  const bool binary = encoding != MeshEncoding::Ascii;
+  write_file_atomically(path, [&](const std::string& tmp) {
+    ChunkedWriter w(path, tmp);
+    switch (format) {
+      case Format::Obj: write_obj(vertices, polygons, w); break;
+      case Format::Off: write_off(vertices, polygons, w); break;
+      case Format::Ply: write_ply(vertices, polygons, w, binary); break;
+      case Format::Stl: break;  // handled above
     }
     w.close();
   });

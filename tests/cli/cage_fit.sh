@@ -51,5 +51,31 @@ if "$STRATA" deform case/detail.obj --edit bend.json --cage cage.obj -o x.obj 2>
   fail "--cage without --base subdiv was accepted"
 fi
 grep -q "need --base subdiv" err.txt || fail "no clear message for --cage without --base subdiv"
+# a quad cage from a file is a Catmull-Clark cage; --write-base keeps its quads
+python3 - <<'PY'
+import math
+n, m = 8, 7
+with open("quad.obj", "w") as f:
+    for k in range(m):
+        for i in range(n):
+            a = 2 * math.pi * i / n
+            f.write(f"v {1.08 * math.cos(a)} {1.08 * math.sin(a)} {6.0 * k / (m - 1)}\n")
+    for k in range(m - 1):
+        for i in range(n):
+            a, b = k * n + i + 1, k * n + (i + 1) % n + 1
+            f.write(f"f {a} {b} {b + n} {a + n}\n")
+PY
+"$STRATA" deform case/detail.obj --edit bend.json --base subdiv --cage quad.obj -o bent_q.obj \
+  --write-base bent_quad.obj --report deform_q.json -q >/dev/null || fail "deform over a quad cage failed"
+python3 - <<'PY' || fail "quad cage check failed"
+import json
+r = json.load(open("deform_q.json"))
+assert r["cage"]["scheme"] == "catmull-clark" and r["cage"]["faces"] == 48, r["cage"]
+assert r["intersections"]["new_pairs"] == 0, r["intersections"]
+faces = [l.split()[1:] for l in open("bent_quad.obj") if l.startswith("f ")]
+assert len(faces) == 48 and all(len(f) == 4 for f in faces), "the edited cage lost its quads"
+moved = [l for l, k in zip(open("quad.obj"), open("bent_quad.obj")) if l.startswith("v ") and l.split() != k.split()]
+assert moved, "the edited quad cage did not move"
+PY
 ls -A | grep -q '\.tmp' && fail "temporary file left behind"
 echo "cage_fit: all checks passed"

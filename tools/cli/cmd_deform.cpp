@@ -1,4 +1,5 @@
 // `strata deform`: region edits of a mesh from an edit script (paper, section 5).
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -84,7 +85,12 @@ int run_deform(const DeformCmdOptions& o) {
       log.phase("reading the cage " + o.cage);
       cage = read_cage(o.cage);
       if (!o.cage_tags.empty()) tags = read_subdiv_tags(o.cage_tags);
-      cage_json = {{"path", o.cage}, {"faces", cage.num_faces()}, {"fitted", false}};
+      const bool triangles = std::all_of(cage.faces.begin(), cage.faces.end(),
+                                         [](const std::vector<int>& f) { return f.size() == 3; });
+      cage_json = {{"path", o.cage},
+                   {"faces", cage.num_faces()},
+                   {"fitted", false},
+                   {"scheme", triangles ? "loop" : "catmull-clark"}};
     } else {
       log.phase("fitting a cage to " + input.name);
       CageFitOptions fo;
@@ -98,6 +104,7 @@ int run_deform(const DeformCmdOptions& o) {
       cage = std::move(fit.cage);
       cage_json = {{"faces", cage.num_faces()},
                    {"fitted", true},
+                   {"scheme", "loop"},
                    {"rms_error", fit.rms_error},
                    {"max_error", fit.max_error},
                    {"seconds", fit.seconds_smooth + fit.seconds_decimate + fit.seconds_fit}};
@@ -251,7 +258,7 @@ Subcommand register_deform(CLI::App& parent) {
       ->check(CLI::IsMember({"faired", "subdiv"}))
       ->capture_default_str();
   app->add_option("--cage", o->cage,
-                  "With --base subdiv: the cage (a triangle mesh file); default: fitted to the input");
+                  "With --base subdiv: the cage (OBJ, OFF or PLY; triangles: Loop, quads or other polygons: Catmull-Clark); default: a Loop cage fitted to the input");
   app->add_option("--cage-tags", o->cage_tags,
                   "With --cage: its crease and corner tags (JSON, see cage_io.h)");
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")

@@ -9,6 +9,7 @@
 
 #include "common.h"
 #include "strata/atomic_file.h"
+#include "strata/cage_io.h"
 #include "strata/edit_script.h"
 #include "strata/exceptions.h"
 #include "strata/layers/model.h"
@@ -328,17 +329,17 @@ int run_export(const ExportCmdOptions& o) {
   if (k >= model.num_bands())
     throw InvalidInput(o.model + ": band " + std::to_string(k) + " out of range (the model has bands 0 .. " +
                        std::to_string(model.num_bands() - 1) + ")");
-  TriMesh mesh;
   if (o.cage) {
+    // Polygons as they are (a Catmull-Clark cage keeps its quads); STL takes triangles only.
     const PolyMesh& c = model.band(0).cage;
-    mesh.vertices = c.vertices;
-    for (const auto& f : c.faces)
-      for (std::size_t t = 1; t + 1 < f.size(); ++t) mesh.faces.push_back({f[0], f[t], f[t + 1]});
-  } else {
-    mesh = model.band_mesh(k, o.resolution);
+    write_cage(c, o.output);
+    std::cout << "wrote " << o.output << " (control cage, " << c.num_vertices() << " vertices, " << c.num_faces()
+              << " faces)" << std::endl;
+    return 0;
   }
+  const TriMesh mesh = model.band_mesh(k, o.resolution);
   write_mesh(mesh, o.output);
-  std::cout << "wrote " << o.output << " (" << (o.cage ? "control cage" : "band " + std::to_string(k)) << ", "
+  std::cout << "wrote " << o.output << " (band " << k << ", "
             << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces)" << std::endl;
   return 0;
 }

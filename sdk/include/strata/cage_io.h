@@ -1,6 +1,7 @@
 //! \file cage_io.h
-//! Control cages and their sharpness tags in files: a cage is a mesh file (read_mesh: polygons
-//! are triangulated, so a cage read from a file is a Loop cage), its tags a small JSON file:
+//! Control cages and their sharpness tags in files: a cage is a mesh file (OBJ, OFF or PLY keep
+//! its polygons: a triangle cage is a Loop cage, one with quads or other polygons a Catmull-Clark
+//! cage under SubdivScheme::Auto), its tags a small JSON file:
 //! \code{.json}
 //! {"creases": [{"edge": [0, 1], "sharpness": 10}, {"edge": [1, 2]}],
 //!  "corners": [{"vertex": 4, "sharpness": 3.5}]}
@@ -24,12 +25,13 @@ SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name);
 //! \throw IoError if the file cannot be read; InvalidInput as parse_subdiv_tags().
 SubdivTags read_subdiv_tags(const std::string& path);
 
-//! Reads a cage (read_mesh, so triangles only).
+//! Reads a cage with its polygons as the file lists them (read_mesh(path, &polygons)); the file
+//! must be a valid mesh once its polygons are triangulated.
 //! \throw as read_mesh().
 PolyMesh read_cage(const std::string& path);
 
-//! Writes a triangle cage with write_mesh (atomically).
-//! \throw InvalidInput if a face is not a triangle; as write_mesh().
+//! Writes a cage with its polygons (write_polygon_mesh, atomically); read_cage gives it back.
+//! \throw as write_polygon_mesh() (e.g. STL and a non-triangle face).
 void write_cage(const PolyMesh& cage, const std::string& path);
 
 }  // namespace strata

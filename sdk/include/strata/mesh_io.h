@@ -45,6 +45,12 @@ namespace strata {
 //!        also an OBJ/OFF/PLY face with fewer than three corners).
 TriMesh read_mesh(const std::string& path);
 
+//! As read_mesh(path), and also returns the faces as the file lists them, before triangulation
+//! (polygons of 3 or more corners, 0-based; triangles for STL) in \p polygons (if not null). The
+//! triangles of the result are those polygons' fans, in the same order.
+//! \throw as read_mesh(path).
+TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons);
+
 //! Encoding to use for formats that have both (PLY, STL).
 enum class MeshEncoding {
   Default,  //!< Binary for PLY and STL, ASCII for OBJ and OFF.
@@ -61,6 +67,16 @@ enum class MeshEncoding {
 //!        coordinate overflows float32 for binary STL.
 //! \throw IoError if the extension is not supported or the file cannot be written.
 void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding = MeshEncoding::Default);
+
+//! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
+//! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
+//! gives back the same vertices and polygons. STL takes triangles only.
+//! \pre the triangulated polygons (the fans read_mesh makes) pass validate_mesh().
+//! \throw InvalidInput if a face has fewer than 3 corners, an index out of range or repeated,
+//!        the triangulation fails validation, a face is not a triangle for STL or has more than
+//!        255 corners for PLY, or \p encoding is Binary for OBJ or OFF; IoError as write_mesh().
+void write_polygon_mesh(const std::vector<Vec3>& vertices, const std::vector<std::vector<int>>& polygons,
+                        const std::string& path, MeshEncoding encoding = MeshEncoding::Default);
 
 //! Checks that \p mesh is a valid triangle mesh for the numeric core, in this order:
 //! at least one face; every coordinate finite; every index in [0, num_vertices()); no index
