@@ -22,6 +22,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -80,6 +81,37 @@ struct Args {
   ReconstructOptions reconstruct;  // defaults, but for --finest-volume-iterations
 };
 
+// --set NAME=VALUE: one reconstruction option by its field name (for tuning runs).
+void set_option(ReconstructOptions& o, const std::string& kv) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos) throw std::runtime_error("--set needs NAME=VALUE, got '" + kv + "'");
+  const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
+  const std::map<std::string, int*> ints = {
+      {"volume_scales", &o.volume_scales},         {"max_levels", &o.max_levels},
+      {"coarsest_vertices", &o.coarsest_vertices}, {"volume_iterations", &o.volume_iterations},
+      {"finest_volume_iterations", &o.finest_volume_iterations},
+      {"regularization_iterations", &o.regularization_iterations},
+      {"max_cycles", &o.max_cycles},               {"final_max_cycles", &o.final_max_cycles},
+      {"max_final_steps", &o.max_final_steps},     {"direct_max_prisms", &o.direct_max_prisms},
+      {"cg_max_iterations", &o.cg_max_iterations}};
+  const std::map<std::string, double*> reals = {
+      {"coarsening_ratio", &o.coarsening_ratio},       {"tangential_lambda", &o.tangential_lambda},
+      {"length_lambda", &o.length_lambda},             {"regularization_decay", &o.regularization_decay},
+      {"level_tolerance", &o.level_tolerance},         {"tolerance", &o.tolerance},
+      {"min_length_fraction", &o.min_length_fraction}, {"fixed_point_tolerance", &o.fixed_point_tolerance},
+      {"cg_tolerance", &o.cg_tolerance}};
+  if (auto it = ints.find(k); it != ints.end()) {
+    *it->second = std::stoi(v);
+  } else if (auto jt = reals.find(k); jt != reals.end()) {
+    *jt->second = std::stod(v);
+  } else if (k == "step_solver") {
+    if (v != "jacobi_cg" && v != "direct") throw std::runtime_error("step_solver is jacobi_cg or direct");
+    o.step_solver = v == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
+  } else {
+    throw std::runtime_error("--set: unknown reconstruction option '" + k + "'");
+  }
+}
+
 Args parse_args(int argc, char** argv) {
   Args a;
   auto value = [&](int& i) -> std::string {
@@ -107,6 +139,8 @@ Args parse_args(int argc, char** argv) {
       a.out = value(i);
     } else if (opt == "--finest-volume-iterations") {
       a.reconstruct.finest_volume_iterations = std::stoi(value(i));
+    } else if (opt == "--set") {
+      set_option(a.reconstruct, value(i));
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
@@ -314,7 +348,7 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv);
   } catch (const std::exception& ex) {
     std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
-              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--out FILE.json] "
+              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--set OPTION=VALUE] [--out FILE.json] "
               << "[--max-seconds S]" << std::endl;
     return 2;
   }
@@ -385,6 +419,14 @@ int main(int argc, char** argv) {
           {"regularization_iterations", ro.regularization_iterations},
           {"max_cycles", ro.max_cycles},
           {"final_max_cycles", ro.final_max_cycles},
+          {"max_final_steps", ro.max_final_steps},
+          {"cg_max_iterations", ro.cg_max_iterations},
+          {"cg_tolerance", ro.cg_tolerance},
+          {"level_tolerance", ro.level_tolerance},
+          {"tangential_lambda", ro.tangential_lambda},
+          {"length_lambda", ro.length_lambda},
+          {"regularization_decay", ro.regularization_decay},
+          {"direct_max_prisms", ro.direct_max_prisms},
           {"tolerance", ro.tolerance},
           {"step_solver", ro.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi_cg"}}},
         {"parent_baseline_rss_bytes", parent_rss},
