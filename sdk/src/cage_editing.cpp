@@ -10,6 +10,7 @@
 
 #include "internal/cage_graph.h"
 #include "internal/detail_solve.h"
+#include "internal/topology.h"
 #include "strata/exceptions.h"
 
 namespace strata {
@@ -83,10 +84,14 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
+    handle_flags_.assign(n, 0);
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       region_.push_back(i);
-      if (handle[i]) handle_.push_back(i);
+      if (handle[i]) {
+        handle_.push_back(i);
+        handle_flags_[i] = 1;
+      }
     }
     const auto t0 = Clock::now();
     s_ = cage_blend_field(base_.cage(), region, handle);
@@ -149,15 +154,21 @@ class CageEditor::Impl {
   void encode(const std::vector<char>& region) {
     const int nv = mesh_.num_vertices();
     const Projection pr = project_to_limit(base_, mesh_.vertices, opt_.projection);
-    std::vector<char> moves(nv, 0);
+    std::vector<char> moves(nv, 0), nonrigid(nv, 0);
     tbb::parallel_for(0, nv, [&](int i) {
       const SubdivSurface::Stencil st = base_.stencil(pr.points[i]);
-      for (std::size_t k = 0; k < st.indices.size(); ++k)
-        if (region[st.indices[k]] && st.position[k] != 0.0) {
-          moves[i] = 1;
-          return;
-        }
+      for (std::size_t k = 0; k < st.indices.size(); ++k) {
+        if (st.position[k] == 0.0 && st.du[k] == 0.0 && st.dv[k] == 0.0) continue;
+        const int c = st.indices[k];
+        if (region[c]) moves[i] = 1;
+        if (!handle_flags_[c]) nonrigid[i] = 1;
+      }
     });
+    // Rigid (all weights on the handle) and far enough from every non-rigid vertex: pinned.
+    const internal::Adjacency adj = internal::build_adjacency(nv, mesh_.faces);
+    const int rings = opt_.handle_solved_rings;
+    const std::vector<int> near_nonrigid =
+        rings < 0 ? std::vector<int>(nv, 0) : internal::ring_distance(adj, nonrigid, rings + 1);
     std::vector<int> sub_id(nv, -1);
     TriMesh detail;
     for (const Face& f : mesh_.faces) {
@@ -179,7 +190,10 @@ class CageEditor::Impl {
     enc = encode_detail(detail, base_, opt_.projection);
     moves_.swap(moves);
     enc.pinned.resize(sub_vertices_.size());
-    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) enc.pinned[k] = !moves_[sub_vertices_[k]];
+    for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
+      const int v = sub_vertices_[k];
+      enc.pinned[k] = !moves_[v] || (rings >= 0 && near_nonrigid[v] > rings);
+    }
   }
 
   // Vertices that depend on the region take the solution; all others keep theirs exactly.
@@ -193,6 +207,7 @@ class CageEditor::Impl {
   CageEditOptions opt_;
   internal::DetailSolve detail_;
   std::vector<int> region_, handle_;
+  std::vector<char> handle_flags_;  // per cage vertex: in the region and the handle
   std::vector<double> s_;
   std::vector<char> moves_;
   std::vector<int> sub_vertices_;

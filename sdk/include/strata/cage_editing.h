@@ -31,6 +31,12 @@ struct CageEditOptions {
   ReconstructOptions reconstruct;
   //! Interactive steps (update_drag()), as EditOptions::drag.
   WarmStartOptions drag{true, 1e-2, 1, 30};
+  //! Detail vertices whose limit stencils reach handle cage vertices only move rigidly with the
+  //! handle (their base frames do), so displacement vectors place them exactly and they are not
+  //! solved, except within this many edges of a vertex whose frame does not move rigidly: those
+  //! rings are solved with the blended part. Negative: every vertex that depends on the region is
+  //! solved.
+  int handle_solved_rings = 3;
 };
 
 //! The blend field of an edit on a cage (paper, section 5, with the cage as the base): s is
