@@ -154,5 +154,12 @@ TEST_P(RealScanCageBend, VolumesOverTheCageWithoutNewIntersections) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scans, RealScanCageBend,
-                         ::testing::Values(CageScanEdit{"camel_neck", "camel", "camel_neck.json", 0, false}),
+                         ::testing::Values(CageScanEdit{"camel_neck", "camel", "camel_neck.json", 0, false},
+                                           CageScanEdit{"bear_arm_90", "bear", "cage_bear_arm_90.json", 400, true},
+                                           CageScanEdit{"diplodocus_neck_90", "diplodocus",
+                                                        "cage_diplodocus_neck_90.json", 300, true},
+                                           CageScanEdit{"diplodocus_neck_mid_90", "diplodocus",
+                                                        "cage_diplodocus_neck_mid_90.json", 0, true},
+                                           CageScanEdit{"elephant_leg_90", "refined_elephant",
+                                                        "cage_elephant_leg_90.json", 400, true}),
                          [](const ::testing::TestParamInfo<CageScanEdit>& info) { return std::string(info.param.name); });

@@ -5,7 +5,7 @@
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 DEST=${STRATA_SCANS_DIR:-$ROOT/assets/scans}
-MESHES=(camel man armadillo bear)
+MESHES=(camel man armadillo bear diplodocus refined_elephant)
 missing=0
 for m in "${MESHES[@]}"; do [ -s "$DEST/$m.off" ] || missing=1; done
 [ "$missing" = 1 ] || exit 0

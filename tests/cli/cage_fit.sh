@@ -77,5 +77,12 @@ assert len(faces) == 48 and all(len(f) == 4 for f in faces), "the edited cage lo
 moved = [l for l, k in zip(open("quad.obj"), open("bent_quad.obj")) if l.startswith("v ") and l.split() != k.split()]
 assert moved, "the edited quad cage did not move"
 PY
+# --handle-rings: negative solves every vertex over a cage; rejected over the faired base
+"$STRATA" deform case/detail.obj --edit bend.json --base subdiv --cage quad.obj --handle-rings -1 -o all.obj \
+  -q >/dev/null || fail "--handle-rings -1 over a cage failed"
+if "$STRATA" deform case/detail.obj --edit bend.json --handle-rings -1 -o x.obj 2>err.txt >/dev/null; then
+  fail "--handle-rings -1 with the faired base was accepted"
+fi
+grep -q "handle-rings must be >= 0" err.txt || fail "no clear message for a negative --handle-rings"
 ls -A | grep -q '\.tmp' && fail "temporary file left behind"
 echo "cage_fit: all checks passed"

@@ -29,6 +29,7 @@ struct DeformCmdOptions {
   std::string cage;             // subdiv: given cage (empty: fitted)
   std::string cage_tags;        // subdiv: its sharpness tags (optional)
   int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
+  int handle_rings = 3;         // EditOptions / CageEditOptions::handle_solved_rings
   bool quiet = false;
 };
 
@@ -68,6 +69,8 @@ int run_deform(const DeformCmdOptions& o) {
   if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
     throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
   if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
+  if (!subdiv && o.handle_rings < 0)
+    throw InvalidInput("--handle-rings must be >= 0 with --base faired (negative: solve every vertex, --base subdiv)");
   if (!o.cage.empty() && o.cage_faces > 0)
     throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
   Stopwatch total;
@@ -113,6 +116,7 @@ int run_deform(const DeformCmdOptions& o) {
 
   EditOptions options;
   options.smoothing_fraction = o.smoothing;
+  options.handle_solved_rings = o.handle_rings;
   options.method = method == Method::Volumes ? EditOptions::Method::Volumes : EditOptions::Method::Vectors;
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
@@ -147,6 +151,7 @@ int run_deform(const DeformCmdOptions& o) {
       log.phase(label + ": encoding over the cage's limit surface");
       CageEditOptions co;
       co.method = options.method;
+      co.handle_solved_rings = o.handle_rings;
       co.reconstruct.progress = log.progress(label + ": " + to_string(method));
       std::unique_ptr<CageEditor> editor;
       try {
@@ -261,6 +266,10 @@ Subcommand register_deform(CLI::App& parent) {
                   "With --base subdiv: the cage (OBJ, OFF or PLY; triangles: Loop, quads or other polygons: Catmull-Clark); default: a Loop cage fitted to the input");
   app->add_option("--cage-tags", o->cage_tags,
                   "With --cage: its crease and corner tags (JSON, see cage_io.h)");
+  app->add_option("--handle-rings", o->handle_rings,
+                  "Handle vertices that move rigidly are placed exactly (as by vectors) and not solved, except "
+                  "within this many edges of the blended part; with --base subdiv a negative value solves all")
+      ->capture_default_str();
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--report", o->report, "Also write a JSON report (metrics, sizes, timings) here");
