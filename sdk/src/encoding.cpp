@@ -431,6 +431,9 @@ void check_limit_encoding(const DetailEncoding& e, int control_points) {
 // Unit normals du x dv and tangents du (orthogonalized) from the base points' derivatives.
 void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const std::vector<Vec3>& du,
                   const std::vector<Vec3>& dv, BaseFrames& fr);
+// The unit normal du x dv and the tangent du (orthogonalized) of base point i.
+void frame_at(const DetailEncoding& e, const SubdivSurface& surface, int i, const Vec3& du, const Vec3& dv,
+              Vec3& normal, Vec3& tangent);
 
 }  // namespace
 
@@ -468,14 +471,47 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const LimitPointSet& po
   if (points.size() != n)
     throw InvalidInput("limit point set has " + std::to_string(points.size()) + " points, the encoding " +
                        std::to_string(n));
+  // One pass: each chunk's derivatives stay in small buffers while its frames are made.
   BaseFrames fr;
-  std::vector<Vec3> du, dv;
-  points.evaluate(surface, fr.points, du, dv);
-  limit_frames(e, surface, du, dv, fr);
+  fr.points.resize(n);
+  fr.normals.resize(n);
+  fr.tangents.resize(n);
+  if (n > 0) points.evaluate(surface, 0, 0, nullptr, nullptr, nullptr);  // checks the patch layout once
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    constexpr int kChunk = 256;
+    Vec3 du[kChunk], dv[kChunk];
+    for (int b = r.begin(); b < r.end(); b += kChunk) {
+      const int e_ = std::min(r.end(), b + kChunk);
+      points.evaluate(surface, b, e_, fr.points.data() + b, du, dv);
+      for (int i = b; i < e_; ++i) frame_at(e, surface, i, du[i - b], dv[i - b], fr.normals[i], fr.tangents[i]);
+    }
+  });
   return fr;
 }
 
 namespace {
+
+void frame_at(const DetailEncoding& e, const SubdivSurface& surface, int i, const Vec3& du, const Vec3& dv,
+              Vec3& normal, Vec3& tangent) {
+  Vec3 nrm = du.cross(dv);
+  Vec3 u = du;
+  if (!(nrm.norm() > 1e-300)) {
+    // A degenerate parameterization at this point (e.g. a valence-2 vertex): the frame of a
+    // point nudged towards the ptex face's middle.
+    LimitPoint lp = e.limit_points[i];
+    const double c = surface.ptex_corners() == 3 ? 1.0 / 3.0 : 0.5;
+    lp.u += 1e-7 * (c - lp.u);
+    lp.v += 1e-7 * (c - lp.v);
+    const LimitSample s2 = surface.evaluate(lp);
+    nrm = s2.du.cross(s2.dv);
+    u = s2.du;
+  }
+  nrm = nrm.norm() > 1e-300 ? Vec3(nrm.normalized()) : Vec3(Vec3::UnitZ());
+  Vec3 t = u - u.dot(nrm) * nrm;
+  if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
+  normal = nrm;
+  tangent = t.normalized();
+}
 
 void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const std::vector<Vec3>& du,
                   const std::vector<Vec3>& dv, BaseFrames& fr) {
@@ -483,26 +519,7 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
   fr.normals.resize(n);
   fr.tangents.resize(n);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i) {
-      Vec3 nrm = du[i].cross(dv[i]);
-      Vec3 u = du[i];
-      if (!(nrm.norm() > 1e-300)) {
-        // A degenerate parameterization at this point (e.g. a valence-2 vertex): the frame of a
-        // point nudged towards the ptex face's middle.
-        LimitPoint lp = e.limit_points[i];
-        const double c = surface.ptex_corners() == 3 ? 1.0 / 3.0 : 0.5;
-        lp.u += 1e-7 * (c - lp.u);
-        lp.v += 1e-7 * (c - lp.v);
-        const LimitSample s2 = surface.evaluate(lp);
-        nrm = s2.du.cross(s2.dv);
-        u = s2.du;
-      }
-      nrm = nrm.norm() > 1e-300 ? Vec3(nrm.normalized()) : Vec3(Vec3::UnitZ());
-      Vec3 t = u - u.dot(nrm) * nrm;
-      if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
-      fr.normals[i] = nrm;
-      fr.tangents[i] = t.normalized();
-    }
+    for (int i = r.begin(); i < r.end(); ++i) frame_at(e, surface, i, du[i], dv[i], fr.normals[i], fr.tangents[i]);
   });
 }
 

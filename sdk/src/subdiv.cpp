@@ -621,35 +621,53 @@ LimitPointSet::LimitPointSet(const SubdivSurface& surface, const std::vector<Lim
   }
 }
 
+void LimitPointSet::check(const SubdivSurface& surface) const {
+  if (static_cast<int>(surface.impl_->points_.size()) != num_patch_points_)
+    throw InvalidInput("limit point set was built on a surface with " + vtx(num_patch_points_) +
+                       " patch points, this one has " + vtx(static_cast<int>(surface.impl_->points_.size())));
+}
+
+void LimitPointSet::evaluate_unchecked(const std::vector<Vec3>& P, int begin, int end, Vec3* positions, Vec3* du,
+                                       Vec3* dv) const {
+  for (int i = begin; i < end; ++i) {
+    const int b = offsets_[i], e = offsets_[i + 1];
+    const Vec3 o = P[index_[b]];
+    // Sums of weights times (point - origin): the weights of the position sum to 1 and those
+    // of the derivatives to 0, so the origin drops out and single-precision weights lose
+    // nothing relative to the coordinates' magnitude.
+    Vec3 sp = Vec3::Zero(), su = Vec3::Zero(), sv = Vec3::Zero();
+    for (int k = b + 1; k < e; ++k) {
+      const Vec3 d = P[index_[k]] - o;
+      sp += static_cast<double>(wp_[k]) * d;
+      su += static_cast<double>(wu_[k]) * d;
+      sv += static_cast<double>(wv_[k]) * d;
+    }
+    positions[i - begin] = o + sp;
+    du[i - begin] = su;
+    dv[i - begin] = sv;
+  }
+}
+
 void LimitPointSet::evaluate(const SubdivSurface& surface, std::vector<Vec3>& positions,
                              std::vector<Vec3>& du, std::vector<Vec3>& dv) const {
-  const std::vector<Vec3>& P = surface.impl_->points_;
-  if (static_cast<int>(P.size()) != num_patch_points_)
-    throw InvalidInput("limit point set was built on a surface with " + vtx(num_patch_points_) +
-                       " patch points, this one has " + vtx(static_cast<int>(P.size())));
+  check(surface);
   const int n = size();
   positions.resize(n);
   du.resize(n);
   dv.resize(n);
+  const std::vector<Vec3>& P = surface.impl_->points_;
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i) {
-      const int b = offsets_[i], e = offsets_[i + 1];
-      const Vec3 o = P[index_[b]];
-      // Sums of weights times (point - origin): the weights of the position sum to 1 and those
-      // of the derivatives to 0, so the origin drops out and single-precision weights lose
-      // nothing relative to the coordinates' magnitude.
-      Vec3 sp = Vec3::Zero(), su = Vec3::Zero(), sv = Vec3::Zero();
-      for (int k = b + 1; k < e; ++k) {
-        const Vec3 d = P[index_[k]] - o;
-        sp += static_cast<double>(wp_[k]) * d;
-        su += static_cast<double>(wu_[k]) * d;
-        sv += static_cast<double>(wv_[k]) * d;
-      }
-      positions[i] = o + sp;
-      du[i] = su;
-      dv[i] = sv;
-    }
+    evaluate_unchecked(P, r.begin(), r.end(), positions.data() + r.begin(), du.data() + r.begin(),
+                       dv.data() + r.begin());
   });
+}
+
+void LimitPointSet::evaluate(const SubdivSurface& surface, int begin, int end, Vec3* positions, Vec3* du,
+                             Vec3* dv) const {
+  check(surface);
+  if (begin < 0 || end > size() || begin > end)
+    throw InvalidInput("limit point range [" + vtx(begin) + ", " + vtx(end) + ") out of [0, " + vtx(size()) + ")");
+  evaluate_unchecked(surface.impl_->points_, begin, end, positions, du, dv);
 }
 
 }  // namespace strata

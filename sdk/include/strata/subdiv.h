@@ -180,8 +180,15 @@ class LimitPointSet {
   //! \throw InvalidInput if the surface's patch layout differs.
   void evaluate(const SubdivSurface& surface, std::vector<Vec3>& positions, std::vector<Vec3>& du,
                 std::vector<Vec3>& dv) const;
+  //! The same for the points [begin, end) into the arrays given (end - begin entries each), on
+  //! the calling thread: for callers that use each point's values right away.
+  //! 	hrow InvalidInput if the surface's patch layout differs or the range is out of bounds.
+  void evaluate(const SubdivSurface& surface, int begin, int end, Vec3* positions, Vec3* du, Vec3* dv) const;
 
  private:
+  void check(const SubdivSurface& surface) const;
+  void evaluate_unchecked(const std::vector<Vec3>& patch_points, int begin, int end, Vec3* positions, Vec3* du,
+                          Vec3* dv) const;
   int num_patch_points_ = 0;
   std::vector<int> offsets_;  // per point: its entries [offsets_[i], offsets_[i+1])
   std::vector<int> index_;    // per entry: patch point; the first entry of a point is its origin
