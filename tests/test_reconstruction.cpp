@@ -140,6 +140,31 @@ TEST(Reconstruction, SolverIsReusableAndDeterministic) {
   EXPECT_EQ(rec.level_vertex_counts(), levels);
 }
 
+// A clean-start solve that ends above the tolerance runs once more with
+// retry_volume_iterations steps per cycle: exactly the solve those options give from scratch
+// (nothing of the first attempt carries over); retry_volume_iterations = 0 turns it off.
+TEST(Reconstruction, UnconvergedSolveIsRetriedFromTheCleanStart) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  ReconstructOptions cheap;
+  cheap.volume_iterations = 1;
+  cheap.max_final_steps = 0;  // no exact polish: the first attempt cannot reach the tolerance
+  cheap.retry_volume_iterations = 3;
+  const ReconstructResult retried = VolumeReconstructor(e, cheap).reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(retried.stats.retries, 1);
+  EXPECT_FALSE(retried.stats.converged);
+  ReconstructOptions direct = cheap;
+  direct.volume_iterations = 3;
+  direct.retry_volume_iterations = 0;
+  const ReconstructResult fresh = VolumeReconstructor(e, direct).reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(fresh.stats.retries, 0);
+  EXPECT_EQ(max_distance(retried.positions, fresh.positions), 0.0);
+  cheap.retry_volume_iterations = 0;
+  EXPECT_EQ(VolumeReconstructor(e, cheap).reconstruct(c.edited_base.vertices).stats.retries, 0);
+  // A converged solve is not retried.
+  EXPECT_EQ(VolumeReconstructor(e).reconstruct(c.edited_base.vertices).stats.retries, 0);
+}
+
 TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   // The cold solve stops its regularization once it barely moves (with a decayed weight); a warm
   // restart regularizes a little further, so it stays close but not bitwise at the start.

@@ -50,6 +50,7 @@ json options_json(const ModelOptions& o) {
             {"coarsening_ratio", r.coarsening_ratio},
             {"volume_iterations", r.volume_iterations},
             {"finest_volume_iterations", r.finest_volume_iterations},
+            {"retry_volume_iterations", r.retry_volume_iterations},
             {"regularization_iterations", r.regularization_iterations},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
@@ -139,6 +140,11 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("finest_volume_iterations")
           ? static_cast<int>(h.integer(r, "finest_volume_iterations", wr, 1, 100000))
           : ro.volume_iterations;
+  // Files written before the option existed did not retry.
+  ro.retry_volume_iterations =
+      r.contains("retry_volume_iterations")
+          ? static_cast<int>(h.integer(r, "retry_volume_iterations", wr, 0, 100000))
+          : 0;
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));

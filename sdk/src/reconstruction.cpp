@@ -81,6 +81,7 @@ struct State {
   std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
   double amplitude = 1.0;       // scales every target and rest offset (ReconstructRequest)
   int volume_iterations = 0;    // volume steps per cycle on the level being solved
+  int cycle_volume_iterations = 0;  // the clean start's n (volume_iterations, or the retry's)
   GnScratch gn;
 };
 
@@ -202,17 +203,17 @@ class VolumeReconstructor::Impl {
       return res;
     }
     if (!start) {
-      // Section 4.1: the clean configuration p' = q', then growing volume scales.
-      s.P = s.Q;
-      const int k = std::max(1, opt_.volume_scales);
-      for (int sc = 0; sc < k; ++sc) {
-        const double t = static_cast<double>(sc + 1) / k, h = a * t;
-        // The pinned vertices' displacements follow the volume scale, so that the layer is scaled
-        // down as a whole: pinned at full height next to free vertices at the clean start would
-        // make steep walls at the border of the solved part, which fold.
-        place_pinned(s, t);
-        multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
-        report("reconstruct", static_cast<double>(sc + 1) / k);
+      clean_start(s, a, opt_.volume_iterations, st, V);
+      if (opt_.retry_volume_iterations > opt_.volume_iterations) {
+        const Level& F = levels_.back();
+        compute_volumes(F, s, V);
+        if (relative_error(F, a, V, nullptr) > opt_.tolerance) {
+          // Not converged: the cheaper schedule left the polish in a poor basin; once more from
+          // the clean start with more volume steps per cycle.
+          ++st.retries;
+          s.gn.damping = kMinDamping;
+          clean_start(s, a, opt_.retry_volume_iterations, st, V);
+        }
       }
     } else {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
@@ -373,7 +374,7 @@ class VolumeReconstructor::Impl {
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
-        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 ||
+        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 || opt_.retry_volume_iterations < 0 ||
         !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
         !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
         opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 ||
@@ -511,6 +512,7 @@ class VolumeReconstructor::Impl {
   void init_state(const BaseFrames& fr, const ReconstructRequest& request, State& s) const {
     if (!std::isfinite(request.amplitude)) throw InvalidInput("reconstruction: the amplitude is not finite");
     s.amplitude = request.amplitude;
+    s.cycle_volume_iterations = opt_.volume_iterations;
     const int n = enc_.num_detail_vertices();
     if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
         static_cast<int>(fr.tangents.size()) != n)
@@ -557,6 +559,23 @@ class VolumeReconstructor::Impl {
     if (opt_.progress) opt_.progress(phase, f);
   }
 
+  // Section 4.1: from the clean configuration p' = q', the volume scales h = a/k, 2a/k, .., a,
+  // each a multigrid pass with n = volume_iterations steps per cycle.
+  void clean_start(State& s, double a, int volume_iterations, ReconstructStats& st, std::vector<double>& V) const {
+    s.P = s.Q;
+    s.cycle_volume_iterations = volume_iterations;
+    const int k = std::max(1, opt_.volume_scales);
+    for (int sc = 0; sc < k; ++sc) {
+      const double t = static_cast<double>(sc + 1) / k, h = a * t;
+      // The pinned vertices' displacements follow the volume scale, so that the layer is scaled
+      // down as a whole: pinned at full height next to free vertices at the clean start would
+      // make steep walls at the border of the solved part, which fold.
+      place_pinned(s, t);
+      multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
+      report("reconstruct", static_cast<double>(sc + 1) / k);
+    }
+  }
+
   // Listing 1 for one volume scale h: every level from the coarsest to the finest, each solved by
   // cycles of (at most) n volume steps and m regularization sweeps, then prolongated to the next
   // level.
@@ -576,7 +595,7 @@ class VolumeReconstructor::Impl {
         continue;
       }
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
-      s.volume_iterations = finest && !full_scale ? opt_.finest_volume_iterations : opt_.volume_iterations;
+      s.volume_iterations = finest && !full_scale ? opt_.finest_volume_iterations : s.cycle_volume_iterations;
       const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
@@ -848,7 +867,13 @@ class VolumeReconstructor::Impl {
     }
     for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
       const int i = fine.inserted[k];
-      if (pinned(i)) continue;
+      if (pinned(i)) {
+        // Placed, not solved: unchanged since the pass started (the rings of later inserted
+        // vertices read this, which must not be a previous pass's change).
+        s.dRho[i] = 0.0;
+        s.dT[i].setZero();
+        continue;
+      }
       const int b = fine.ring_offsets[k], e = fine.ring_offsets[k + 1];
       double rho = 0.0;
       Vec3 t = Vec3::Zero();

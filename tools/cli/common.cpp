@@ -247,6 +247,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"regularization_sweeps", s.regularization_sweeps},
               {"cg_iterations", s.cg_iterations},
               {"factorizations", s.factorizations},
+              {"retries", s.retries},
               {"final_sweeps", s.final_sweeps},
               {"constraint_updates", s.constraint_updates},
               {"solver_max_relative_error", s.max_relative_error},
