@@ -41,7 +41,7 @@ struct ReconstructOptions {
   //! n: volume-preservation steps (Gauss-Newton projections onto the prism volumes, section 4.1)
   //! per cycle at most; a cycle's volume steps stop once the level's tolerance holds. The paper
   //! uses 10; Strata's steps are Gauss-Newton steps, and on the 100k-prism bends 5 of them per
-  //! cycle took 1.6 to 2.4 times as long as 2 with no fewer intersecting pairs (rings: 157
+  //! cycle took 1.3 to 1.6 times as long as 2 with no fewer intersecting pairs (rings: 157
   //! against 104; bumps and cuboid 0 either way).
   int volume_iterations = 2;
   //! If a clean-start solve ends above `tolerance`, it runs once more from the clean start with
