@@ -546,10 +546,24 @@ TEST(Subdiv, LimitPointSetReevaluatesAfterCageEdits) {
       worst = std::max({worst, (P[i] - x.position).norm(), (Du[i] - x.du).norm(), (Dv[i] - x.dv).norm()});
     }
     EXPECT_LE(worst, 1e-5);  // single-precision weights relative to the patch (size ~1)
+    // Any range gives the same values, bit for bit, as the whole set.
+    const int b = set.size() / 3, e = set.size() - 2;
+    std::vector<Vec3> p(e - b), du(e - b), dv(e - b);
+    set.evaluate(s, b, e, p.data(), du.data(), dv.data());
+    for (int i = b; i < e; ++i) {
+      EXPECT_EQ(p[i - b], P[i]);
+      EXPECT_EQ(du[i - b], Du[i]);
+      EXPECT_EQ(dv[i - b], Dv[i]);
+    }
+    EXPECT_THROW(set.evaluate(s, -1, 2, p.data(), du.data(), dv.data()), InvalidInput);
+    EXPECT_THROW(set.evaluate(s, 0, set.size() + 1, p.data(), du.data(), dv.data()), InvalidInput);
+    EXPECT_THROW(set.evaluate(s, 3, 2, p.data(), du.data(), dv.data()), InvalidInput);
   }
   const SubdivSurface cube(cube_cage()), other(cube_with_ngons());
   const LimitPointSet set(cube, {{0, 0.5, 0.5}});
   std::vector<Vec3> P, Du, Dv;
   EXPECT_THROW(set.evaluate(other, P, Du, Dv), InvalidInput);
+  Vec3 p, du, dv;
+  EXPECT_THROW(set.evaluate(other, 0, 1, &p, &du, &dv), InvalidInput);
   EXPECT_THROW(LimitPointSet(cube, {{99, 0.5, 0.5}}), InvalidInput);
 }
