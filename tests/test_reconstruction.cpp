@@ -165,6 +165,33 @@ TEST(Reconstruction, UnconvergedSolveIsRetriedFromTheCleanStart) {
   EXPECT_EQ(VolumeReconstructor(e).reconstruct(c.edited_base.vertices).stats.retries, 0);
 }
 
+// With retry_on_new_intersections, a converged solve that folds is run again with the retry's
+// schedule and the result with fewer new intersecting pairs is kept: the combined solve returns
+// exactly the better of the two schedules' own results.
+TEST(Reconstruction, FoldedSolveKeepsTheBetterOfTwoSchedules) {
+  for (cases::DetailKind kind : {cases::DetailKind::Bumps, cases::DetailKind::Rings}) {
+    const cases::CylinderCase c = make_case(kind, 0);  // the paper's resolution
+    const DetailEncoding e = encode_detail(c.detail, c.base);
+    auto new_pairs = [&](const std::vector<Vec3>& p) {
+      IntersectionOptions all;
+      all.collect_pairs = true;
+      return count_new_intersections(find_self_intersections(c.detail.vertices, c.detail.faces, all),
+                                     find_self_intersections(p, c.detail.faces, all));
+    };
+    ReconstructOptions only;
+    only.retry_volume_iterations = 0;
+    const ReconstructResult two = VolumeReconstructor(e, only).reconstruct(c.edited_base.vertices);
+    only.volume_iterations = 5;
+    const ReconstructResult five = VolumeReconstructor(e, only).reconstruct(c.edited_base.vertices);
+    const ReconstructResult both = VolumeReconstructor(e).reconstruct(c.edited_base.vertices);
+    ASSERT_TRUE(two.stats.converged && five.stats.converged && both.stats.converged);
+    const std::size_t p2 = new_pairs(two.positions), p5 = new_pairs(five.positions);
+    EXPECT_EQ(both.stats.retries, p2 > 0 ? 1 : 0);
+    EXPECT_EQ(both.positions, p2 > 0 && p5 < p2 ? five.positions : two.positions);
+    EXPECT_EQ(new_pairs(both.positions), std::min(p2, p5));
+  }
+}
+
 TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   // The cold solve stops its regularization once it barely moves (with a decayed weight); a warm
   // restart regularizes a little further, so it stays close but not bitwise at the start.

@@ -51,6 +51,7 @@ json options_json(const ModelOptions& o) {
             {"volume_iterations", r.volume_iterations},
             {"finest_volume_iterations", r.finest_volume_iterations},
             {"retry_volume_iterations", r.retry_volume_iterations},
+            {"retry_on_new_intersections", r.retry_on_new_intersections},
             {"regularization_iterations", r.regularization_iterations},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
@@ -145,6 +146,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("retry_volume_iterations")
           ? static_cast<int>(h.integer(r, "retry_volume_iterations", wr, 0, 100000))
           : 0;
+  ro.retry_on_new_intersections =
+      r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));

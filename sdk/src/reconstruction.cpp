@@ -11,6 +11,7 @@
 #include "internal/hierarchy.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
+#include "strata/intersections.h"
 #include "strata/prism.h"
 
 namespace strata {
@@ -204,15 +205,20 @@ class VolumeReconstructor::Impl {
     }
     if (!start) {
       clean_start(s, a, opt_.volume_iterations, st, V);
-      if (opt_.retry_volume_iterations > opt_.volume_iterations) {
-        const Level& F = levels_.back();
-        compute_volumes(F, s, V);
-        if (relative_error(F, a, V, nullptr) > opt_.tolerance) {
-          // Not converged: the cheaper schedule left the polish in a poor basin; once more from
-          // the clean start with more volume steps per cycle.
-          ++st.retries;
-          s.gn.damping = kMinDamping;
-          clean_start(s, a, opt_.retry_volume_iterations, st, V);
+      if (opt_.retry_volume_iterations > 0 && opt_.retry_volume_iterations != opt_.volume_iterations) {
+        Outcome first = outcome(s, a, V, false);
+        if (!first.converged || opt_.retry_on_new_intersections) {
+          if (first.converged) first = outcome(s, a, V, true);
+          if (!first.converged || first.new_pairs > 0) {
+            // Not converged, or folded: once more from the clean start with the other schedule,
+            // and the better of the two is kept (converged first, then fewer new pairs).
+            std::vector<Vec3> kept = s.P;
+            ++st.retries;
+            s.gn.damping = kMinDamping;
+            clean_start(s, a, opt_.retry_volume_iterations, st, V);
+            const Outcome second = outcome(s, a, V, opt_.retry_on_new_intersections);
+            if (!second.better_than(first)) s.P.swap(kept);
+          }
         }
       }
     } else {
@@ -559,6 +565,37 @@ class VolumeReconstructor::Impl {
     if (opt_.progress) opt_.progress(phase, f);
   }
 
+  // How a clean-start solve ended: converged to the tolerance, and (if counted) the intersecting
+  // pairs of detail triangles that the rest detail does not have.
+  struct Outcome {
+    bool converged = false;
+    double max_error = 0.0;
+    std::size_t new_pairs = 0;
+    bool better_than(const Outcome& o) const {
+      if (converged != o.converged) return converged;
+      if (!converged) return max_error < o.max_error;
+      return new_pairs < o.new_pairs;
+    }
+  };
+
+  Outcome outcome(const State& s, double a, std::vector<double>& V, bool count_pairs) const {
+    Outcome o;
+    const Level& F = levels_.back();
+    compute_volumes(F, s, V);
+    o.max_error = relative_error(F, a, V, nullptr);
+    o.converged = o.max_error <= opt_.tolerance;
+    if (count_pairs) {
+      IntersectionOptions io;
+      io.collect_pairs = true;
+      io.parallel = false;  // the solver stays on the calling thread
+      if (!rest_pairs_)
+        rest_pairs_ =
+            std::make_unique<IntersectionResult>(find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));
+      o.new_pairs = count_new_intersections(*rest_pairs_, find_self_intersections(s.P, enc_.detail_faces, io));
+    }
+    return o;
+  }
+
   // Section 4.1: from the clean configuration p' = q', the volume scales h = a/k, 2a/k, .., a,
   // each a multigrid pass with n = volume_iterations steps per cycle.
   void clean_start(State& s, double a, int volume_iterations, ReconstructStats& st, std::vector<double>& V) const {
@@ -901,6 +938,9 @@ class VolumeReconstructor::Impl {
   // control points does not rebuild the patch table. Mutable like the levels' factorizations.
   mutable std::unique_ptr<SubdivSurface> limit_;
   std::unique_ptr<LimitPointSet> limit_points_;  // the base points' patch weights
+  // The rest detail's own intersecting pairs (found at the first retry check), so that a result's
+  // new pairs can be told. Mutable like the levels' factorizations.
+  mutable std::unique_ptr<IntersectionResult> rest_pairs_;
   double setup_seconds_ = 0.0;
 };
 

@@ -105,6 +105,9 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
     *it->second = std::stoi(v);
   } else if (auto jt = reals.find(k); jt != reals.end()) {
     *jt->second = std::stod(v);
+  } else if (k == "retry_on_new_intersections") {
+    if (v != "true" && v != "false") throw std::runtime_error("retry_on_new_intersections is true or false");
+    o.retry_on_new_intersections = v == "true";
   } else if (k == "step_solver") {
     if (v != "jacobi_cg" && v != "direct") throw std::runtime_error("step_solver is jacobi_cg or direct");
     o.step_solver = v == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
@@ -419,6 +422,7 @@ int main(int argc, char** argv) {
           {"volume_iterations", ro.volume_iterations},
           {"finest_volume_iterations", ro.finest_volume_iterations},
           {"retry_volume_iterations", ro.retry_volume_iterations},
+          {"retry_on_new_intersections", ro.retry_on_new_intersections},
           {"regularization_iterations", ro.regularization_iterations},
           {"max_cycles", ro.max_cycles},
           {"final_max_cycles", ro.final_max_cycles},

@@ -44,11 +44,18 @@ struct ReconstructOptions {
   //! cycle took 1.3 to 1.6 times as long as 2 with no fewer intersecting pairs (rings: 157
   //! against 104; bumps and cuboid 0 either way).
   int volume_iterations = 2;
-  //! If a clean-start solve ends above `tolerance`, it runs once more from the clean start with
-  //! this many volume steps per cycle (when more than volume_iterations; 0: no retry). Measured:
-  //! the armadillo's top bent 90 degrees in a layered model (strata_bench_layers) ends at a max
-  //! error of 2.2 with 2 steps and converges with 5.
+  //! If a clean-start solve ends above `tolerance` (or, with retry_on_new_intersections, with
+  //! intersecting triangle pairs that the rest detail does not have), it runs once more from the
+  //! clean start with this many volume steps per cycle, and the better result is kept: converged
+  //! first, then fewer new pairs (0 or equal to volume_iterations: no retry). The fold outcome of
+  //! a schedule is erratic from case to case: measured, 2 steps left 8 new pairs on the paper's
+  //! bumps at its own resolution where 5 left none, and 5 steps left 166 on the camel neck over a
+  //! cage where 2 left none; 2 steps also failed to converge on the armadillo's top bent 90 degrees
+  //! in a layered model (strata_bench_layers; max error 2.2), which 5 steps solve.
   int retry_volume_iterations = 5;
+  //! Count the new intersecting pairs of a converged clean-start solve (exactly, one thread; at
+  //! 100k prisms about 0.1 s) and retry if there are any. See retry_volume_iterations.
+  bool retry_on_new_intersections = true;
   //! Volume steps per cycle at most on the finest level at the intermediate volume scales. One
   //! step between regularization rounds is enough there to grow the detail without folds (the
   //! full scale and the polish reach the tolerance); more steps cost time (measured on the 100k
