@@ -71,7 +71,8 @@ TEST_P(PaperBend, VolumesAvoidTheFoldsThatVectorsMake) {
   EXPECT_GT(o.vectors.max_relative_error, 0.1);
 }
 
-INSTANTIATE_TEST_SUITE_P(Fig6, PaperBend, ::testing::Values(cases::DetailKind::Bumps, cases::DetailKind::Cuboid),
+INSTANTIATE_TEST_SUITE_P(Fig6, PaperBend,
+                         ::testing::Values(cases::DetailKind::Bumps, cases::DetailKind::Cuboid),
                          [](const auto& info) { return std::string(cases::to_string(info.param)); });
 
 TEST(Reconstruction, RingsBendKeepsVolumesAndCutsVectorFolds) {
@@ -141,26 +142,31 @@ TEST(Reconstruction, SolverIsReusableAndDeterministic) {
 }
 
 // A clean-start solve that ends above the tolerance runs once more with
-// retry_volume_iterations steps per cycle: exactly the solve those options give from scratch
-// (nothing of the first attempt carries over); retry_volume_iterations = 0 turns it off.
+// retry_volume_iterations steps per cycle from the clean start (nothing of the first attempt
+// carries over), and the one with the smaller error is kept; retry_volume_iterations = 0 turns
+// it off.
 TEST(Reconstruction, UnconvergedSolveIsRetriedFromTheCleanStart) {
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
   const DetailEncoding e = encode_detail(c.detail, c.base);
   ReconstructOptions cheap;
   cheap.volume_iterations = 1;
-  cheap.max_final_steps = 0;  // no exact polish: the first attempt cannot reach the tolerance
+  cheap.max_final_steps = 0;  // no exact polish: neither attempt can reach the tolerance
   cheap.retry_volume_iterations = 3;
   const ReconstructResult retried = VolumeReconstructor(e, cheap).reconstruct(c.edited_base.vertices);
   EXPECT_EQ(retried.stats.retries, 1);
   EXPECT_FALSE(retried.stats.converged);
-  ReconstructOptions direct = cheap;
-  direct.volume_iterations = 3;
-  direct.retry_volume_iterations = 0;
-  const ReconstructResult fresh = VolumeReconstructor(e, direct).reconstruct(c.edited_base.vertices);
-  EXPECT_EQ(fresh.stats.retries, 0);
-  EXPECT_EQ(max_distance(retried.positions, fresh.positions), 0.0);
-  cheap.retry_volume_iterations = 0;
-  EXPECT_EQ(VolumeReconstructor(e, cheap).reconstruct(c.edited_base.vertices).stats.retries, 0);
+  ReconstructOptions one = cheap;
+  one.retry_volume_iterations = 0;
+  const ReconstructResult first = VolumeReconstructor(e, one).reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(first.stats.retries, 0);
+  ReconstructOptions three = one;
+  three.volume_iterations = 3;
+  const ReconstructResult second = VolumeReconstructor(e, three).reconstruct(c.edited_base.vertices);
+  ASSERT_NE(first.stats.max_relative_error, second.stats.max_relative_error);
+  const ReconstructResult& better =
+      second.stats.max_relative_error < first.stats.max_relative_error ? second : first;
+  EXPECT_EQ(max_distance(retried.positions, better.positions), 0.0);
+  EXPECT_EQ(retried.stats.max_relative_error, better.stats.max_relative_error);
   // A converged solve is not retried.
   EXPECT_EQ(VolumeReconstructor(e).reconstruct(c.edited_base.vertices).stats.retries, 0);
 }
@@ -204,7 +210,8 @@ TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   EXPECT_LE(max_distance(a.positions, b.positions), 0.02 * bbox_diagonal(c.detail.vertices));
   // From a perturbed start, the exact warm solve restores the volumes.
   std::vector<Vec3> noisy = a.positions;
-  for (std::size_t i = 0; i < noisy.size(); ++i) noisy[i] += 1e-3 * Vec3(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(7.0 * i));
+  for (std::size_t i = 0; i < noisy.size(); ++i)
+    noisy[i] += 1e-3 * Vec3(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(7.0 * i));
   const ReconstructResult n = rec.reconstruct_from(c.edited_base.vertices, noisy);
   EXPECT_TRUE(n.stats.converged);
   EXPECT_LE(n.stats.max_relative_error, 1e-4);

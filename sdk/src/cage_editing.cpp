@@ -24,7 +24,8 @@ double seconds_since(Clock::time_point t) {
 // Region and handle flags on a cage of n vertices: sizes, and a handle that leaves something to blend.
 void check_cage_selection(int n, const std::vector<char>& region, const std::vector<char>& handle) {
   if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
-    throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) + ")");
+    throw InvalidInput("region and handle flags must have one entry per cage vertex (" + std::to_string(n) +
+                       ")");
   int nr = 0, nh = 0;
   for (int i = 0; i < n; ++i) {
     nr += region[i] != 0;
@@ -62,14 +63,16 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   const Eigen::VectorXd Bfixed = B * fixed;
   for (int k = 0; k < B.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
-      if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0) tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
+      if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0)
+        tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
   for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
   Eigen::SparseMatrix<double> A(m, m);
   A.setFromTriplets(tf.begin(), tf.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
   if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
   const Eigen::VectorXd x = ldlt.solve(rhs);
-  if (ldlt.info() != Eigen::Success || !x.allFinite()) throw SolverError("the cage's blend field solve failed");
+  if (ldlt.info() != Eigen::Success || !x.allFinite())
+    throw SolverError("the cage's blend field solve failed");
   for (int k = 0; k < m; ++k) s[free[k]] = x[k];
   return s;
 }
@@ -84,24 +87,22 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
-    handle_flags_.assign(n, 0);
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       region_.push_back(i);
-      if (handle[i]) {
-        handle_.push_back(i);
-        handle_flags_[i] = 1;
-      }
+      if (handle[i]) handle_.push_back(i);
     }
     const auto t0 = Clock::now();
     s_ = cage_blend_field(base_.cage(), region, handle);
     decompose_seconds_ = seconds_since(t0);
     const auto t1 = Clock::now();
-    encode(region);
+    encode(region, handle);
     encode_seconds_ = seconds_since(t1);
   }
 
-  std::vector<Vec3> edited_cage(const EditTransform& t) const { return blend_transform(base_.control_points(), s_, t); }
+  std::vector<Vec3> edited_cage(const EditTransform& t) const {
+    return blend_transform(base_.control_points(), s_, t);
+  }
 
   EditResult apply(const EditTransform& t) const {
     EditResult res;
@@ -150,8 +151,10 @@ class CageEditor::Impl {
  private:
   // The prisms whose base points depend on a region cage vertex (a non-zero weight in their
   // limit stencil), encoded over the limit surface; their vertices that do not depend on the
-  // region are pinned (their frames cannot change).
-  void encode(const std::vector<char>& region) {
+  // region are pinned (their frames cannot change), and so are those that depend on handle
+  // vertices only (their frames move rigidly) unless within handle_solved_rings of one that
+  // does not.
+  void encode(const std::vector<char>& region, const std::vector<char>& handle) {
     const int nv = mesh_.num_vertices();
     const Projection pr = project_to_limit(base_, mesh_.vertices, opt_.projection);
     std::vector<char> moves(nv, 0), nonrigid(nv, 0);
@@ -161,7 +164,7 @@ class CageEditor::Impl {
         if (st.position[k] == 0.0 && st.du[k] == 0.0 && st.dv[k] == 0.0) continue;
         const int c = st.indices[k];
         if (region[c]) moves[i] = 1;
-        if (!handle_flags_[c]) nonrigid[i] = 1;
+        if (!region[c] || !handle[c]) nonrigid[i] = 1;
       }
     });
     // Rigid (all weights on the handle) and far enough from every non-rigid vertex: pinned.
@@ -207,7 +210,6 @@ class CageEditor::Impl {
   CageEditOptions opt_;
   internal::DetailSolve detail_;
   std::vector<int> region_, handle_;
-  std::vector<char> handle_flags_;  // per cage vertex: in the region and the handle
   std::vector<double> s_;
   std::vector<char> moves_;
   std::vector<int> sub_vertices_;

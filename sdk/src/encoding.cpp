@@ -260,7 +260,8 @@ DetailEncoding encoding_over_mesh(const TriMesh& detail, const TriMesh& base, st
 }
 
 // The same over a limit surface with known limit points.
-DetailEncoding encoding_over_limit(const TriMesh& detail, const SubdivSurface& base, std::vector<LimitPoint> points) {
+DetailEncoding encoding_over_limit(const TriMesh& detail, const SubdivSurface& base,
+                                   std::vector<LimitPoint> points) {
   DetailEncoding e;
   e.detail_faces = detail.faces;
   e.detail_rest = detail.vertices;
@@ -308,7 +309,8 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
   return e;
 }
 
-DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std::vector<BasePoint> base_points) {
+DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
+                                std::vector<BasePoint> base_points) {
   const auto t0 = std::chrono::steady_clock::now();
   check_mesh(detail, "detail");
   check_mesh(base, "base");
@@ -316,7 +318,8 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std:
     throw InvalidInput("encoding: " + std::to_string(base_points.size()) + " base points for " +
                        std::to_string(detail.vertices.size()) + " detail vertices");
   for (std::size_t i = 0; i < base_points.size(); ++i)
-    if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() || !base_points[i].bary.allFinite())
+    if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() ||
+        !base_points[i].bary.allFinite())
       throw InvalidInput("encoding: base point " + std::to_string(i) + " is not on a base face");
   DetailEncoding e = encoding_over_mesh(detail, base, std::move(base_points));
   e.report.seconds = seconds_since(t0);
@@ -340,7 +343,8 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base
   return e;
 }
 
-DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>& faces, std::vector<int>& vertices) {
+DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>& faces,
+                                 std::vector<int>& vertices) {
   if (faces.empty()) throw InvalidInput("restrict_encoding: no faces selected");
   const int n = e.num_detail_vertices();
   std::vector<int> id(n, -1);
@@ -476,14 +480,14 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const LimitPointSet& po
   fr.points.resize(n);
   fr.normals.resize(n);
   fr.tangents.resize(n);
-  if (n > 0) points.evaluate(surface, 0, 0, nullptr, nullptr, nullptr);  // checks the patch layout once
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
     constexpr int kChunk = 256;
     Vec3 du[kChunk], dv[kChunk];
     for (int b = r.begin(); b < r.end(); b += kChunk) {
       const int e_ = std::min(r.end(), b + kChunk);
       points.evaluate(surface, b, e_, fr.points.data() + b, du, dv);
-      for (int i = b; i < e_; ++i) frame_at(e, surface, i, du[i - b], dv[i - b], fr.normals[i], fr.tangents[i]);
+      for (int i = b; i < e_; ++i)
+        frame_at(e, surface, i, du[i - b], dv[i - b], fr.normals[i], fr.tangents[i]);
     }
   });
   return fr;
@@ -519,7 +523,8 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
   fr.normals.resize(n);
   fr.tangents.resize(n);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i) frame_at(e, surface, i, du[i], dv[i], fr.normals[i], fr.tangents[i]);
+    for (int i = r.begin(); i < r.end(); ++i)
+      frame_at(e, surface, i, du[i], dv[i], fr.normals[i], fr.tangents[i]);
   });
 }
 

@@ -69,19 +69,19 @@ struct GnScratch {
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
 // the sweeps (one State per call, so calls share nothing but the levels' factorizations).
 struct State {
-  std::vector<Vec3> P;          // current detail positions
-  std::vector<Vec3> Q;          // base points on the edited base
-  std::vector<Vec3> N;          // unit normals at the base points
-  std::vector<Vec3> R;          // rest tangential offset, rotated into the edited base's frame
-  std::vector<Vec3> P0;         // positions at the start of the current multigrid pass
-  std::vector<double> dRho;     // prolongated change of d/f
-  std::vector<Vec3> dT;         // prolongated change of the tangential displacement
-  std::vector<double> rho;      // regularization scratch: d/f per level vertex
-  std::vector<Vec3> tdev;       // regularization scratch: tangential deviation per level vertex
-  std::vector<Vec3> before;     // positions before a regularization round
-  std::vector<Vec3> pinned_at;  // where the pinned vertices stay (empty: none pinned)
-  double amplitude = 1.0;       // scales every target and rest offset (ReconstructRequest)
-  int volume_iterations = 0;    // volume steps per cycle on the level being solved
+  std::vector<Vec3> P;              // current detail positions
+  std::vector<Vec3> Q;              // base points on the edited base
+  std::vector<Vec3> N;              // unit normals at the base points
+  std::vector<Vec3> R;              // rest tangential offset, rotated into the edited base's frame
+  std::vector<Vec3> P0;             // positions at the start of the current multigrid pass
+  std::vector<double> dRho;         // prolongated change of d/f
+  std::vector<Vec3> dT;             // prolongated change of the tangential displacement
+  std::vector<double> rho;          // regularization scratch: d/f per level vertex
+  std::vector<Vec3> tdev;           // regularization scratch: tangential deviation per level vertex
+  std::vector<Vec3> before;         // positions before a regularization round
+  std::vector<Vec3> pinned_at;      // where the pinned vertices stay (empty: none pinned)
+  double amplitude = 1.0;           // scales every target and rest offset (ReconstructRequest)
+  int volume_iterations = 0;        // volume steps per cycle on the level being solved
   int cycle_volume_iterations = 0;  // the clean start's n (volume_iterations, or the retry's)
   GnScratch gn;
 };
@@ -186,12 +186,7 @@ class VolumeReconstructor::Impl {
     init_state(fr, request, s);
     st.seconds_frames = seconds_since(t0);
     t0 = Clock::now();
-    const int nl = static_cast<int>(levels_.size());
-    st.levels = nl;
-    for (const Level& L : levels_) {
-      st.level_vertices.push_back(static_cast<int>(L.verts.size()));
-      st.level_faces.push_back(static_cast<int>(L.faces.size()));
-    }
+    level_stats(st);
     std::vector<double> V;
     const double a = s.amplitude;
     if (a == 0.0) {
@@ -206,19 +201,15 @@ class VolumeReconstructor::Impl {
     if (!start) {
       clean_start(s, a, opt_.volume_iterations, st, V);
       if (opt_.retry_volume_iterations > 0 && opt_.retry_volume_iterations != opt_.volume_iterations) {
-        Outcome first = outcome(s, a, V, false);
-        if (!first.converged || opt_.retry_on_new_intersections) {
-          if (first.converged) first = outcome(s, a, V, true);
-          if (!first.converged || first.new_pairs > 0) {
-            // Not converged, or folded: once more from the clean start with the other schedule,
-            // and the better of the two is kept (converged first, then fewer new pairs).
-            std::vector<Vec3> kept = s.P;
-            ++st.retries;
-            s.gn.damping = kMinDamping;
-            clean_start(s, a, opt_.retry_volume_iterations, st, V);
-            const Outcome second = outcome(s, a, V, opt_.retry_on_new_intersections);
-            if (!second.better_than(first)) s.P.swap(kept);
-          }
+        const Outcome first = outcome(s, a, V);
+        if (!first.converged || first.new_pairs > 0) {
+          // Not converged, or folded: once more from the clean start with the other schedule,
+          // and the better of the two is kept (converged first, then fewer new pairs).
+          std::vector<Vec3> kept = s.P;
+          ++st.retries;
+          s.gn.damping = kMinDamping;
+          clean_start(s, a, opt_.retry_volume_iterations, st, V);
+          if (!outcome(s, a, V).better_than(first)) s.P.swap(kept);
         }
       }
     } else {
@@ -240,15 +231,7 @@ class VolumeReconstructor::Impl {
         polish(F, s, warm->tolerance, st, V);
       }
     }
-    // Final accuracy on the finest level.
-    const Level& F = levels_.back();
-    compute_volumes(F, s, V);
-    st.max_relative_error = relative_error(F, a, V, &st.rms_relative_error);
-    st.converged = st.max_relative_error <= (start ? warm->tolerance : opt_.tolerance);
-    for (const Vec3& p : s.P)
-      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
-    st.seconds_solve = seconds_since(t0);
-    res.positions = std::move(s.P);
+    finish(s, start ? warm->tolerance : opt_.tolerance, t0, V, res);
     return res;
   }
 
@@ -266,11 +249,7 @@ class VolumeReconstructor::Impl {
     State s;
     init_state(fr, request, s);
     const int nl = static_cast<int>(levels_.size());
-    st.levels = nl;
-    for (const Level& L : levels_) {
-      st.level_vertices.push_back(static_cast<int>(L.verts.size()));
-      st.level_faces.push_back(static_cast<int>(L.faces.size()));
-    }
+    level_stats(st);
     if (ds.level.empty()) {
       // The first step: every level starts from the drag's start positions.
       ds.level.assign(nl, {});
@@ -314,11 +293,9 @@ class VolumeReconstructor::Impl {
       } else if (!finest && !warm.coarse_levels_only) {
         // The exact solve: the coarse levels only serve the previews; carried along, unsolved.
       } else if (finest && warm.coarse_levels_only && nl > 1) {
-        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
-        st.regularization_sweeps += opt_.regularization_iterations;
+        regularize_sweeps(L, s, st);
       } else if (!finest && warm.level_steps > 0) {
-        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
-        st.regularization_sweeps += opt_.regularization_iterations;
+        regularize_sweeps(L, s, st);
         project(L, s, a, opt_.level_tolerance, warm.level_steps,
                 static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms, st, V);
         ++st.cycles;
@@ -334,14 +311,7 @@ class VolumeReconstructor::Impl {
       }
       for (int i : L.verts) ds.level[l][i] = s.P[i];
     }
-    const Level& F = levels_.back();
-    compute_volumes(F, s, V);
-    st.max_relative_error = relative_error(F, a, V, &st.rms_relative_error);
-    st.converged = st.max_relative_error <= warm.tolerance;
-    for (const Vec3& p : s.P)
-      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
-    st.seconds_solve = seconds_since(t0);
-    res.positions = std::move(s.P);
+    finish(s, warm.tolerance, t0, V, res);
     return res;
   }
 
@@ -380,8 +350,8 @@ class VolumeReconstructor::Impl {
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
-        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 || opt_.retry_volume_iterations < 0 ||
-        !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
+        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 ||
+        opt_.retry_volume_iterations < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
         !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
         opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 ||
         opt_.length_lambda < 0)
@@ -578,27 +548,61 @@ class VolumeReconstructor::Impl {
     }
   };
 
-  Outcome outcome(const State& s, double a, std::vector<double>& V, bool count_pairs) const {
+  // The new pairs are counted (retry_on_new_intersections) only for a converged result: an
+  // unconverged one is retried, or compared by its error, regardless.
+  Outcome outcome(const State& s, double a, std::vector<double>& V) const {
     Outcome o;
     const Level& F = levels_.back();
     compute_volumes(F, s, V);
     o.max_error = relative_error(F, a, V, nullptr);
     o.converged = o.max_error <= opt_.tolerance;
-    if (count_pairs) {
+    if (o.converged && opt_.retry_on_new_intersections) {
       IntersectionOptions io;
       io.collect_pairs = true;
       io.parallel = false;  // the solver stays on the calling thread
       if (!rest_pairs_)
-        rest_pairs_ =
-            std::make_unique<IntersectionResult>(find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));
-      o.new_pairs = count_new_intersections(*rest_pairs_, find_self_intersections(s.P, enc_.detail_faces, io));
+        rest_pairs_ = std::make_unique<IntersectionResult>(
+            find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));
+      o.new_pairs =
+          count_new_intersections(*rest_pairs_, find_self_intersections(s.P, enc_.detail_faces, io));
     }
     return o;
   }
 
+  // The hierarchy's sizes, coarsest first.
+  void level_stats(ReconstructStats& st) const {
+    st.levels = static_cast<int>(levels_.size());
+    for (const Level& L : levels_) {
+      st.level_vertices.push_back(static_cast<int>(L.verts.size()));
+      st.level_faces.push_back(static_cast<int>(L.faces.size()));
+    }
+  }
+
+  // The final accuracy on the finest level against \p tol, the solve's time since \p t0, and the
+  // positions moved into \p res.
+  void finish(State& s, double tol, Clock::time_point t0, std::vector<double>& V,
+              ReconstructResult& res) const {
+    ReconstructStats& st = res.stats;
+    const Level& F = levels_.back();
+    compute_volumes(F, s, V);
+    st.max_relative_error = relative_error(F, s.amplitude, V, &st.rms_relative_error);
+    st.converged = st.max_relative_error <= tol;
+    for (const Vec3& p : s.P)
+      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
+    st.seconds_solve = seconds_since(t0);
+    res.positions = std::move(s.P);
+  }
+
+  // m regularization sweeps at full weight (the drags' and the coarse-only passes' finest level).
+  void regularize_sweeps(const Level& L, State& s, ReconstructStats& st) const {
+    for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
+    st.regularization_sweeps += opt_.regularization_iterations;
+  }
+
   // Section 4.1: from the clean configuration p' = q', the volume scales h = a/k, 2a/k, .., a,
   // each a multigrid pass with n = volume_iterations steps per cycle.
-  void clean_start(State& s, double a, int volume_iterations, ReconstructStats& st, std::vector<double>& V) const {
+  void clean_start(State& s, double a, int volume_iterations, ReconstructStats& st,
+                   std::vector<double>& V) const {
     s.P = s.Q;
     s.cycle_volume_iterations = volume_iterations;
     const int k = std::max(1, opt_.volume_scales);
@@ -627,8 +631,7 @@ class VolumeReconstructor::Impl {
       const bool finest = l + 1 == nl;
       if (finest && coarse_only && nl > 1) {
         // Section 5: the finest level follows by regularization only.
-        for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
-        st.regularization_sweeps += opt_.regularization_iterations;
+        regularize_sweeps(L, s, st);
         continue;
       }
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
@@ -957,11 +960,11 @@ ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_fram
   return impl_->run(edited_frames, nullptr, nullptr);
 }
 ReconstructResult VolumeReconstructor::reconstruct(const std::vector<Vec3>& edited_base,
-                                                     const ReconstructRequest& request) const {
+                                                   const ReconstructRequest& request) const {
   return impl_->run(edited_base, nullptr, nullptr, request);
 }
 ReconstructResult VolumeReconstructor::reconstruct(const BaseFrames& edited_frames,
-                                                     const ReconstructRequest& request) const {
+                                                   const ReconstructRequest& request) const {
   return impl_->run(edited_frames, nullptr, nullptr, request);
 }
 ReconstructResult VolumeReconstructor::reconstruct_from(const BaseFrames& edited_frames,

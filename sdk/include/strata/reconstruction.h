@@ -54,7 +54,8 @@ struct ReconstructOptions {
   //! in a layered model (strata_bench_layers; max error 2.2), which 5 steps solve.
   int retry_volume_iterations = 5;
   //! Count the new intersecting pairs of a converged clean-start solve (exactly, one thread; at
-  //! 100k prisms about 0.1 s) and retry if there are any. See retry_volume_iterations.
+  //! 100k prisms 0.05 s per count, the rest detail counted once) and retry if there are any.
+  //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! Volume steps per cycle at most on the finest level at the intermediate volume scales. One
   //! step between regularization rounds is enough there to grow the detail without folds (the
@@ -115,12 +116,12 @@ struct ReconstructStats {
   std::vector<int> finest_cycles_per_scale;
   double max_relative_error = 0.0;  //!< on the finest level at the end
   double rms_relative_error = 0.0;
-  bool converged = false;            //!< max_relative_error <= tolerance
-  double seconds_frames = 0.0;       //!< evaluating the base points on the edited base
-  double seconds_solve = 0.0;        //!< the multigrid solve
-  long long step_halvings = 0;       //!< Gauss-Newton steps halved by the backtracking line search
-  long long factorizations = 0;      //!< numeric Cholesky factorizations (direct step solver)
-  int retries = 0;                   //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  bool converged = false;        //!< max_relative_error <= tolerance
+  double seconds_frames = 0.0;   //!< evaluating the base points on the edited base
+  double seconds_solve = 0.0;    //!< the multigrid solve
+  long long step_halvings = 0;   //!< Gauss-Newton steps halved by the backtracking line search
+  long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
+  int retries = 0;  //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };
@@ -233,7 +234,8 @@ class VolumeReconstructor {
                                      const WarmStartOptions& warm = {},
                                      const ReconstructRequest& request = {}) const;
   ReconstructResult reconstruct_from(const BaseFrames& edited_frames, const std::vector<Vec3>& start,
-                                     const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+                                     const WarmStartOptions& warm = {},
+                                     const ReconstructRequest& request = {}) const;
 
   //! One step of an interactive drag over \p edited_frames (paper, section 5). With
   //! warm.coarse_levels_only (a preview), every coarse level starts from its own solution of the
@@ -246,10 +248,12 @@ class VolumeReconstructor {
   //! \pre state.reset() was called with this encoding's vertex count.
   //! \throw InvalidInput as reconstruct_from(), or if the state was not started or has another size.
   ReconstructResult drag_step(const BaseFrames& edited_frames, DragState& state,
-                              const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+                              const WarmStartOptions& warm = {},
+                              const ReconstructRequest& request = {}) const;
   //! The same over an edited base given by its vertices (or its cage's control points).
   ReconstructResult drag_step(const std::vector<Vec3>& edited_base, DragState& state,
-                              const WarmStartOptions& warm = {}, const ReconstructRequest& request = {}) const;
+                              const WarmStartOptions& warm = {},
+                              const ReconstructRequest& request = {}) const;
   //! The base frames over an edited base given by its vertices (or its cage's control points), as
   //! the reconstruction evaluates them (keeping the subdivision surface's patch table).
   BaseFrames base_frames(const std::vector<Vec3>& edited_base) const;
