@@ -11,6 +11,7 @@
 
 #include "internal/blended_map.h"
 #include "internal/detail_solve.h"
+#include "internal/serial_openmp.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 
@@ -281,6 +282,7 @@ class RegionEditor::Impl {
     auto solve = [](int m, std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs, const char* what) {
       Eigen::SparseMatrix<double> Q(m, m);
       Q.setFromTriplets(trip.begin(), trip.end());
+      const internal::SerialOpenMp serial;
       Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(Q);
       if (llt.info() != Eigen::Success) throw SolverError(std::string("the region's ") + what + " system could not be factorized");
       Eigen::MatrixXd sol = llt.solve(rhs);

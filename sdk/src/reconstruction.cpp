@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "internal/hierarchy.h"
+#include "internal/serial_openmp.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 #include "strata/intersections.h"
@@ -449,6 +450,7 @@ class VolumeReconstructor::Impl {
         if (L.jj_col[t] <= static_cast<int>(j)) L.jj_slot[t] = slot(static_cast<int>(j), L.jj_col[t]);
     }
     L.llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
+    const internal::SerialOpenMp serial;
     L.llt->analyzePattern(L.jj);
   }
 
@@ -807,6 +809,7 @@ class VolumeReconstructor::Impl {
   void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
     const std::size_t m = L.faces.size();
     assemble(L, w.values, w.damping);
+    const internal::SerialOpenMp serial;
     L.llt->factorize(L.jj);
     if (L.llt->info() != Eigen::Success)
       throw SolverError("Cholesky factorization of the volume step failed");

@@ -1,0 +1,18 @@
+#include "internal/serial_openmp.h"
+
+// omp.h comes with the compiler; no -fopenmp here (it would switch on Eigen's own OpenMP paths).
+#include <omp.h>
+
+namespace strata::internal {
+
+SerialOpenMp::SerialOpenMp() : dynamic_(omp_get_dynamic()), max_threads_(omp_get_max_threads()) {
+  omp_set_dynamic(1);
+  omp_set_num_threads(1);
+}
+
+SerialOpenMp::~SerialOpenMp() {
+  omp_set_num_threads(max_threads_);
+  omp_set_dynamic(dynamic_);
+}
+
+}  // namespace strata::internal
