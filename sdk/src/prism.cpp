@@ -3,18 +3,24 @@
 namespace strata {
 namespace {
 
-// Contribution of the side quad over edge (a,b), split at its centroid into the triangles
+// Contribution of the side quad over edge (a,b), split at its centroid c into the triangles
 // (qa,qb,c), (qb,pb,c), (pb,pa,c), (pa,qa,c), each oriented outwards. Adds 6*volume to v6 and
-// 6*gradient to ga, gb. For a triangle (x,y,z), det = x.(y x z) has d/dx = y x z, d/dy = z x x,
-// d/dz = x x y; the centroid's gradient reaches pa and pb with weight 1/4.
+// 6*gradient to ga, gb. The four determinants x.(y x c) sum to c.gc, with gc the sum of the
+// edges' cross products: twice the quad's vector area, (pb - qa) x (pa - qb). Their gradients
+// are c x (pb - qa) for pa and c x (qb - pa) for pb, plus gc through the centroid, which moves
+// with weight 1/4.
 inline void side_quad(const Vec3& pa, const Vec3& pb, const Vec3& qa, const Vec3& qb, double& v6, Vec3& ga,
                       Vec3& gb) {
   const Vec3 c = 0.25 * (pa + pb + qa + qb);
-  v6 += qa.dot(qb.cross(c)) + qb.dot(pb.cross(c)) + pb.dot(pa.cross(c)) + pa.dot(qa.cross(c));
-  // d/dc summed over the four triangles: twice the quad's vector area.
-  const Vec3 gc = qa.cross(qb) + qb.cross(pb) + pb.cross(pa) + pa.cross(qa);
-  ga += c.cross(pb) + qa.cross(c) + 0.25 * gc;
-  gb += c.cross(qb) + pa.cross(c) + 0.25 * gc;
+  const Vec3 gc = (pb - qa).cross(pa - qb);
+  v6 += c.dot(gc);
+  ga += c.cross(pb - qa) + 0.25 * gc;
+  gb += c.cross(qb - pa) + 0.25 * gc;
+}
+
+// The same quad's 6*volume alone.
+inline double side_quad_volume(const Vec3& pa, const Vec3& pb, const Vec3& qa, const Vec3& qb) {
+  return (0.25 * (pa + pb + qa + qb)).dot((pb - qa).cross(pa - qb));
 }
 
 }  // namespace
@@ -42,7 +48,12 @@ PrismVolumeGradient prism_volume_gradient(const Vec3& p0, const Vec3& p1, const 
 
 double prism_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& q0, const Vec3& q1,
                     const Vec3& q2) {
-  return prism_volume_gradient(p0, p1, p2, q0, q1, q2).volume;
+  const Vec3& o = q0;
+  const Vec3 P[3] = {p0 - o, p1 - o, p2 - o};
+  const Vec3 Q[3] = {Vec3::Zero(), q1 - o, q2 - o};
+  double v6 = P[0].dot(P[1].cross(P[2]));  // the base triangle's term vanishes with q0 at the origin
+  for (int a = 0; a < 3; ++a) v6 += side_quad_volume(P[a], P[(a + 1) % 3], Q[a], Q[(a + 1) % 3]);
+  return v6 / 6.0;
 }
 
 }  // namespace strata
