@@ -36,7 +36,9 @@ std::vector<std::int32_t> flatten(const std::vector<Face>& faces) {
 const char* scheme_name(SubdivScheme s) {
   return s == SubdivScheme::Loop ? "loop" : s == SubdivScheme::CatmullClark ? "catmull-clark" : "auto";
 }
-const char* method_name(EditOptions::Method m) { return m == EditOptions::Method::Vectors ? "vectors" : "volumes"; }
+const char* method_name(EditOptions::Method m) {
+  return m == EditOptions::Method::Vectors ? "vectors" : "volumes";
+}
 
 json options_json(const ModelOptions& o) {
   const ReconstructOptions& r = o.reconstruct;
@@ -52,6 +54,9 @@ json options_json(const ModelOptions& o) {
             {"finest_volume_iterations", r.finest_volume_iterations},
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
+            {"fold_repair_rounds", r.fold_repair_rounds},
+            {"fold_repair_rings", r.fold_repair_rings},
+            {"fold_repair_sweeps", r.fold_repair_sweeps},
             {"regularization_iterations", r.regularization_iterations},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
@@ -88,7 +93,8 @@ class HeaderReader {
     if (!j.is_object() || !j.contains(key)) fail("missing '" + std::string(key) + "' in " + where);
     return j.at(key);
   }
-  long long integer(const json& j, const char* key, const std::string& where, long long lo, long long hi) const {
+  long long integer(const json& j, const char* key, const std::string& where, long long lo,
+                    long long hi) const {
     const json& v = at(j, key, where);
     if (!v.is_number_integer()) fail("'" + std::string(key) + "' in " + where + " is not an integer");
     const long long x = v.get<long long>();
@@ -142,12 +148,18 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
           ? static_cast<int>(h.integer(r, "finest_volume_iterations", wr, 1, 100000))
           : ro.volume_iterations;
   // Files written before the option existed did not retry.
-  ro.retry_volume_iterations =
-      r.contains("retry_volume_iterations")
-          ? static_cast<int>(h.integer(r, "retry_volume_iterations", wr, 0, 100000))
-          : 0;
+  ro.retry_volume_iterations = r.contains("retry_volume_iterations")
+                                   ? static_cast<int>(h.integer(r, "retry_volume_iterations", wr, 0, 100000))
+                                   : 0;
   ro.retry_on_new_intersections =
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
+  // Files written before fold repair existed did not repair (their results stay as they were).
+  auto optional_count = [&](const char* key, int fallback) {
+    return r.contains(key) ? static_cast<int>(h.integer(r, key, wr, 0, 100000)) : fallback;
+  };
+  ro.fold_repair_rounds = optional_count("fold_repair_rounds", 0);
+  ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
+  ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));
@@ -160,7 +172,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.min_length_fraction = h.number(r, "min_length_fraction", wr);
   ro.fixed_point_tolerance = h.number(r, "fixed_point_tolerance", wr);
   const std::string solver = h.text(r, "step_solver", wr);
-  if (solver != "direct" && solver != "jacobi-cg") h.fail("options.reconstruct: unknown step_solver '" + solver + "'");
+  if (solver != "direct" && solver != "jacobi-cg")
+    h.fail("options.reconstruct: unknown step_solver '" + solver + "'");
   ro.step_solver = solver == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
   ro.direct_max_prisms = static_cast<int>(h.integer(r, "direct_max_prisms", wr, 0, kMaxCount));
   ro.cg_tolerance = h.number(r, "cg_tolerance", wr);
@@ -192,16 +205,19 @@ void write_model(const LayeredModel& model, const std::string& path) {
       indices.insert(indices.end(), f.begin(), f.end());
     }
     json creases = json::array(), corners = json::array();
-    for (const auto& cr : cage.tags.creases) creases.push_back({{"edge", {cr.v0, cr.v1}}, {"sharpness", cr.sharpness}});
-    for (const auto& co : cage.tags.corners) corners.push_back({{"vertex", co.vertex}, {"sharpness", co.sharpness}});
-    bands.push_back({{"kind", "cage"},
-                     {"vertices", cage.cage.num_vertices()},
-                     {"faces", cage.cage.num_faces()},
-                     {"face_corners", indices.size()},
-                     {"scheme", scheme_name(cage.subdiv.scheme)},
-                     {"boundary", cage.subdiv.boundary == BoundaryRule::EdgeAndCorner ? "edge-and-corner" : "edge-only"},
-                     {"isolation_level", cage.subdiv.isolation_level},
-                     {"tags", {{"creases", creases}, {"corners", corners}}}});
+    for (const auto& cr : cage.tags.creases)
+      creases.push_back({{"edge", {cr.v0, cr.v1}}, {"sharpness", cr.sharpness}});
+    for (const auto& co : cage.tags.corners)
+      corners.push_back({{"vertex", co.vertex}, {"sharpness", co.sharpness}});
+    bands.push_back(
+        {{"kind", "cage"},
+         {"vertices", cage.cage.num_vertices()},
+         {"faces", cage.cage.num_faces()},
+         {"face_corners", indices.size()},
+         {"scheme", scheme_name(cage.subdiv.scheme)},
+         {"boundary", cage.subdiv.boundary == BoundaryRule::EdgeAndCorner ? "edge-and-corner" : "edge-only"},
+         {"isolation_level", cage.subdiv.isolation_level},
+         {"tags", {{"creases", creases}, {"corners", corners}}}});
     c.sections.push_back({"band0.points", pack_f64(flatten(cage.cage.vertices))});
     c.sections.push_back({"band0.face_sizes", pack_i32(sizes)});
     c.sections.push_back({"band0.face_indices", pack_i32(indices)});
@@ -210,8 +226,9 @@ void write_model(const LayeredModel& model, const std::string& path) {
     const Band& b = model.band(k);
     const DetailEncoding& e = b.encoding;
     const std::string p = "band" + std::to_string(k) + ".";
-    const bool at_rest = b.mesh.vertices.size() == e.detail_rest.size() &&
-                         std::memcmp(b.mesh.vertices.data(), e.detail_rest.data(), sizeof(Vec3) * e.detail_rest.size()) == 0;
+    const bool at_rest =
+        b.mesh.vertices.size() == e.detail_rest.size() &&
+        std::memcmp(b.mesh.vertices.data(), e.detail_rest.data(), sizeof(Vec3) * e.detail_rest.size()) == 0;
     const bool limit = e.over_limit_surface();
     bands.push_back({{"kind", "triangles"},
                      {"vertices", b.mesh.num_vertices()},
@@ -294,8 +311,10 @@ LayeredModel read_model(const std::string& path) {
     const long long nc = h.integer(b, "face_corners", w, 3, kMaxCount);
     Band& cage = bands[0];
     cage.cage.vertices = unflatten(unpack_f64(section("band0.points"), 3 * nv, what("band0.points")));
-    const std::vector<std::int32_t> sizes = unpack_i32(section("band0.face_sizes"), nf, what("band0.face_sizes"));
-    const std::vector<std::int32_t> idx = unpack_i32(section("band0.face_indices"), nc, what("band0.face_indices"));
+    const std::vector<std::int32_t> sizes =
+        unpack_i32(section("band0.face_sizes"), nf, what("band0.face_sizes"));
+    const std::vector<std::int32_t> idx =
+        unpack_i32(section("band0.face_indices"), nc, what("band0.face_indices"));
     long long at = 0;
     for (std::int32_t s : sizes) {
       if (s < 3 || at + s > nc) h.fail("band 0: face sizes do not match the face corner count");
@@ -307,7 +326,8 @@ LayeredModel read_model(const std::string& path) {
     if (scheme != "loop" && scheme != "catmull-clark") h.fail("band 0: unknown scheme '" + scheme + "'");
     cage.subdiv.scheme = scheme == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark;
     const std::string boundary = h.text(b, "boundary", w);
-    if (boundary != "edge-only" && boundary != "edge-and-corner") h.fail("band 0: unknown boundary rule '" + boundary + "'");
+    if (boundary != "edge-only" && boundary != "edge-and-corner")
+      h.fail("band 0: unknown boundary rule '" + boundary + "'");
     cage.subdiv.boundary = boundary == "edge-only" ? BoundaryRule::EdgeOnly : BoundaryRule::EdgeAndCorner;
     cage.subdiv.isolation_level = static_cast<int>(h.integer(b, "isolation_level", w, 1, 10));
     const json& tags = h.at(b, "tags", w);
@@ -336,7 +356,8 @@ LayeredModel read_model(const std::string& path) {
     band.amplitude = h.number(b, "amplitude", w);
     const std::string base_kind = h.text(b, "base", w);
     if (base_kind != (k == 1 ? "limit" : "mesh"))
-      h.fail(w + ": its base must be " + (k == 1 ? "the cage's limit surface" : "the next coarser band's mesh"));
+      h.fail(w + ": its base must be " +
+             (k == 1 ? "the cage's limit surface" : "the next coarser band's mesh"));
     const std::vector<std::int32_t> f = unpack_i32(section(p + "faces"), 3 * nf, what(p + "faces"));
     TriMesh rest;
     for (long long j = 0; j < nf; ++j) rest.faces.push_back({f[3 * j], f[3 * j + 1], f[3 * j + 2]});
@@ -345,18 +366,22 @@ LayeredModel read_model(const std::string& path) {
     const std::vector<std::int32_t> bf = unpack_i32(section(p + "base_faces"), nv, what(p + "base_faces"));
     try {
       if (k == 1) {
-        const std::vector<double> uv = unpack_f64(section(p + "base_coords"), 2 * nv, what(p + "base_coords"));
+        const std::vector<double> uv =
+            unpack_f64(section(p + "base_coords"), 2 * nv, what(p + "base_coords"));
         std::vector<LimitPoint> lp(nv);
         for (long long i = 0; i < nv; ++i) lp[i] = LimitPoint{bf[i], uv[2 * i], uv[2 * i + 1]};
         PolyMesh base_cage = bands[0].cage;
-        if (static_cast<long long>(base_cage.vertices.size()) != nb) h.fail(w + ": base_vertices differs from the cage");
+        if (static_cast<long long>(base_cage.vertices.size()) != nb)
+          h.fail(w + ": base_vertices differs from the cage");
         base_cage.vertices = band.base_rest;
         const SubdivSurface surface(base_cage, bands[0].tags, bands[0].subdiv);
         band.encoding = encode_detail_at(rest, surface, std::move(lp));
       } else {
-        const std::vector<double> bc = unpack_f64(section(p + "base_coords"), 3 * nv, what(p + "base_coords"));
+        const std::vector<double> bc =
+            unpack_f64(section(p + "base_coords"), 3 * nv, what(p + "base_coords"));
         std::vector<BasePoint> bp(nv);
-        for (long long i = 0; i < nv; ++i) bp[i] = BasePoint{bf[i], Vec3(bc[3 * i], bc[3 * i + 1], bc[3 * i + 2])};
+        for (long long i = 0; i < nv; ++i)
+          bp[i] = BasePoint{bf[i], Vec3(bc[3 * i], bc[3 * i + 1], bc[3 * i + 2])};
         const TriMesh base{band.base_rest, bands[k - 1].mesh.faces};
         if (static_cast<long long>(bands[k - 1].mesh.vertices.size()) != nb)
           h.fail(w + ": base_vertices differs from band " + std::to_string(k - 1));

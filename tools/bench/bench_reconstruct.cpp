@@ -16,20 +16,19 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "paper_cases.h"
 #include "strata/encoding.h"
@@ -43,7 +42,9 @@ using json = nlohmann::json;
 using namespace strata;
 using Clock = std::chrono::steady_clock;
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // CPU seconds of this process (all threads): less sensitive than wall time to a loaded machine.
 double cpu_seconds() {
@@ -86,21 +87,30 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
   const auto eq = kv.find('=');
   if (eq == std::string::npos) throw std::runtime_error("--set needs NAME=VALUE, got '" + kv + "'");
   const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
-  const std::map<std::string, int*> ints = {
-      {"volume_scales", &o.volume_scales},         {"max_levels", &o.max_levels},
-      {"coarsest_vertices", &o.coarsest_vertices}, {"volume_iterations", &o.volume_iterations},
-      {"finest_volume_iterations", &o.finest_volume_iterations},
-      {"retry_volume_iterations", &o.retry_volume_iterations},
-      {"regularization_iterations", &o.regularization_iterations},
-      {"max_cycles", &o.max_cycles},               {"final_max_cycles", &o.final_max_cycles},
-      {"max_final_steps", &o.max_final_steps},     {"direct_max_prisms", &o.direct_max_prisms},
-      {"cg_max_iterations", &o.cg_max_iterations}};
-  const std::map<std::string, double*> reals = {
-      {"coarsening_ratio", &o.coarsening_ratio},       {"tangential_lambda", &o.tangential_lambda},
-      {"length_lambda", &o.length_lambda},             {"regularization_decay", &o.regularization_decay},
-      {"level_tolerance", &o.level_tolerance},         {"tolerance", &o.tolerance},
-      {"min_length_fraction", &o.min_length_fraction}, {"fixed_point_tolerance", &o.fixed_point_tolerance},
-      {"cg_tolerance", &o.cg_tolerance}};
+  const std::map<std::string, int*> ints = {{"volume_scales", &o.volume_scales},
+                                            {"max_levels", &o.max_levels},
+                                            {"coarsest_vertices", &o.coarsest_vertices},
+                                            {"volume_iterations", &o.volume_iterations},
+                                            {"finest_volume_iterations", &o.finest_volume_iterations},
+                                            {"retry_volume_iterations", &o.retry_volume_iterations},
+                                            {"fold_repair_rounds", &o.fold_repair_rounds},
+                                            {"fold_repair_rings", &o.fold_repair_rings},
+                                            {"fold_repair_sweeps", &o.fold_repair_sweeps},
+                                            {"regularization_iterations", &o.regularization_iterations},
+                                            {"max_cycles", &o.max_cycles},
+                                            {"final_max_cycles", &o.final_max_cycles},
+                                            {"max_final_steps", &o.max_final_steps},
+                                            {"direct_max_prisms", &o.direct_max_prisms},
+                                            {"cg_max_iterations", &o.cg_max_iterations}};
+  const std::map<std::string, double*> reals = {{"coarsening_ratio", &o.coarsening_ratio},
+                                                {"tangential_lambda", &o.tangential_lambda},
+                                                {"length_lambda", &o.length_lambda},
+                                                {"regularization_decay", &o.regularization_decay},
+                                                {"level_tolerance", &o.level_tolerance},
+                                                {"tolerance", &o.tolerance},
+                                                {"min_length_fraction", &o.min_length_fraction},
+                                                {"fixed_point_tolerance", &o.fixed_point_tolerance},
+                                                {"cg_tolerance", &o.cg_tolerance}};
   if (auto it = ints.find(k); it != ints.end()) {
     *it->second = std::stoi(v);
   } else if (auto jt = reals.find(k); jt != reals.end()) {
@@ -199,10 +209,14 @@ json run_size(const Args& args, int size, long long parent_rss) {
   const VolumeMetrics vm = timed("volume_metrics", [&] { return volume_metrics(e, frames, r.positions); });
   const std::vector<Vec3> vec = timed("vectors", [&] { return reconstruct_vectors(e, frames); });
   const VolumeMetrics vv = volume_metrics(e, frames, vec);
-  const auto in = timed("intersections_input", [&] { return find_self_intersections(e.detail_rest, e.detail_faces, io); });
-  const auto out = timed("intersections_volumes", [&] { return find_self_intersections(r.positions, e.detail_faces, io); });
-  const auto outv = timed("intersections_vectors", [&] { return find_self_intersections(vec, e.detail_faces, io); });
-  const std::size_t new_pairs = count_new_intersections(in, out), new_pairs_v = count_new_intersections(in, outv);
+  const auto in = timed("intersections_input",
+                        [&] { return find_self_intersections(e.detail_rest, e.detail_faces, io); });
+  const auto out = timed("intersections_volumes",
+                         [&] { return find_self_intersections(r.positions, e.detail_faces, io); });
+  const auto outv =
+      timed("intersections_vectors", [&] { return find_self_intersections(vec, e.detail_faces, io); });
+  const std::size_t new_pairs = count_new_intersections(in, out),
+                    new_pairs_v = count_new_intersections(in, outv);
 
   const long long prisms = static_cast<long long>(e.detail_faces.size());
   const long long peak = max_rss_bytes();
@@ -213,52 +227,52 @@ json run_size(const Args& args, int size, long long parent_rss) {
                 {"rms_relative_error", m.rms_relative_error},
                 {"total_volume_change", m.total_volume_change}};
   };
-  return json{
-      {"size", size},
-      {"case", cases::to_string(args.detail)},
-      {"prisms", prisms},
-      {"detail_vertices", e.num_detail_vertices()},
-      {"base_vertices", base_vertices},
-      {"base_faces", base_faces},
-      {"levels", st.levels},
-      {"level_vertices", st.level_vertices},
-      {"level_faces", st.level_faces},
-      {"seconds", sec},
-      {"cpu_seconds", cpu},
-      {"stats",
-       {{"cycles", st.cycles},
-        {"volume_sweeps", st.volume_sweeps},
-        {"regularization_sweeps", st.regularization_sweeps},
-        {"cg_iterations", st.cg_iterations},
-        {"factorizations", st.factorizations},
-        {"retries", st.retries},
-        {"final_sweeps", st.final_sweeps},
-        {"finest_cycles_per_scale", st.finest_cycles_per_scale},
-        {"constraint_updates", st.constraint_updates},
-        {"solver_max_relative_error", st.max_relative_error},
-        {"converged", st.converged}}},
-      {"throughput",
-       {{"constraint_updates_per_second", static_cast<double>(st.constraint_updates) / solve},
-        {"prisms_per_second_per_multigrid_pass",
-         static_cast<double>(prisms) * rec.options().volume_scales / solve}}},
-      {"accuracy", {{"volumes", metrics(vm)}, {"vectors", metrics(vv)}}},
-      {"intersections",
-       {{"input_pairs", in.num_pairs},
-        {"volumes_pairs", out.num_pairs},
-        {"volumes_new_pairs", new_pairs},
-        {"vectors_pairs", outv.num_pairs},
-        {"vectors_new_pairs", new_pairs_v}}},
-      {"memory",
-       {{"parent_baseline_rss_bytes", parent_rss},
-        {"child_start_rss_bytes", start_rss},
-        {"peak_rss_bytes", peak},
-        {"peak_rss_bytes_after_phase", rss},
-        {"bytes_per_prism", static_cast<double>(peak - parent_rss) / static_cast<double>(prisms)}}},
-      {"targets",
-       {{"max_relative_error_le_1e-3", err_ok},
-        {"rms_relative_error_le_1e-4", rms_ok},
-        {"no_new_intersections", new_pairs == 0},
-        {"all", err_ok && rms_ok && new_pairs == 0}}}};
+  return json{{"size", size},
+              {"case", cases::to_string(args.detail)},
+              {"prisms", prisms},
+              {"detail_vertices", e.num_detail_vertices()},
+              {"base_vertices", base_vertices},
+              {"base_faces", base_faces},
+              {"levels", st.levels},
+              {"level_vertices", st.level_vertices},
+              {"level_faces", st.level_faces},
+              {"seconds", sec},
+              {"cpu_seconds", cpu},
+              {"stats",
+               {{"cycles", st.cycles},
+                {"volume_sweeps", st.volume_sweeps},
+                {"regularization_sweeps", st.regularization_sweeps},
+                {"cg_iterations", st.cg_iterations},
+                {"factorizations", st.factorizations},
+                {"retries", st.retries},
+                {"fold_repairs", st.fold_repairs},
+                {"final_sweeps", st.final_sweeps},
+                {"finest_cycles_per_scale", st.finest_cycles_per_scale},
+                {"constraint_updates", st.constraint_updates},
+                {"solver_max_relative_error", st.max_relative_error},
+                {"converged", st.converged}}},
+              {"throughput",
+               {{"constraint_updates_per_second", static_cast<double>(st.constraint_updates) / solve},
+                {"prisms_per_second_per_multigrid_pass",
+                 static_cast<double>(prisms) * rec.options().volume_scales / solve}}},
+              {"accuracy", {{"volumes", metrics(vm)}, {"vectors", metrics(vv)}}},
+              {"intersections",
+               {{"input_pairs", in.num_pairs},
+                {"volumes_pairs", out.num_pairs},
+                {"volumes_new_pairs", new_pairs},
+                {"vectors_pairs", outv.num_pairs},
+                {"vectors_new_pairs", new_pairs_v}}},
+              {"memory",
+               {{"parent_baseline_rss_bytes", parent_rss},
+                {"child_start_rss_bytes", start_rss},
+                {"peak_rss_bytes", peak},
+                {"peak_rss_bytes_after_phase", rss},
+                {"bytes_per_prism", static_cast<double>(peak - parent_rss) / static_cast<double>(prisms)}}},
+              {"targets",
+               {{"max_relative_error_le_1e-3", err_ok},
+                {"rms_relative_error_le_1e-4", rms_ok},
+                {"no_new_intersections", new_pairs == 0},
+                {"all", err_ok && rms_ok && new_pairs == 0}}}};
 }
 
 // Runs run_size() in a forked child; kills it after max_seconds. Returns its JSON object, or
@@ -332,7 +346,9 @@ const json* find_size(const json& results, int size) {
     if (r.value("size", 0) == size) return &r;
   return nullptr;
 }
-bool completed(const json* r) { return r && r->contains("prisms"); }
+bool completed(const json* r) {
+  return r && r->contains("prisms");
+}
 
 }  // namespace
 
@@ -353,7 +369,8 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv);
   } catch (const std::exception& ex) {
     std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
-              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--set OPTION=VALUE] [--out FILE.json] "
+              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--set OPTION=VALUE] [--out "
+                 "FILE.json] "
               << "[--max-seconds S]" << std::endl;
     return 2;
   }
@@ -390,71 +407,84 @@ int main(int argc, char** argv) {
     }
     auto verdict = [&](bool ok) { return any_done ? json(ok) : json(nullptr); };
     json t100k = nullptr, tscale = nullptr;
-    if (completed(r100k)) t100k = reconstruct_seconds(r100k) <= 2.0;
-    else if (r100k && r100k->value("timed_out", false)) t100k = false;
-    if (ratio.is_number()) tscale = ratio.get<double>() <= 12.0;
-    else if (completed(r100k) && r1m && r1m->value("timed_out", false)) tscale = false;
+    if (completed(r100k))
+      t100k = reconstruct_seconds(r100k) <= 2.0;
+    else if (r100k && r100k->value("timed_out", false))
+      t100k = false;
+    if (ratio.is_number())
+      tscale = ratio.get<double>() <= 12.0;
+    else if (completed(r100k) && r1m && r1m->value("timed_out", false))
+      tscale = false;
 
-    const json report{
-        {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
-        {"case", cases::to_string(args.detail)},
-        {"sizes", args.sizes},
-        {"max_seconds", args.max_seconds},
-        {"machine",
-         {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
-          {"cpu_model", cpu_model()},
-          {"compiler", __VERSION__},
-          {"load_average_at_start", load_avg},
-          {"load_average_at_end", load_average()},
+    const json report {
+      {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
+          {"case", cases::to_string(args.detail)}, {"sizes", args.sizes}, {"max_seconds", args.max_seconds},
+          {"machine",
+           {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
+            {"cpu_model", cpu_model()},
+            {"compiler", __VERSION__},
+            {"load_average_at_start", load_avg},
+            {"load_average_at_end", load_average()},
 #ifdef NDEBUG
-          {"ndebug", true}}},
+            {"ndebug", true}}},
 #else
-          {"ndebug", false}}},
+            {"ndebug", false}}},
 #endif
-        {"threads",
-         {{"note", "single thread: the reconstruction is single-threaded, OMP_NUM_THREADS pins CHOLMOD's "
-                   "OpenMP pool, the intersection search runs with IntersectionOptions::parallel = false"},
-          {"OMP_NUM_THREADS", std::getenv("OMP_NUM_THREADS")},
-          {"intersections_parallel", false}}},
-        {"reconstruct_options",
-         {{"volume_scales", ro.volume_scales},
-          {"max_levels", ro.max_levels},
-          {"volume_iterations", ro.volume_iterations},
-          {"finest_volume_iterations", ro.finest_volume_iterations},
-          {"retry_volume_iterations", ro.retry_volume_iterations},
-          {"retry_on_new_intersections", ro.retry_on_new_intersections},
-          {"regularization_iterations", ro.regularization_iterations},
-          {"max_cycles", ro.max_cycles},
-          {"final_max_cycles", ro.final_max_cycles},
-          {"max_final_steps", ro.max_final_steps},
-          {"cg_max_iterations", ro.cg_max_iterations},
-          {"cg_tolerance", ro.cg_tolerance},
-          {"level_tolerance", ro.level_tolerance},
-          {"tangential_lambda", ro.tangential_lambda},
-          {"length_lambda", ro.length_lambda},
-          {"regularization_decay", ro.regularization_decay},
-          {"direct_max_prisms", ro.direct_max_prisms},
-          {"tolerance", ro.tolerance},
-          {"step_solver", ro.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi_cg"}}},
-        {"parent_baseline_rss_bytes", parent_rss},
-        {"results", results},
-        {"time_ratio_1m_over_100k", ratio},
-        {"targets",
-         {{"throughput_ge_1e6_per_cycle",
-           {{"definition", "prisms_per_second_per_multigrid_pass = prisms * volume_scales / seconds_solve, "
-                           "every completed size"},
+          {"threads",
+           {{"note",
+             "single thread: the reconstruction is single-threaded, OMP_NUM_THREADS pins CHOLMOD's "
+             "OpenMP pool, the intersection search runs with IntersectionOptions::parallel = false"},
+            {"OMP_NUM_THREADS", std::getenv("OMP_NUM_THREADS")},
+            {"intersections_parallel", false}}},
+          {"reconstruct_options",
+           {{"volume_scales", ro.volume_scales},
+            {"max_levels", ro.max_levels},
+            {"volume_iterations", ro.volume_iterations},
+            {"finest_volume_iterations", ro.finest_volume_iterations},
+            {"retry_volume_iterations", ro.retry_volume_iterations},
+            {"retry_on_new_intersections", ro.retry_on_new_intersections},
+            {"fold_repair_rounds", ro.fold_repair_rounds},
+            {"fold_repair_rings", ro.fold_repair_rings},
+            {"fold_repair_sweeps", ro.fold_repair_sweeps},
+            {"regularization_iterations", ro.regularization_iterations},
+            {"max_cycles", ro.max_cycles},
+            {"final_max_cycles", ro.final_max_cycles},
+            {"max_final_steps", ro.max_final_steps},
+            {"cg_max_iterations", ro.cg_max_iterations},
+            {"cg_tolerance", ro.cg_tolerance},
+            {"level_tolerance", ro.level_tolerance},
+            {"tangential_lambda", ro.tangential_lambda},
+            {"length_lambda", ro.length_lambda},
+            {"regularization_decay", ro.regularization_decay},
+            {"direct_max_prisms", ro.direct_max_prisms},
+            {"tolerance", ro.tolerance},
+            {"step_solver", ro.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi_cg"}}},
+          {"parent_baseline_rss_bytes", parent_rss}, {"results", results}, {"time_ratio_1m_over_100k", ratio},
+      {
+        "targets", {
+          {"throughput_ge_1e6_per_cycle",
+           {{"definition",
+             "prisms_per_second_per_multigrid_pass = prisms * volume_scales / seconds_solve, "
+             "every completed size"},
             {"values", per_size_throughput},
             {"pass", verdict(thr_ok)}}},
-          {"reconstruct_100k_le_2s",
-           {{"definition", "wall time of VolumeReconstructor::reconstruct() (frames + solve; setup excluded)"},
-            {"seconds", completed(r100k) ? json(reconstruct_seconds(r100k)) : json(nullptr)},
-            {"pass", t100k}}},
-          {"scaling_1m_le_12x_100k", {{"ratio", ratio}, {"pass", tscale}}},
-          {"memory_le_1kb_per_prism",
-           {{"definition", "(child peak rss - parent baseline rss) / prisms, whole pipeline, every completed size"},
-            {"values", per_size_bytes},
-            {"pass", verdict(mem_ok)}}},
-          {"accuracy_and_no_new_intersections", verdict(acc_ok)}}}};
+              {"reconstruct_100k_le_2s",
+               {{"definition",
+                 "wall time of VolumeReconstructor::reconstruct() (frames + solve; setup excluded)"},
+                {"seconds", completed(r100k) ? json(reconstruct_seconds(r100k)) : json(nullptr)},
+                {"pass", t100k}}},
+              {"scaling_1m_le_12x_100k", {{"ratio", ratio}, {"pass", tscale}}},
+              {"memory_le_1kb_per_prism",
+               {{"definition",
+                 "(child peak rss - parent baseline rss) / prisms, whole pipeline, every completed size"},
+                {"values", per_size_bytes},
+                {"pass", verdict(mem_ok)}}},
+          {
+            "accuracy_and_no_new_intersections", verdict(acc_ok)
+          }
+        }
+      }
+    };
     const std::string text = report.dump(2);
     std::cout << text << std::endl;
     if (!args.out.empty()) {

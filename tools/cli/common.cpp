@@ -92,7 +92,8 @@ bool same_file_name(const std::string& a, const std::string& b) {
   return pa.lexically_normal() == pb.lexically_normal();
 }
 
-void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes, const std::string& report) {
+void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes,
+                   const std::string& report) {
   std::vector<std::string> all{output};
   check_mesh_output_path(output);
   for (const std::string& m : extra_meshes)
@@ -107,7 +108,8 @@ void check_outputs(const std::string& output, const std::vector<std::string>& ex
   for (std::size_t a = 0; a < all.size(); ++a)
     for (std::size_t b = a + 1; b < all.size(); ++b)
       if (same_file_name(all[a], all[b]))
-        throw InvalidInput(all[b] + ": two outputs would be written to the same file; give them different names");
+        throw InvalidInput(all[b] +
+                           ": two outputs would be written to the same file; give them different names");
 }
 
 void check_mesh_output_path(const std::string& path) {
@@ -149,10 +151,11 @@ TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const s
   return t;
 }
 
-EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited, const Log& log) {
+EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited,
+                          const Log& log) {
   check_same_connectivity(base, edited);
-  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) + " vertices) over the base (" +
-            std::to_string(base.mesh.num_faces()) + " faces)");
+  log.phase("encoding the detail (" + std::to_string(detail.mesh.num_vertices()) +
+            " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
   EncodedInput e;
   Stopwatch sw;
   e.encoding = encode_detail(detail.mesh, base.mesh);
@@ -248,6 +251,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"cg_iterations", s.cg_iterations},
               {"factorizations", s.factorizations},
               {"retries", s.retries},
+              {"fold_repairs", s.fold_repairs},
               {"final_sweeps", s.final_sweeps},
               {"constraint_updates", s.constraint_updates},
               {"solver_max_relative_error", s.max_relative_error},

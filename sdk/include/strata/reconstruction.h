@@ -57,6 +57,19 @@ struct ReconstructOptions {
   //! 100k prisms 0.05 s per count, the rest detail counted once) and retry if there are any.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
+  //! Local fold repair, before any retry: a converged clean-start solve with new intersecting
+  //! pairs (counted as for retry_on_new_intersections, which must be on) gets up to this many
+  //! repair rounds. A round smooths the vertices of the new pairs' triangles and
+  //! fold_repair_rings + round rings around them by fold_repair_sweeps regularization sweeps at
+  //! full weight, then exact steps restore the volumes; the best result is kept (converged first,
+  //! then fewer new pairs). Folds after the solve are local (on the 100k bumps, one triangle
+  //! through three neighbours two rings away), so a repair costs about one polish, where a retry
+  //! costs a whole solve. 0: no repair.
+  int fold_repair_rounds = 3;
+  //! Rings of vertices around the new pairs' triangles smoothed in the first repair round.
+  int fold_repair_rings = 2;
+  //! Regularization sweeps per repair round.
+  int fold_repair_sweeps = 10;
   //! Volume steps per cycle at most on the finest level at the intermediate volume scales. One
   //! step between regularization rounds is enough there to grow the detail without folds (the
   //! full scale and the polish reach the tolerance); more steps cost time (measured on the 100k
@@ -121,7 +134,8 @@ struct ReconstructStats {
   double seconds_solve = 0.0;    //!< the multigrid solve
   long long step_halvings = 0;   //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
-  int retries = 0;  //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };
