@@ -1,7 +1,7 @@
 //! \file atomic_file.h
-//! Whole-file reads that never hang, and atomic writes. Replace a file in one step: write a temporary file next to it, flush it to disk, then rename
-//! it over the target. Readers of the target see either the old or the new contents, never a
-//! half-written file, even if the writer fails or the process dies mid-write.
+//! Whole-file reads that never hang, and atomic writes. Replace a file in one step: write a temporary file
+//! next to it, flush it to disk, then rename it over the target. Readers of the target see either the old or
+//! the new contents, never a half-written file, even if the writer fails or the process dies mid-write.
 #pragma once
 
 #include <functional>

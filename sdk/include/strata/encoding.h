@@ -116,7 +116,8 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
 //! \throw InvalidInput if a mesh is invalid as for encode_detail(), the point count differs from
 //!        the detail's vertex count, or a base point's face is out of range or its coordinates
 //!        are not finite.
-DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base, std::vector<BasePoint> base_points);
+DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
+                                std::vector<BasePoint> base_points);
 
 //! The same over a subdivision limit surface with the limit points given.
 //! \throw InvalidInput as above, or if a limit point's face is out of range.

@@ -3,13 +3,13 @@
 //! that intersect, decided by exact predicates and pruned by a bounding-volume hierarchy.
 #pragma once
 
-#include "strata/mesh.h"
-
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include "strata/mesh.h"
 
 namespace strata {
 

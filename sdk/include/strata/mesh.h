@@ -26,7 +26,9 @@ struct TriMesh {
 double bbox_diagonal(const std::vector<Vec3>& points);
 
 //! Unnormalized normal of triangle (a, b, c): twice its area times its unit normal.
-inline Vec3 triangle_area_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+inline Vec3 triangle_area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return (b - a).cross(c - a);
+}
 
 //! Unit vertex normals, each the angle-weighted average of the incident face normals.
 //! A vertex with no incident face (or only degenerate ones) gets the zero vector.

@@ -23,10 +23,10 @@
 //! indices as written in the file (1-based for OBJ).
 #pragma once
 
-#include "strata/mesh.h"
-
 #include <string>
 #include <vector>
+
+#include "strata/mesh.h"
 
 namespace strata {
 
@@ -36,10 +36,10 @@ namespace strata {
 //! corners are split into triangles, stored consecutively in file order: a fan from the corner
 //! whose smallest triangle is largest (for up to 32 corners; else from the first corner), so
 //! convex polygons keep their exact area and simple non-convex ones get no flipped triangle.
-//! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face data (normals, colors,
-//! texture coordinates, materials) is ignored. The result has passed validate_mesh(mesh, path).
-//! \pre nothing; any file content is handled (garbage gives an error, never a crash).
-//! \throw IoError if the file is missing or unreadable, the extension is not supported, or the
+//! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
+//! data (normals, colors, texture coordinates, materials) is ignored. The result has passed
+//! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a
+//! crash). \throw IoError if the file is missing or unreadable, the extension is not supported, or the
 //!        contents cannot be parsed or are truncated (e.g. fewer elements than a header declares).
 //! \throw InvalidInput if the contents parse but do not form a valid mesh (see validate_mesh;
 //!        also an OBJ/OFF/PLY face with fewer than three corners).
@@ -55,7 +55,7 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
 enum class MeshEncoding {
   Default,  //!< Binary for PLY and STL, ASCII for OBJ and OFF.
   Ascii,
-  Binary,   //!< Only valid for PLY (little-endian, double coordinates) and STL (float32).
+  Binary,  //!< Only valid for PLY (little-endian, double coordinates) and STL (float32).
 };
 
 //! Writes \p mesh to \p path in the format given by the extension (see read_mesh), replacing the

@@ -11,12 +11,12 @@ namespace strata {
 
 //! Prism volumes of a detail over a base, against the encoding's targets.
 struct VolumeMetrics {
-  double max_relative_error = 0.0;  //!< max_j |V_j - V*_j| / mean_j |V*_j|
-  double rms_relative_error = 0.0;  //!< RMS_j |V_j - V*_j| / mean_j |V*_j|
-  double mean_abs_target = 0.0;     //!< mean_j |V*_j|
-  double total_target = 0.0;        //!< sum_j V*_j: the volume between base and detail at encoding
-  double total_volume = 0.0;        //!< sum_j V_j
-  double total_volume_change = 0.0; //!< (total_volume - total_target) / |total_target|
+  double max_relative_error = 0.0;   //!< max_j |V_j - V*_j| / mean_j |V*_j|
+  double rms_relative_error = 0.0;   //!< RMS_j |V_j - V*_j| / mean_j |V*_j|
+  double mean_abs_target = 0.0;      //!< mean_j |V*_j|
+  double total_target = 0.0;         //!< sum_j V*_j: the volume between base and detail at encoding
+  double total_volume = 0.0;         //!< sum_j V_j
+  double total_volume_change = 0.0;  //!< (total_volume - total_target) / |total_target|
 };
 
 //! Measures the prisms spanned by \p detail_positions over the base points in \p frames.

@@ -187,8 +187,8 @@ class LimitPointSet {
 
  private:
   void check(const SubdivSurface& surface) const;
-  void evaluate_unchecked(const std::vector<Vec3>& patch_points, int begin, int end, Vec3* positions, Vec3* du,
-                          Vec3* dv) const;
+  void evaluate_unchecked(const std::vector<Vec3>& patch_points, int begin, int end, Vec3* positions,
+                          Vec3* du, Vec3* dv) const;
   int num_patch_points_ = 0;
   std::vector<int> offsets_;  // per point: its entries [offsets_[i], offsets_[i+1])
   std::vector<int> index_;    // per entry: patch point; the first entry of a point is its origin
