@@ -112,8 +112,10 @@ TEST(CageEditor, DragEndsWithTheExactSolve) {
   ASSERT_EQ(last.size(), s.c.detail.vertices.size());
   const EditResult end = ed.end_drag();
   EXPECT_FALSE(ed.dragging());
-  const EditResult direct = ed.apply(EditTransform::rotation(Vec3(0, 1, 0), 45.0, pivot));
-  EXPECT_EQ(end.positions, direct.positions);
+  EXPECT_FALSE(end.drag_end_fallback);  // from the drag's state, converged without new pairs
+  EXPECT_TRUE(end.stats.converged);
+  EXPECT_EQ(end.stats.new_intersecting_pairs, 0);
+  EXPECT_LE(end.volume.max_relative_error, 1e-4);
   // The preview followed the drag: it is closer to the exact result than the unedited mesh is.
   double preview = 0.0, unedited = 0.0;
   for (std::size_t i = 0; i < last.size(); ++i) {
@@ -121,6 +123,15 @@ TEST(CageEditor, DragEndsWithTheExactSolve) {
     unedited += (s.c.detail.vertices[i] - end.positions[i]).squaredNorm();
   }
   EXPECT_LT(preview, 0.25 * unedited);
+  // DragEnd::CleanStart ends exactly where apply() of the same transform does.
+  CageEditOptions co;
+  co.drag_end = EditOptions::DragEnd::CleanStart;
+  CageEditor ce(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, co);
+  ce.begin_drag();
+  for (double a : {15.0, 30.0, 45.0}) ce.update_drag(EditTransform::rotation(Vec3(0, 1, 0), a, pivot));
+  const EditResult clean_end = ce.end_drag();
+  EXPECT_FALSE(clean_end.drag_end_fallback);
+  EXPECT_EQ(clean_end.positions, ce.apply(EditTransform::rotation(Vec3(0, 1, 0), 45.0, pivot)).positions);
 }
 
 // Detail vertices whose limit stencils reach handle cage vertices only move rigidly with the

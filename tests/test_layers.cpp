@@ -1,14 +1,13 @@
 // Layered models (issue 5): building from real scans, lossless export, the cascade after band
 // edits and amplitude changes, .strata round trips, and corrupted .strata files.
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
-#include <map>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -20,18 +19,23 @@
 #include "strata/mesh_io.h"
 #include "strata/metrics.h"
 #include "test_files.h"
+#include "test_meshes.h"
 
 namespace strata {
 namespace {
 
 namespace fs = std::filesystem;
 using layers::LayeredModel;
+using test::max_distance;
 
-std::string scan_path(const std::string& name) { return std::string(STRATA_ASSETS_DIR) + "/scans/" + name + ".off"; }
+std::string scan_path(const std::string& name) {
+  return std::string(STRATA_ASSETS_DIR) + "/scans/" + name + ".off";
+}
 
 TriMesh read_scan(const std::string& name) {
   const std::string path = scan_path(name);
-  if (!std::ifstream(path).good()) ADD_FAILURE() << path << " is missing: run tools/setup.sh (tools/fetch_scans.sh)";
+  if (!std::ifstream(path).good())
+    ADD_FAILURE() << path << " is missing: run tools/setup.sh (tools/fetch_scans.sh)";
   return read_mesh(path);
 }
 
@@ -41,13 +45,6 @@ bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
-
-double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double d = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
-  return d;
-}
-
 
 // One model per scan, built once for the whole suite (a build takes about a second).
 const LayeredModel& model_of(const std::string& scan) {
@@ -136,7 +133,8 @@ TEST(Layers, MutingABandAndRestoringItGivesTheOriginalBack) {
   EXPECT_EQ(muted.rebuilt[1].band, 2);
   EXPECT_LE(muted.rebuilt[1].volume.max_relative_error, 1e-3);
   EXPECT_LE(muted.rebuilt[1].volume.rms_relative_error, 1e-4);
-  EXPECT_GT(max_distance(model.band(2).mesh.vertices, original), 2e-3 * diag) << "muting band 1 changed nothing";
+  EXPECT_GT(max_distance(model.band(2).mesh.vertices, original), 2e-3 * diag)
+      << "muting band 1 changed nothing";
   model.set_amplitude(1, 1.0);
   EXPECT_LE(max_distance(model.band(2).mesh.vertices, original), 1e-3 * diag);
   EXPECT_TRUE(same_bits(model.band(2).mesh.vertices, original));
@@ -206,7 +204,8 @@ TEST(Layers, NinetyDegreeNeckBendAtBandZeroAddsNoIntersectionsToTheFinestBand) {
     }
   // Vertices whose base did not move kept their positions bit for bit.
   int kept = 0;
-  for (int i = 0; i < before.num_vertices(); ++i) kept += before.vertices[i] == model.band(2).mesh.vertices[i];
+  for (int i = 0; i < before.num_vertices(); ++i)
+    kept += before.vertices[i] == model.band(2).mesh.vertices[i];
   EXPECT_GT(kept, before.num_vertices() / 3);
   const IntersectionResult in = find_self_intersections(before.vertices, before.faces, {true});
   const IntersectionResult out = find_self_intersections(model.band(2).mesh.vertices, before.faces, {true});
@@ -244,7 +243,8 @@ TEST(Layers, SavedModelsContinueEditingExactlyAsInMemory) {
   const EditStep step = camel_neck_bend();
   model.edit(0, step);
   back.edit(0, step);
-  for (int k = 1; k < 3; ++k) EXPECT_TRUE(same_bits(back.band(k).mesh.vertices, model.band(k).mesh.vertices)) << k;
+  for (int k = 1; k < 3; ++k)
+    EXPECT_TRUE(same_bits(back.band(k).mesh.vertices, model.band(k).mesh.vertices)) << k;
 }
 
 TEST(Layers, DragPreviewsThenEndsWithTheExactEdit) {
@@ -261,7 +261,8 @@ TEST(Layers, DragPreviewsThenEndsWithTheExactEdit) {
     EXPECT_FALSE(same_bits(model.band(2).mesh.vertices, rest));
   }
   // The preview is close to the exact result (coarse levels only), the end is the exact edit.
-  EXPECT_LT(max_distance(model.band(2).mesh.vertices, exact.band(2).mesh.vertices), 0.05 * bbox_diagonal(rest));
+  EXPECT_LT(max_distance(model.band(2).mesh.vertices, exact.band(2).mesh.vertices),
+            0.05 * bbox_diagonal(rest));
   model.end_drag();
   EXPECT_FALSE(model.dragging());
   for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(model.band_points(k), exact.band_points(k))) << k;
@@ -362,11 +363,14 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
     layers::write_strata_container(v, path);
     expect_rejected(path, name);
   };
-  variant("vertex_count", [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["vertices"] = 12; });
+  variant("vertex_count",
+          [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["vertices"] = 12; });
   variant("no_bands", [](nlohmann::json& m, layers::StrataContainer&) { m.erase("bands"); });
-  variant("amplitude_text", [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["amplitude"] = "x"; });
+  variant("amplitude_text",
+          [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["amplitude"] = "x"; });
   variant("wrong_type", [](nlohmann::json& m, layers::StrataContainer&) { m["type"] = "something.else"; });
-  variant("bad_method", [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["method"] = "magic"; });
+  variant("bad_method",
+          [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["method"] = "magic"; });
   variant("missing_section", [](nlohmann::json&, layers::StrataContainer& v) {
     v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),
                                     [](const layers::Section& s) { return s.name == "band1.rest"; }),
@@ -385,7 +389,8 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
   });
   variant("limit_face", [](nlohmann::json&, layers::StrataContainer& v) {
     for (layers::Section& s : v.sections)
-      if (s.name == "band1.base_faces") s.bytes[0] = 0xff, s.bytes[1] = 0xff, s.bytes[2] = 0xff, s.bytes[3] = 0x0f;
+      if (s.name == "band1.base_faces")
+        s.bytes[0] = 0xff, s.bytes[1] = 0xff, s.bytes[2] = 0xff, s.bytes[3] = 0x0f;
   });
   // The untouched container still reads.
   EXPECT_NO_THROW(layers::read_model(good));

@@ -11,6 +11,13 @@
 
 namespace strata::test {
 
+//! The largest distance between corresponding points of \p a and \p b (same sizes).
+inline double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double d = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
+  return d;
+}
+
 //! A sphere: the icosahedron subdivided \p levels times (20 * 4^levels faces), its vertices
 //! projected onto the sphere of \p radius about \p centre. Outward-oriented.
 inline TriMesh icosphere(int levels, double radius = 1.0, const Vec3& centre = Vec3::Zero()) {

@@ -8,8 +8,10 @@
 #include "strata/intersections.h"
 #include "strata/metrics.h"
 #include "strata/reconstruction.h"
+#include "test_meshes.h"
 
 using namespace strata;
+using strata::test::max_distance;
 
 namespace {
 
@@ -42,12 +44,6 @@ cases::CylinderCase make_case(cases::DetailKind kind, int triangles) {
   o.detail = kind;
   o.target_detail_triangles = triangles;
   return cases::make_cylinder_case(o);
-}
-
-double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double d = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
-  return d;
 }
 
 }  // namespace

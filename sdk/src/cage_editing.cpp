@@ -84,7 +84,7 @@ class CageEditor::Impl {
       : mesh_(mesh),
         base_(std::move(base)),
         opt_(std::move(o)),
-        detail_(opt_.method, opt_.reconstruct, opt_.drag) {
+        detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
     for (int i = 0; i < n; ++i) {
@@ -105,11 +105,18 @@ class CageEditor::Impl {
   }
 
   EditResult apply(const EditTransform& t) const {
+    return finish(t,
+                  [&](const std::vector<Vec3>& cage, EditResult& res) { return detail_.solve(cage, res); });
+  }
+
+  // An exact edit by transform t whose detail \p solve rebuilds over the edited cage.
+  template <class Solve>
+  EditResult finish(const EditTransform& t, Solve&& solve) const {
     EditResult res;
     auto t0 = Clock::now();
     res.base_positions = edited_cage(t);
     res.times.edit = seconds_since(t0);
-    const std::vector<Vec3> sub = detail_.solve(res.base_positions, res);
+    const std::vector<Vec3> sub = solve(res.base_positions, res);
     res.times.decompose = decompose_seconds_;
     res.times.encode = encode_seconds_;
     res.positions = mesh_.vertices;
@@ -131,11 +138,14 @@ class CageEditor::Impl {
     return drag_positions_;
   }
 
-  // The exact solve from the clean start, as RegionEditor::end_drag (apply() of the same transform).
+  // The exact solve as CageEditOptions::drag_end says (RegionEditor::end_drag).
   EditResult end_drag() {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
     dragging_ = false;
-    return apply(drag_transform_);
+    if (opt_.drag_end == EditOptions::DragEnd::CleanStart) return apply(drag_transform_);
+    return finish(drag_transform_, [&](const std::vector<Vec3>& cage, EditResult& res) {
+      return detail_.end_drag(cage, res);
+    });
   }
 
   const TriMesh& mesh() const { return mesh_; }

@@ -5,8 +5,8 @@
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "internal/blended_map.h"
@@ -19,9 +19,13 @@ namespace strata {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
-bool finite(const Vec3& v) { return v.allFinite(); }
+bool finite(const Vec3& v) {
+  return v.allFinite();
+}
 
 using internal::BlendedMap;
 
@@ -81,8 +85,8 @@ std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& s
     case Selection::Kind::Vertices:
       for (int v : sel.indices) {
         if (v < 0 || v >= static_cast<int>(x.size()))
-          throw InvalidInput("vertex selection index " + std::to_string(v) + " is out of range (the mesh has " +
-                             std::to_string(x.size()) + " vertices)");
+          throw InvalidInput("vertex selection index " + std::to_string(v) +
+                             " is out of range (the mesh has " + std::to_string(x.size()) + " vertices)");
         out[v] = 1;
       }
       break;
@@ -90,7 +94,8 @@ std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& s
   return out;
 }
 
-EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Vec3& pivot, const Vec3& translation) {
+EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Vec3& pivot,
+                                      const Vec3& translation) {
   if (!finite(axis) || !std::isfinite(degrees) || !finite(pivot) || !finite(translation))
     throw InvalidInput("rotation has a non-finite value");
   if (!(axis.norm() > 0)) throw InvalidInput("rotation axis is zero");
@@ -101,15 +106,19 @@ EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Ve
   return t;
 }
 
-Vec3 EditTransform::apply(const Vec3& x) const { return pivot + linear * (x - pivot) + translation; }
+Vec3 EditTransform::apply(const Vec3& x) const {
+  return pivot + linear * (x - pivot) + translation;
+}
 
-Vec3 EditTransform::apply_blended(const Vec3& x, double s) const { return BlendedMap(*this).apply(x, s); }
+Vec3 EditTransform::apply_blended(const Vec3& x, double s) const {
+  return BlendedMap(*this).apply(x, s);
+}
 
 std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::vector<double>& s,
                                   const EditTransform& transform) {
   if (points.size() != s.size())
-    throw InvalidInput("blend: " + std::to_string(s.size()) + " blend values for " + std::to_string(points.size()) +
-                       " points");
+    throw InvalidInput("blend: " + std::to_string(s.size()) + " blend values for " +
+                       std::to_string(points.size()) + " points");
   const BlendedMap map(transform);
   std::vector<Vec3> out = points;
   for (std::size_t i = 0; i < points.size(); ++i)
@@ -120,10 +129,13 @@ std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::ve
 class RegionEditor::Impl {
  public:
   Impl(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle, EditOptions o)
-      : mesh_(mesh), opt_(std::move(o)), detail_(opt_.method, opt_.reconstruct, opt_.drag) {
+      : mesh_(mesh),
+        opt_(std::move(o)),
+        detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = mesh.num_vertices();
     if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
-      throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) + ")");
+      throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) +
+                         ")");
     const auto t0 = Clock::now();
     in_region_.assign(n, 0);
     in_handle_.assign(n, 0);
@@ -138,8 +150,10 @@ class RegionEditor::Impl {
     }
     if (region_.empty()) throw InvalidInput("the region selects no vertex");
     if (handle_.empty()) throw InvalidInput("the handle selects no vertex of the region");
-    if (handle_.size() == region_.size()) throw InvalidInput("the handle is the whole region: nothing to blend");
-    if (static_cast<int>(region_.size()) == n) throw InvalidInput("the region is the whole mesh: nothing is held fixed");
+    if (handle_.size() == region_.size())
+      throw InvalidInput("the handle is the whole region: nothing to blend");
+    if (static_cast<int>(region_.size()) == n)
+      throw InvalidInput("the region is the whole mesh: nothing is held fixed");
     const internal::Adjacency adj = internal::build_adjacency(n, mesh.faces);
     decompose(adj);
     decompose_seconds_ = seconds_since(t0);
@@ -151,12 +165,19 @@ class RegionEditor::Impl {
   std::vector<Vec3> edited_base(const EditTransform& t) const { return blend_transform(base_, s_, t); }
 
   EditResult apply(const EditTransform& t) const {
+    return finish(
+        t, [&](const std::vector<Vec3>& sub_base, EditResult& res) { return detail_.solve(sub_base, res); });
+  }
+
+  // An exact edit by transform t whose region detail \p solve rebuilds over the region's base.
+  template <class Solve>
+  EditResult finish(const EditTransform& t, Solve&& solve) const {
     EditResult res;
     auto t0 = Clock::now();
     res.base_positions = edited_base(t);
     const std::vector<Vec3> sub_base = gather(res.base_positions);
     res.times.edit = seconds_since(t0);
-    const std::vector<Vec3> sub = detail_.solve(sub_base, res);
+    const std::vector<Vec3> sub = solve(sub_base, res);
     res.times.decompose = decompose_seconds_;
     res.times.encode = encode_seconds_;
     res.positions = mesh_.vertices;
@@ -178,14 +199,17 @@ class RegionEditor::Impl {
     return drag_positions_;
   }
 
-  // The exact solve from the clean start (volume scaling), so that a drag ends exactly where
-  // apply() of the same transform does. (Warm-started exact solves from the finest positions
-  // alone were measured to drift into folds over long drags; from the drag's per-level state
-  // they do not on the bumpy cylinder, but end up to 2% of the diagonal away from apply().)
+  // The exact solve as EditOptions::drag_end says. (Warm-started exact solves from the finest
+  // positions alone were measured to drift into folds over long drags; from the drag's per-level
+  // state they did not on the bumpy cylinder; they end near the last preview, up to 2% of the
+  // diagonal away from apply(), and are checked, with apply()'s clean start as the fallback.)
   EditResult end_drag() {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
     dragging_ = false;
-    return apply(drag_transform_);
+    if (opt_.drag_end == EditOptions::DragEnd::CleanStart) return apply(drag_transform_);
+    return finish(drag_transform_, [&](const std::vector<Vec3>& sub_base, EditResult& res) {
+      return detail_.end_drag(sub_base, res);
+    });
   }
 
   const TriMesh& mesh() const { return mesh_; }
@@ -249,13 +273,15 @@ class RegionEditor::Impl {
       for (int i : region_) pts.push_back(x[i]);
       wavelength = opt_.smoothing_fraction * bbox_diagonal(pts);
     }
-    if (!(wavelength > 0) || !std::isfinite(wavelength)) throw InvalidInput("the region has no extent to smooth over");
+    if (!(wavelength > 0) || !std::isfinite(wavelength))
+      throw InvalidInput("the region has no extent to smooth over");
     const double pull = std::pow(2 * M_PI / wavelength, 4);
 
     // Rows of Q = L M^-1 L for the unknowns: Q_ij = sum_k L_ik L_kj / M_k over k in {i} and i's
     // neighbours; held columns j go to the right-hand side.
     auto assemble = [&](const std::vector<int>& unknowns, const std::vector<int>& id, int cols,
-                        const std::function<void(int, int, double, Eigen::MatrixXd&)>& held, Eigen::MatrixXd& rhs) {
+                        const std::function<void(int, int, double, Eigen::MatrixXd&)>& held,
+                        Eigen::MatrixXd& rhs) {
       const int m = static_cast<int>(unknowns.size());
       std::vector<Eigen::Triplet<double>> trip;
       trip.reserve(static_cast<std::size_t>(m) * 50);
@@ -270,29 +296,35 @@ class RegionEditor::Impl {
             held(r, j, c * lkj, rhs);
         };
         add(k, diag[k]);
-        for (int t = adj.neighbor_offsets[k]; t < adj.neighbor_offsets[k + 1]; ++t) add(adj.neighbors[t], -w[t]);
+        for (int t = adj.neighbor_offsets[k]; t < adj.neighbor_offsets[k + 1]; ++t)
+          add(adj.neighbors[t], -w[t]);
       };
       for (int r = 0; r < m; ++r) {
         const int i = unknowns[r];
         add_row_k(r, i, diag[i]);
-        for (int t = adj.neighbor_offsets[i]; t < adj.neighbor_offsets[i + 1]; ++t) add_row_k(r, adj.neighbors[t], -w[t]);
+        for (int t = adj.neighbor_offsets[i]; t < adj.neighbor_offsets[i + 1]; ++t)
+          add_row_k(r, adj.neighbors[t], -w[t]);
       }
       return trip;
     };
-    auto solve = [](int m, std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs, const char* what) {
+    auto solve = [](int m, std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs,
+                    const char* what) {
       Eigen::SparseMatrix<double> Q(m, m);
       Q.setFromTriplets(trip.begin(), trip.end());
       const internal::SerialOpenMp serial;
       Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(Q);
-      if (llt.info() != Eigen::Success) throw SolverError(std::string("the region's ") + what + " system could not be factorized");
+      if (llt.info() != Eigen::Success)
+        throw SolverError(std::string("the region's ") + what + " system could not be factorized");
       Eigen::MatrixXd sol = llt.solve(rhs);
-      if (llt.info() != Eigen::Success || !sol.allFinite()) throw SolverError(std::string("the region's ") + what + " solve failed");
+      if (llt.info() != Eigen::Success || !sol.allFinite())
+        throw SolverError(std::string("the region's ") + what + " solve failed");
       return sol;
     };
 
     Eigen::MatrixXd rhs;
     std::vector<Eigen::Triplet<double>> trip = assemble(
-        region_, region_id, 3, [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs);
+        region_, region_id, 3,
+        [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs);
     for (int i : region_) {
       const int r = region_id[i];
       trip.emplace_back(r, r, pull * area[i]);
@@ -300,10 +332,15 @@ class RegionEditor::Impl {
     }
     const Eigen::MatrixXd faired = solve(static_cast<int>(region_.size()), trip, rhs, "fairing");
     base_ = x;
-    for (std::size_t k = 0; k < region_.size(); ++k) base_[region_[k]] = faired.row(static_cast<Eigen::Index>(k)).transpose();
+    for (std::size_t k = 0; k < region_.size(); ++k)
+      base_[region_[k]] = faired.row(static_cast<Eigen::Index>(k)).transpose();
 
     trip = assemble(
-        free, free_id, 1, [&](int r, int j, double v, Eigen::MatrixXd& b) { if (in_handle_[j]) b(r, 0) -= v; }, rhs);
+        free, free_id, 1,
+        [&](int r, int j, double v, Eigen::MatrixXd& b) {
+          if (in_handle_[j]) b(r, 0) -= v;
+        },
+        rhs);
     const Eigen::MatrixXd blend = solve(static_cast<int>(free.size()), trip, rhs, "blend field");
     s_.assign(n, 0.0);
     for (int i : handle_) s_[i] = 1.0;
@@ -312,7 +349,8 @@ class RegionEditor::Impl {
 
   // Every connected part of the free vertices must touch a held vertex (fixed rest or handle);
   // otherwise its fairing has no boundary condition.
-  void check_components(const internal::Adjacency& adj, const std::vector<int>& free_id, const std::vector<int>& free) const {
+  void check_components(const internal::Adjacency& adj, const std::vector<int>& free_id,
+                        const std::vector<int>& free) const {
     std::vector<char> seen(free.size(), 0);
     std::vector<int> stack;
     for (std::size_t start = 0; start < free.size(); ++start) {
@@ -419,28 +457,62 @@ class RegionEditor::Impl {
   EditTransform drag_transform_;
 };
 
-RegionEditor::RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
-                           EditOptions options)
+RegionEditor::RegionEditor(const TriMesh& mesh, const std::vector<char>& region,
+                           const std::vector<char>& handle, EditOptions options)
     : impl_(std::make_unique<Impl>(mesh, region, handle, std::move(options))) {}
 RegionEditor::~RegionEditor() = default;
 RegionEditor::RegionEditor(RegionEditor&&) noexcept = default;
 RegionEditor& RegionEditor::operator=(RegionEditor&&) noexcept = default;
-const TriMesh& RegionEditor::mesh() const { return impl_->mesh(); }
-const std::vector<Vec3>& RegionEditor::base() const { return impl_->base(); }
-const std::vector<double>& RegionEditor::blend() const { return impl_->blend(); }
-const std::vector<int>& RegionEditor::region_vertices() const { return impl_->region(); }
-const std::vector<int>& RegionEditor::handle_vertices() const { return impl_->handle(); }
-int RegionEditor::region_faces() const { return static_cast<int>(impl_->encoding().detail_faces.size()); }
-const DetailEncoding& RegionEditor::encoding() const { return impl_->encoding(); }
-const std::vector<int>& RegionEditor::region_submesh_vertices() const { return impl_->sub_vertices(); }
-const EditOptions& RegionEditor::options() const { return impl_->options(); }
-double RegionEditor::decompose_seconds() const { return impl_->decompose_seconds(); }
-double RegionEditor::encode_seconds() const { return impl_->encode_seconds(); }
-std::vector<Vec3> RegionEditor::edited_base(const EditTransform& t) const { return impl_->edited_base(t); }
-EditResult RegionEditor::apply(const EditTransform& t) const { return impl_->apply(t); }
-void RegionEditor::begin_drag() { impl_->begin_drag(); }
-const std::vector<Vec3>& RegionEditor::update_drag(const EditTransform& t) { return impl_->update_drag(t); }
-EditResult RegionEditor::end_drag() { return impl_->end_drag(); }
-bool RegionEditor::dragging() const { return impl_->dragging(); }
+const TriMesh& RegionEditor::mesh() const {
+  return impl_->mesh();
+}
+const std::vector<Vec3>& RegionEditor::base() const {
+  return impl_->base();
+}
+const std::vector<double>& RegionEditor::blend() const {
+  return impl_->blend();
+}
+const std::vector<int>& RegionEditor::region_vertices() const {
+  return impl_->region();
+}
+const std::vector<int>& RegionEditor::handle_vertices() const {
+  return impl_->handle();
+}
+int RegionEditor::region_faces() const {
+  return static_cast<int>(impl_->encoding().detail_faces.size());
+}
+const DetailEncoding& RegionEditor::encoding() const {
+  return impl_->encoding();
+}
+const std::vector<int>& RegionEditor::region_submesh_vertices() const {
+  return impl_->sub_vertices();
+}
+const EditOptions& RegionEditor::options() const {
+  return impl_->options();
+}
+double RegionEditor::decompose_seconds() const {
+  return impl_->decompose_seconds();
+}
+double RegionEditor::encode_seconds() const {
+  return impl_->encode_seconds();
+}
+std::vector<Vec3> RegionEditor::edited_base(const EditTransform& t) const {
+  return impl_->edited_base(t);
+}
+EditResult RegionEditor::apply(const EditTransform& t) const {
+  return impl_->apply(t);
+}
+void RegionEditor::begin_drag() {
+  impl_->begin_drag();
+}
+const std::vector<Vec3>& RegionEditor::update_drag(const EditTransform& t) {
+  return impl_->update_drag(t);
+}
+EditResult RegionEditor::end_drag() {
+  return impl_->end_drag();
+}
+bool RegionEditor::dragging() const {
+  return impl_->dragging();
+}
 
 }  // namespace strata

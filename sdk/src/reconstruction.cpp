@@ -216,8 +216,12 @@ class VolumeReconstructor::Impl {
         clean_start(s, a, opt_.retry_volume_iterations, st, V);
         Outcome second = outcome(s, a, V);
         repair_folds(s, a, st, V, second);
-        if (!second.better_than(first)) s.P.swap(kept);
+        if (second.better_than(first))
+          first = std::move(second);
+        else
+          s.P.swap(kept);
       }
+      st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
     } else {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
         throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
@@ -313,6 +317,10 @@ class VolumeReconstructor::Impl {
         if (finest) {
           st.finest_cycles_per_scale.push_back(cycles);
           polish(L, s, warm.tolerance, st, V);
+          // The exact solve: its folds are counted and repaired as a clean start's.
+          Outcome o = outcome(s, a, V);
+          repair_folds(s, a, st, V, o);
+          st.new_intersecting_pairs = o.counted ? static_cast<long long>(o.new_pairs) : -1;
         }
       }
       for (int i : L.verts) ds.level[l][i] = s.P[i];
@@ -550,6 +558,7 @@ class VolumeReconstructor::Impl {
     bool converged = false;
     double max_error = 0.0;
     std::size_t new_pairs = 0;
+    bool counted = false;             // new_pairs was counted
     std::vector<int> new_pair_faces;  // the faces of the new pairs, sorted, distinct
     bool better_than(const Outcome& o) const {
       if (converged != o.converged) return converged;
@@ -575,6 +584,7 @@ class VolumeReconstructor::Impl {
             find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));
       const IntersectionResult now = find_self_intersections(s.P, enc_.detail_faces, io);
       o.new_pairs = count_new_intersections(*rest_pairs_, now);
+      o.counted = true;
       std::vector<std::pair<int, int>> fresh;
       std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
                           rest_pairs_->pairs.end(), std::back_inserter(fresh));

@@ -252,6 +252,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"factorizations", s.factorizations},
               {"retries", s.retries},
               {"fold_repairs", s.fold_repairs},
+              {"solver_new_intersecting_pairs", s.new_intersecting_pairs},
               {"final_sweeps", s.final_sweeps},
               {"constraint_updates", s.constraint_updates},
               {"solver_max_relative_error", s.max_relative_error},

@@ -31,6 +31,10 @@ struct CageEditOptions {
   ReconstructOptions reconstruct;
   //! Interactive steps (update_drag()), as EditOptions::drag.
   WarmStartOptions drag{true, 1e-2, 1, 30};
+  //! How end_drag() runs the exact solve, as EditOptions::drag_end.
+  EditOptions::DragEnd drag_end = EditOptions::DragEnd::FromDragState;
+  //! As EditOptions::drag_end_cycles.
+  int drag_end_cycles = 5;
   //! Detail vertices whose limit stencils reach handle cage vertices only move rigidly with the
   //! handle (their base frames do), so displacement vectors place them exactly and they are not
   //! solved, except within this many edges of a vertex whose frame does not move rigidly: those
@@ -93,7 +97,8 @@ class CageEditor {
   void begin_drag();
   //! \throw InvalidInput if no drag is active, or as edited_cage().
   const std::vector<Vec3>& update_drag(const EditTransform& transform);
-  //! \throw InvalidInput if no drag is active.
+  //! Ends the drag with the exact solve, as CageEditOptions::drag_end says (RegionEditor::end_drag).
+  //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails.
   EditResult end_drag();
   bool dragging() const;
 

@@ -136,6 +136,10 @@ struct ReconstructStats {
   long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
+  //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
+  //! counted by the solver (retry_on_new_intersections, converged clean-start solves and exact
+  //! solves from a drag's state); -1 if not counted.
+  long long new_intersecting_pairs = -1;
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };

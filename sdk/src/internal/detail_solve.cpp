@@ -44,6 +44,32 @@ void DetailSolve::begin_drag(const std::vector<Vec3>& rest_base) {
   drag_state_.reset(rec_->base_frames(rest_base), enc_.detail_rest);
 }
 
+std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResult& res) {
+  if (method_ != EditOptions::Method::Volumes || drag_end_ != EditOptions::DragEnd::FromDragState ||
+      !drag_state_.started())
+    return solve(base, res);
+  const auto t0 = Clock::now();
+  // The finest level from the drag's state to the exact tolerance, with the reconstructor's own
+  // check for new intersecting pairs (and fold repair).
+  WarmStartOptions exact;
+  exact.coarse_levels_only = false;
+  exact.tolerance = reconstruct_.tolerance;
+  exact.max_cycles = drag_end_cycles_;
+  ReconstructResult r = rec_->drag_step(base, drag_state_, exact);
+  const double warm_seconds = seconds_since(t0);
+  if (!r.stats.converged || r.stats.new_intersecting_pairs != 0) {
+    // Not converged, folded, or not checked (the options count no pairs): the clean start.
+    res.drag_end_fallback = true;
+    std::vector<Vec3> sub = solve(base, res);
+    res.times.solve += warm_seconds;
+    return sub;
+  }
+  res.times.solve = warm_seconds;
+  res.stats = std::move(r.stats);
+  res.volume = volume_metrics(enc_, rec_->base_frames(base), r.positions);
+  return std::move(r.positions);
+}
+
 const std::vector<Vec3>& DetailSolve::drag_step(const std::vector<Vec3>& base) {
   if (method_ == EditOptions::Method::Volumes)
     drag_sub_ = rec_->drag_step(base, drag_state_, drag_).positions;

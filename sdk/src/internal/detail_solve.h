@@ -11,8 +11,13 @@ namespace strata::internal {
 
 class DetailSolve {
  public:
-  DetailSolve(EditOptions::Method method, ReconstructOptions reconstruct, WarmStartOptions drag)
-      : method_(method), reconstruct_(std::move(reconstruct)), drag_(drag) {}
+  DetailSolve(EditOptions::Method method, ReconstructOptions reconstruct, WarmStartOptions drag,
+              EditOptions::DragEnd drag_end, int drag_end_cycles)
+      : method_(method),
+        reconstruct_(std::move(reconstruct)),
+        drag_(drag),
+        drag_end_(drag_end),
+        drag_end_cycles_(drag_end_cycles) {}
 
   //! Set once by the editor before the first solve (the reconstructor is built from it lazily).
   DetailEncoding& encoding() { return enc_; }
@@ -27,6 +32,9 @@ class DetailSolve {
   void begin_drag(const std::vector<Vec3>& rest_base);
   //! One warm-started step over \p base; returns the detail positions.
   const std::vector<Vec3>& drag_step(const std::vector<Vec3>& base);
+  //! The exact solve that ends a drag over \p base (EditOptions::drag_end): from the drag's state,
+  //! checked, or solve(). Fills res as solve() does, and res.drag_end_fallback.
+  std::vector<Vec3> end_drag(const std::vector<Vec3>& base, EditResult& res);
 
  private:
   //! Builds the volume reconstructor on first use; returns the seconds it took (0 if it existed).
@@ -35,6 +43,8 @@ class DetailSolve {
   EditOptions::Method method_;
   ReconstructOptions reconstruct_;
   WarmStartOptions drag_;
+  EditOptions::DragEnd drag_end_;
+  int drag_end_cycles_;
   DetailEncoding enc_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
   std::vector<Vec3> drag_sub_;
