@@ -1,10 +1,15 @@
 #include "strata/reconstruction.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <iterator>
@@ -30,6 +35,9 @@ struct Level {
   std::vector<int> verts;
   std::vector<Face> faces;
   std::vector<Face> local_faces;  // faces in level-local ids; empty on the finest (ids are original)
+  // Level-local vertex -> its (face * 3 + corner) entries, faces ascending: J^T x gathered per
+  // vertex sums in the same order as a scatter over the faces would, so threads change nothing.
+  std::vector<int> vf_offsets, vf;
   std::vector<double> targets;
   double mean_abs_target = 0.0;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
@@ -148,6 +156,8 @@ class VolumeReconstructor::Impl {
       const double f = enc_.normal_offsets[i];
       guarded_f_[i] = std::abs(f) >= fmin ? f : (f < 0 ? -fmin : fmin);
     }
+    const int threads = opt_.threads > 0 ? opt_.threads : tbb::this_task_arena::max_concurrency();
+    if (threads > 1) arena_ = std::make_unique<tbb::task_arena>(threads);
     internal::HierarchyOptions ho;
     ho.max_levels = opt_.max_levels;
     ho.coarsest_vertices = opt_.coarsest_vertices;
@@ -368,8 +378,8 @@ class VolumeReconstructor::Impl {
         opt_.retry_volume_iterations < 0 || opt_.fold_repair_rounds < 0 || opt_.fold_repair_rings < 0 ||
         opt_.fold_repair_sweeps < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
         !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
-        opt_.cg_max_iterations < 1 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 ||
-        opt_.length_lambda < 0)
+        opt_.cg_max_iterations < 1 || opt_.threads < 0 || opt_.max_final_steps < 0 ||
+        opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
       throw InvalidInput("reconstruction options out of range");
   }
 
@@ -390,8 +400,22 @@ class VolumeReconstructor::Impl {
       for (int c = 0; c < 3; ++c) lf[j][c] = local[L.faces[j][c]];
     if (!finest) L.local_faces = lf;
     const internal::Adjacency adj = internal::build_adjacency(nv, lf);
+    L.vf_offsets.assign(nv + 1, 0);
+    for (std::size_t j = 0; j < lf.size(); ++j)
+      for (int c = 0; c < 3; ++c) ++L.vf_offsets[lf[j][c] + 1];
+    for (int k = 0; k < nv; ++k) L.vf_offsets[k + 1] += L.vf_offsets[k];
+    L.vf.resize(3 * lf.size());
+    {
+      std::vector<int> fill(L.vf_offsets.begin(), L.vf_offsets.end() - 1);
+      for (std::size_t j = 0; j < lf.size(); ++j)
+        for (int c = 0; c < 3; ++c) L.vf[fill[lf[j][c]]++] = static_cast<int>(3 * j) + c;
+    }
     L.boundary = internal::boundary_vertices(nv, lf);
-    build_jj_pattern(lf, adj, L);
+    // J J^T's pattern and symbolic factorization only where exact steps are taken: the finest
+    // level (the polish), and the levels the options solve directly.
+    if (finest || opt_.step_solver == VolumeStepSolver::Direct ||
+        static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms)
+      build_jj_pattern(lf, adj, L);
     if (finest) {
       // The encoding's own weights (the finest level's vertex ids are the original ones).
       L.nb_offsets = enc_.weight_offsets;
@@ -773,10 +797,38 @@ class VolumeReconstructor::Impl {
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
     V.resize(L.faces.size());
-    for (std::size_t j = 0; j < L.faces.size(); ++j) {
+    for_each(L.faces.size(), [&](std::size_t j) {
       const Face& f = L.faces[j];
       V[j] = prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+    });
+  }
+
+  // (J^T x) at level-local vertex k: its faces' gradients at its corners weighted by x, summed in
+  // face order (a scatter over the faces would sum the same terms in the same order).
+  static Vec3 gather_jt(const Level& L, const GnScratch& w, const std::vector<double>& x, int k) {
+    Vec3 acc = Vec3::Zero();
+    for (int t = L.vf_offsets[k]; t < L.vf_offsets[k + 1]; ++t) {
+      const int e = L.vf[t];
+      acc += x[e / 3] * w.grad[e / 3][e % 3];
     }
+    return acc;
+  }
+
+  // f(i) for i in [0, n): on the solver's threads when n is large enough to pay for them. Every
+  // index is independent, so the result does not depend on the threads (reductions stay serial).
+  template <class F>
+  void for_each(std::size_t n, F&& f) const {
+    constexpr std::size_t kGrain = 2048;
+    if (!arena_ || n < 2 * kGrain) {
+      for (std::size_t i = 0; i < n; ++i) f(i);
+      return;
+    }
+    arena_->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+                        });
+    });
   }
 
   // max_j |h V*_j - V_j| / mean_j |h V*_j|, and optionally the RMS of the same ratio.
@@ -804,15 +856,15 @@ class VolumeReconstructor::Impl {
     w.grad.resize(m);
     w.r.resize(m);
     w.diag.resize(m);
-    double rr = 0.0;
-    for (std::size_t j = 0; j < m; ++j) {
+    for_each(m, [&](std::size_t j) {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g =
           prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
       for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
-      rr += w.r[j] * w.r[j];
-    }
+    });
+    double rr = 0.0;
+    for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     const double rr0 = rr;
     if (direct) {
       jj_values(L, w.grad, w.values, w.diag);
@@ -822,31 +874,30 @@ class VolumeReconstructor::Impl {
       // sweep over J J^T's ~13 entries a row, and no matrix to build per step.
       const std::vector<Face>& lf = L.local_faces.empty() ? L.faces : L.local_faces;
       const std::size_t nv = L.verts.size();
-      for (std::size_t j = 0; j < m; ++j) {
+      for_each(m, [&](std::size_t j) {
         const double d = w.grad[j][0].squaredNorm() + w.grad[j][1].squaredNorm() + w.grad[j][2].squaredNorm();
         w.diag[j] = d > 0 ? 1.0 / d : 0.0;
-      }
+      });
+      w.jt.resize(nv);
       auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
-        w.jt.assign(nv, Vec3::Zero());
-        for (std::size_t j = 0; j < m; ++j)
-          for (int c = 0; c < 3; ++c) w.jt[lf[j][c]] += x[j] * w.grad[j][c];
+        for_each(nv, [&](std::size_t k) { w.jt[k] = gather_jt(L, w, x, static_cast<int>(k)); });
         out.resize(m);
-        for (std::size_t j = 0; j < m; ++j) {
+        for_each(m, [&](std::size_t j) {
           const Face& f = lf[j];
           out[j] = w.grad[j][0].dot(w.jt[f[0]]) + w.grad[j][1].dot(w.jt[f[1]]) + w.grad[j][2].dot(w.jt[f[2]]);
-        }
+        });
       };
       solve_cg(L, w, rr, st, apply);
     }
     // delta = J^T y, with backtracking: the constraints are only multi-affine, so a full step
     // from a poor configuration can overshoot; halve it while the residual grows.
-    w.delta.assign(s.P.size(), Vec3::Zero());
-    for (std::size_t j = 0; j < m; ++j) {
-      const Face& f = L.faces[j];
-      for (int c = 0; c < 3; ++c) w.delta[f[c]] += w.y[j] * w.grad[j][c];
-    }
+    w.delta.resize(s.P.size());
+    for_each(L.verts.size(), [&](std::size_t k) {
+      const int i = L.verts[k];
+      w.delta[i] = gather_jt(L, w, w.y, static_cast<int>(k));
+      s.P[i] += w.delta[i];
+    });
     double alpha = 1.0;
-    for (int i : L.verts) s.P[i] += w.delta[i];
     int halvings = 0;
     bool undone = false;
     for (;; ++halvings) {
@@ -888,6 +939,7 @@ class VolumeReconstructor::Impl {
   // gradients are normal and J J^T is singular, factorizable.
   void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
     const std::size_t m = L.faces.size();
+    assert(L.llt && "exact steps only on levels with J J^T's pattern (make_level)");
     assemble(L, w.values, w.damping);
     const internal::SerialOpenMp serial;
     L.llt->factorize(L.jj);
@@ -925,18 +977,20 @@ class VolumeReconstructor::Impl {
       for (std::size_t j = 0; j < m; ++j) pAp += w.p[j] * w.Ap[j];
       if (!(pAp > 0)) break;
       const double alpha = rz / pAp;
+      for_each(m, [&](std::size_t j) {
+        w.y[j] += alpha * w.p[j];
+        res[j] -= alpha * w.Ap[j];
+        w.z[j] = w.diag[j] * res[j];
+      });
       rr = 0.0;
       double rz_new = 0.0;
       for (std::size_t j = 0; j < m; ++j) {
-        w.y[j] += alpha * w.p[j];
-        res[j] -= alpha * w.Ap[j];
         rr += res[j] * res[j];
+        rz_new += res[j] * w.z[j];
       }
-      precondition(w, res);
-      for (std::size_t j = 0; j < m; ++j) rz_new += res[j] * w.z[j];
       const double beta = rz_new / rz;
       rz = rz_new;
-      for (std::size_t j = 0; j < m; ++j) w.p[j] = w.z[j] + beta * w.p[j];
+      for_each(m, [&](std::size_t j) { w.p[j] = w.z[j] + beta * w.p[j]; });
     }
     st.cg_iterations += it;
   }
@@ -950,19 +1004,19 @@ class VolumeReconstructor::Impl {
     const int nv = static_cast<int>(L.verts.size());
     s.rho.resize(nv);
     s.tdev.resize(nv);
-    for (int k = 0; k < nv; ++k) {
+    for_each(nv, [&](std::size_t k) {
       const int i = L.verts[k];
       const Vec3 d = s.P[i] - s.Q[i];
       const double hgt = d.dot(s.N[i]);
       s.rho[k] = hgt / guarded_f_[i];
       s.tdev[k] = d - hgt * s.N[i] - s.R[i];
-    }
+    });
     const double ll = opt_.length_lambda * lambda_scale, lt = opt_.tangential_lambda * lambda_scale;
-    const int count = only ? static_cast<int>(only->size()) : nv;
-    for (int c = 0; c < count; ++c) {
-      const int k = only ? (*only)[c] : c;
+    const std::size_t count = only ? only->size() : static_cast<std::size_t>(nv);
+    for_each(count, [&](std::size_t c) {
+      const int k = only ? (*only)[c] : static_cast<int>(c);
       const int b = L.nb_offsets[k], e = L.nb_offsets[k + 1];
-      if (b == e) continue;
+      if (b == e) return;
       double avg_rho = 0.0;
       Vec3 avg_t = Vec3::Zero();
       for (int t = b; t < e; ++t) {
@@ -970,7 +1024,7 @@ class VolumeReconstructor::Impl {
         avg_t += L.weights[t] * s.tdev[L.nb[t]];
       }
       const int i = L.verts[k];
-      if (pinned(i)) continue;
+      if (pinned(i)) return;
       const Vec3& n = s.N[i];
       const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
       Vec3 lap = avg_t - s.tdev[k];
@@ -979,7 +1033,7 @@ class VolumeReconstructor::Impl {
       // drifts; it is held at zero there (the detail's open edge keeps its rest offset).
       const Vec3 t = L.boundary[k] ? Vec3(Vec3::Zero()) : Vec3(s.tdev[k] + lt * lap);
       s.P[i] = s.Q[i] + hgt * n + s.R[i] + t;
-    }
+    });
   }
 
   // Carries the coarse level's change since the pass started to the vertices the finer level
@@ -1032,6 +1086,8 @@ class VolumeReconstructor::Impl {
   // new pairs can be told. Mutable like the levels' factorizations.
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
   double setup_seconds_ = 0.0;
+  // The solver's threads (ReconstructOptions::threads); null: the calling thread only.
+  std::unique_ptr<tbb::task_arena> arena_;
 };
 
 VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)

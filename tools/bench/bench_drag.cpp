@@ -4,7 +4,7 @@
 // time, each drag step's time and their median, the exact solve's time, its volume errors and the
 // intersecting pairs it adds, and how far it ends from apply() of the same transform (the
 // clean-start solve, run after the timing). --drag-end state|clean sets EditOptions::drag_end.
-// Single thread (TBB is used only by the benchmark's own intersection counts).
+// One solver thread unless --threads N (TBB is used by the benchmark's own intersection counts).
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   int region_triangles = 50000, steps = 30;
   double degrees = 90.0;
   EditOptions opt;
+  opt.reconstruct.threads = 1;  // the measure: one thread (--threads N to compare)
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string k = argv[a];
     if (k == "--region-triangles")
@@ -35,13 +36,15 @@ int main(int argc, char** argv) {
       steps = std::atoi(argv[a + 1]);
     else if (k == "--degrees")
       degrees = std::atof(argv[a + 1]);
+    else if (k == "--threads")
+      opt.reconstruct.threads = std::atoi(argv[a + 1]);
     else if (k == "--drag-end" &&
              (std::string(argv[a + 1]) == "state" || std::string(argv[a + 1]) == "clean"))
       opt.drag_end = std::string(argv[a + 1]) == "state" ? EditOptions::DragEnd::FromDragState
                                                          : EditOptions::DragEnd::CleanStart;
     else {
       std::cerr << "usage: strata_bench_drag [--region-triangles N] [--steps S] [--degrees D] "
-                   "[--drag-end state|clean]\n";
+                   "[--drag-end state|clean] [--threads N]\n";
       return 2;
     }
   }
@@ -109,6 +112,7 @@ int main(int argc, char** argv) {
                      {"drag_step_max", sorted.back()},
                      {"end_drag_exact", exact},
                      {"apply_clean_start", apply_seconds}}},
+                   {"threads", opt.reconstruct.threads},
                    {"drag_end", opt.drag_end == EditOptions::DragEnd::FromDragState ? "state" : "clean"},
                    {"last_preview",
                     {{"new_intersecting_pairs", preview_new_pairs},

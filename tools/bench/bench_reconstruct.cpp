@@ -74,12 +74,18 @@ std::string load_average() {
   return a + " " + b + " " + c;
 }
 
+ReconstructOptions one_thread() {
+  ReconstructOptions o;
+  o.threads = 1;  // the measure is single-threaded; --set threads=N to compare
+  return o;
+}
+
 struct Args {
   std::vector<int> sizes{10000, 100000, 1000000};
   cases::DetailKind detail = cases::DetailKind::Bumps;
   std::string out;
   double max_seconds = 900.0;
-  ReconstructOptions reconstruct;  // defaults, but for --finest-volume-iterations
+  ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
 };
 
 // --set NAME=VALUE: one reconstruction option by its field name (for tuning runs).
@@ -101,7 +107,8 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
                                             {"final_max_cycles", &o.final_max_cycles},
                                             {"max_final_steps", &o.max_final_steps},
                                             {"direct_max_prisms", &o.direct_max_prisms},
-                                            {"cg_max_iterations", &o.cg_max_iterations}};
+                                            {"cg_max_iterations", &o.cg_max_iterations},
+                                            {"threads", &o.threads}};
   const std::map<std::string, double*> reals = {{"coarsening_ratio", &o.coarsening_ratio},
                                                 {"tangential_lambda", &o.tangential_lambda},
                                                 {"length_lambda", &o.length_lambda},
@@ -432,8 +439,9 @@ int main(int argc, char** argv) {
 #endif
           {"threads",
            {{"note",
-             "single thread: the reconstruction is single-threaded, OMP_NUM_THREADS pins CHOLMOD's "
-             "OpenMP pool, the intersection search runs with IntersectionOptions::parallel = false"},
+             "reconstruction threads: reconstruct_options.threads (1 unless --set threads=N); CHOLMOD "
+             "factorizes on the calling thread; the intersection search runs with "
+             "IntersectionOptions::parallel = false"},
             {"OMP_NUM_THREADS", std::getenv("OMP_NUM_THREADS")},
             {"intersections_parallel", false}}},
           {"reconstruct_options",
@@ -451,6 +459,7 @@ int main(int argc, char** argv) {
             {"final_max_cycles", ro.final_max_cycles},
             {"max_final_steps", ro.max_final_steps},
             {"cg_max_iterations", ro.cg_max_iterations},
+            {"threads", ro.threads},
             {"cg_tolerance", ro.cg_tolerance},
             {"level_tolerance", ro.level_tolerance},
             {"tangential_lambda", ro.tangential_lambda},

@@ -113,6 +113,10 @@ struct ReconstructOptions {
   double cg_tolerance = 1e-2;
   //! Conjugate-gradient iterations per Gauss-Newton step at most.
   int cg_max_iterations = 60;
+  //! Threads of the solver's sweeps over prisms and vertices (TBB; the factorizations run on the
+  //! calling thread). 0: as many as TBB allows the caller; 1: the calling thread only. Every sum
+  //! is taken in the same order whatever the count, so results are identical for any value.
+  int threads = 0;
   //! Optional progress reports (phase, fraction).
   ProgressCallback progress;
 };
