@@ -6,6 +6,7 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
@@ -634,6 +635,7 @@ class VolumeReconstructor::Impl {
     std::vector<int> seeds = best.new_pair_faces;
     std::vector<char> in(F.verts.size(), 0);
     std::vector<int> subset, next;
+    std::vector<Vec3> smoothed, local_result;
     for (int round = 0; round < opt_.fold_repair_rounds; ++round) {
       // The seeds' vertices, grown by rings over the finest level's regularization neighbours.
       std::fill(in.begin(), in.end(), 0);
@@ -650,10 +652,25 @@ class VolumeReconstructor::Impl {
       }
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
       st.regularization_sweeps += opt_.fold_repair_sweeps;
-      s.gn.damping = kMinDamping;
-      polish(F, s, opt_.tolerance, st, V);
+      // Only the prisms around the smoothed vertices lost their volumes: first restore them by
+      // moving those vertices alone (a small system, nearly free). If folds remain, the whole
+      // level's polish from the smoothed positions, whose minimum-norm correction spreads wider
+      // (it unfolds more on the rings, at a factorization a step), and the better of the two.
+      smoothed = s.P;
+      Outcome o;
+      if (local_polish(subset, s, a, st)) o = outcome(s, a, V);
+      if (!o.converged || o.new_pairs > 0) {
+        local_result.swap(s.P);
+        s.P = smoothed;
+        s.gn.damping = kMinDamping;
+        polish(F, s, opt_.tolerance, st, V);
+        Outcome global = outcome(s, a, V);
+        if (global.better_than(o))
+          o = std::move(global);
+        else
+          s.P.swap(local_result);
+      }
       ++st.fold_repairs;
-      Outcome o = outcome(s, a, V);
       if (o.better_than(best)) {
         kept = s.P;
         best = std::move(o);
@@ -664,6 +681,92 @@ class VolumeReconstructor::Impl {
       if (seeds.empty()) break;
     }
     s.P.swap(kept);
+  }
+
+  // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
+  // those vertices moving (pinned ones excepted), until these prisms meet the tolerance. Prisms
+  // without a free vertex do not change. Returns whether the tolerance was reached; on failure
+  // the positions are as the last step left them.
+  bool local_polish(const std::vector<int>& free, State& s, double a, ReconstructStats& st) const {
+    const Level& F = levels_.back();
+    std::vector<char> moves(F.verts.size(), 0);
+    for (int v : free)
+      if (!pinned(v)) moves[v] = 1;
+    std::vector<int> faces;  // the prisms with a moving vertex, ascending
+    std::vector<int> local(F.faces.size(), -1);
+    for (int v : free)
+      if (moves[v])
+        for (int t = F.vf_offsets[v]; t < F.vf_offsets[v + 1]; ++t)
+          if (local[F.vf[t] / 3] < 0) local[F.vf[t] / 3] = 0, faces.push_back(F.vf[t] / 3);
+    std::sort(faces.begin(), faces.end());
+    const int k = static_cast<int>(faces.size());
+    for (int j = 0; j < k; ++j) local[faces[j]] = j;
+    const double scale = std::abs(a) * F.mean_abs_target;
+    std::vector<std::array<Vec3, 3>> g(k);
+    Eigen::VectorXd r(k);
+    auto residual = [&](bool with_gradients) {
+      double rr = 0.0, mx = 0.0;
+      for (int j = 0; j < k; ++j) {
+        const Face& f = F.faces[faces[j]];
+        const PrismVolumeGradient pg =
+            prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+        if (with_gradients)
+          for (int c = 0; c < 3; ++c) g[j][c] = moves[f[c]] ? pg.grad[c] : Vec3(Vec3::Zero());
+        r[j] = a * F.targets[faces[j]] - pg.volume;
+        rr += r[j] * r[j];
+        mx = std::max(mx, std::abs(r[j]));
+      }
+      return std::make_pair(rr, scale > 0 ? mx / scale : 0.0);
+    };
+    double damping = kMinDamping;
+    for (int step = 0; step <= opt_.max_final_steps; ++step) {
+      const auto [rr0, err] = residual(true);
+      if (err <= opt_.tolerance) return true;
+      if (step == opt_.max_final_steps) break;
+      // (J J^T + eps I) y = r over the local prisms: J J^T couples prisms sharing a moving vertex.
+      std::vector<Eigen::Triplet<double>> trip;
+      double max_diag = 0.0;
+      for (int v : free) {
+        if (!moves[v]) continue;
+        for (int t1 = F.vf_offsets[v]; t1 < F.vf_offsets[v + 1]; ++t1)
+          for (int t2 = F.vf_offsets[v]; t2 < F.vf_offsets[v + 1]; ++t2) {
+            const int j1 = local[F.vf[t1] / 3], j2 = local[F.vf[t2] / 3];
+            if (j2 > j1) continue;  // lower triangle
+            trip.emplace_back(j1, j2, g[j1][F.vf[t1] % 3].dot(g[j2][F.vf[t2] % 3]));
+          }
+      }
+      Eigen::SparseMatrix<double> A(k, k);
+      A.setFromTriplets(trip.begin(), trip.end());
+      for (int j = 0; j < k; ++j) max_diag = std::max(max_diag, A.coeff(j, j));
+      for (int j = 0; j < k; ++j) A.coeffRef(j, j) += damping * max_diag + 1e-300;
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(A);
+      if (ldlt.info() != Eigen::Success) return false;
+      const Eigen::VectorXd y = ldlt.solve(r);
+      ++st.factorizations;
+      ++st.final_sweeps;
+      std::vector<Vec3> delta(free.size(), Vec3::Zero());
+      for (std::size_t q = 0; q < free.size(); ++q) {
+        const int v = free[q];
+        if (!moves[v]) continue;
+        for (int t = F.vf_offsets[v]; t < F.vf_offsets[v + 1]; ++t)
+          delta[q] += y[local[F.vf[t] / 3]] * g[local[F.vf[t] / 3]][F.vf[t] % 3];
+        s.P[v] += delta[q];
+      }
+      // Halve while the residual grows; undo and damp more if 4 halvings do not help.
+      double alpha = 1.0;
+      int halvings = 0;
+      while (residual(false).first > rr0) {
+        if (++halvings > 4) {
+          for (std::size_t q = 0; q < free.size(); ++q) s.P[free[q]] -= alpha * delta[q];
+          damping = std::min(100 * damping, kMaxDamping);
+          break;
+        }
+        alpha *= 0.5;
+        for (std::size_t q = 0; q < free.size(); ++q) s.P[free[q]] -= alpha * delta[q];
+      }
+      if (halvings == 0) damping = std::max(0.1 * damping, kMinDamping);
+    }
+    return false;
   }
 
   // The hierarchy's sizes, coarsest first.
