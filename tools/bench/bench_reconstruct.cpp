@@ -3,8 +3,9 @@
 // resident set size is per size. Prints one JSON document (stdout, and --out FILE if given);
 // progress lines go to stderr. A measurement: exits 0 even when targets fail, non-zero on errors.
 //
-// Single-thread: the reconstruction is single-threaded; CHOLMOD's OpenMP pool is pinned to one
-// thread (OMP_NUM_THREADS=1, set by re-executing when unset); the self-intersection search runs
+// Single-thread: ReconstructOptions::threads = 1 (--set threads=N to compare); CHOLMOD factorizes
+// on the calling thread (the SDK caps its hard-coded num_threads(4) regions; OMP_NUM_THREADS=1,
+// set by re-executing when unset, pins any other OpenMP pool); the self-intersection search runs
 // with IntersectionOptions::parallel = false.
 
 #include <poll.h>

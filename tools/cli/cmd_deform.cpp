@@ -30,6 +30,7 @@ struct DeformCmdOptions {
   std::string cage_tags;        // subdiv: its sharpness tags (optional)
   int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
   int handle_rings = 3;         // EditOptions / CageEditOptions::handle_solved_rings
+  int threads = 0;              // ReconstructOptions::threads (0: all cores)
   bool quiet = false;
 };
 
@@ -117,6 +118,7 @@ int run_deform(const DeformCmdOptions& o) {
   EditOptions options;
   options.smoothing_fraction = o.smoothing;
   options.handle_solved_rings = o.handle_rings;
+  options.reconstruct.threads = o.threads;
   options.method = method == Method::Volumes ? EditOptions::Method::Volumes : EditOptions::Method::Vectors;
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
@@ -152,6 +154,7 @@ int run_deform(const DeformCmdOptions& o) {
       CageEditOptions co;
       co.method = options.method;
       co.handle_solved_rings = o.handle_rings;
+      co.reconstruct.threads = o.threads;
       co.reconstruct.progress = log.progress(label + ": " + to_string(method));
       std::unique_ptr<CageEditor> editor;
       try {
@@ -269,6 +272,10 @@ Subcommand register_deform(CLI::App& parent) {
   app->add_option("--handle-rings", o->handle_rings,
                   "Handle vertices that move rigidly are placed exactly (as by vectors) and not solved, except "
                   "within this many edges of the blended part; with --base subdiv a negative value solves all")
+      ->capture_default_str();
+  app->add_option("--threads", o->threads,
+                  "Threads of the volume solver's sweeps (0: all cores, 1: one); the result is the same for any count")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
       ->check(CLI::NonNegativeNumber);
