@@ -116,7 +116,7 @@ struct EditOptions {
   //!   Its new intersecting pairs are counted (and repaired) as a clean-start solve's; if it does
   //!   not converge, or still adds pairs, or the reconstruction options count none
   //!   (ReconstructOptions::retry_on_new_intersections off), the clean-start solve runs instead
-  //!   (EditResult::drag_end_fallback).
+  //!   (EditResult::drag_end_fallback); if neither converges, the smaller error is kept.
   //! - CleanStart: apply() of the last transform (volume scaling from the clean configuration),
   //!   so a drag ends bit for bit where a scripted edit of the same transform does.
   enum class DragEnd { FromDragState, CleanStart };
@@ -145,7 +145,7 @@ struct EditResult {
   ReconstructStats stats;            //!< volumes only (zero for vectors)
   EditTimes times;
   //! end_drag() only: the exact solve from the drag's state did not converge or added
-  //! intersecting pairs, and the clean-start solve ran instead (EditOptions::drag_end).
+  //! intersecting pairs, and the clean-start solve ran too (EditOptions::drag_end).
   bool drag_end_fallback = false;
 };
 
