@@ -58,6 +58,7 @@ json options_json(const ModelOptions& o) {
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
             {"regularization_iterations", r.regularization_iterations},
+            {"coarse_regularization_iterations", r.coarse_regularization_iterations},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
             {"tangential_lambda", r.tangential_lambda},
@@ -161,6 +162,9 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
   ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
+  // Files written before the option existed regularized every level alike.
+  ro.coarse_regularization_iterations =
+      optional_count("coarse_regularization_iterations", ro.regularization_iterations);
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));
   ro.tangential_lambda = h.number(r, "tangential_lambda", wr);

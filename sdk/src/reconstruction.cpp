@@ -375,12 +375,12 @@ class VolumeReconstructor::Impl {
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
     if (opt_.volume_scales < 1 || opt_.max_levels < 1 || opt_.volume_iterations < 1 || opt_.max_cycles < 1 ||
-        opt_.regularization_iterations < 0 || opt_.finest_volume_iterations < 1 ||
-        opt_.retry_volume_iterations < 0 || opt_.fold_repair_rounds < 0 || opt_.fold_repair_rings < 0 ||
-        opt_.fold_repair_sweeps < 0 || !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) ||
-        !(opt_.tolerance > 0) || !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 ||
-        opt_.cg_max_iterations < 1 || opt_.threads < 0 || opt_.max_final_steps < 0 ||
-        opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
+        opt_.regularization_iterations < 0 || opt_.coarse_regularization_iterations < 0 ||
+        opt_.finest_volume_iterations < 1 || opt_.retry_volume_iterations < 0 ||
+        opt_.fold_repair_rounds < 0 || opt_.fold_repair_rings < 0 || opt_.fold_repair_sweeps < 0 ||
+        !(opt_.coarsening_ratio > 0 && opt_.coarsening_ratio < 1) || !(opt_.tolerance > 0) ||
+        !(opt_.level_tolerance > 0) || opt_.final_max_cycles < 1 || opt_.cg_max_iterations < 1 ||
+        opt_.threads < 0 || opt_.max_final_steps < 0 || opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
       throw InvalidInput("reconstruction options out of range");
   }
 
@@ -854,10 +854,14 @@ class VolumeReconstructor::Impl {
     for (;; ++c) {
       project(L, s, h, tol, st, V);
       ++st.cycles;
-      if (c + 1 >= max_cycles || opt_.regularization_iterations == 0) break;
+      if (c + 1 >= max_cycles || (&L == &levels_.back() ? opt_.regularization_iterations
+                                                        : opt_.coarse_regularization_iterations) == 0)
+        break;
       s.before = s.P;
-      for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, lambda);
-      st.regularization_sweeps += opt_.regularization_iterations;
+      const int sweeps =
+          &L == &levels_.back() ? opt_.regularization_iterations : opt_.coarse_regularization_iterations;
+      for (int it = 0; it < sweeps; ++it) regularize(L, s, lambda);
+      st.regularization_sweeps += sweeps;
       lambda *= opt_.regularization_decay;
       double moved = 0.0;
       for (int i : L.verts) moved = std::max(moved, (s.P[i] - s.before[i]).norm());

@@ -54,7 +54,10 @@ s=$($STATS "$T/unmuted.png" "$T/rest.png")
 check "amplitude 1 leaves the image unchanged" "s['changed'] == 0" "$s"
 "$VIEWER" "$T/model.strata" --screenshot "$T/muted1.png" "${COMMON[@]}" --amplitude 1=0 >/dev/null
 s=$($STATS "$T/muted1.png" "$T/rest.png")
-check "muting band 1 changes the image" "s['changed'] > 0.005" "$s"
+# Band 1's detail is small here: muting it moves the finest band by 0.011 on average (max 0.039),
+# 0.34% of the pixels. (The bound was 0.5% while the cascade left a 2.5-unit spike in the finest
+# band, before the coarse levels' regularization; measured with the SDK on this mesh.)
+check "muting band 1 changes the image" "s['changed'] > 0.002" "$s"
 
 # 3. The prism volume error colour map: none at rest, red after a cage edit rebuilt by
 #    displacement vectors; the volumes keep their prisms (no red, max error below 1%).
