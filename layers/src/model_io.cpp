@@ -57,6 +57,7 @@ json options_json(const ModelOptions& o) {
             {"fold_repair_rounds", r.fold_repair_rounds},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
+            {"fold_repair_max_fraction", r.fold_repair_max_fraction},
             {"regularization_iterations", r.regularization_iterations},
             {"coarse_regularization_iterations", r.coarse_regularization_iterations},
             {"max_cycles", r.max_cycles},
@@ -161,6 +162,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.fold_repair_rounds = optional_count("fold_repair_rounds", 0);
   ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
   ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
+  if (r.contains("fold_repair_max_fraction"))
+    ro.fold_repair_max_fraction = h.number(r, "fold_repair_max_fraction", wr);
   ro.regularization_iterations = static_cast<int>(h.integer(r, "regularization_iterations", wr, 0, 100000));
   // Files written before the option existed regularized every level alike.
   ro.coarse_regularization_iterations =

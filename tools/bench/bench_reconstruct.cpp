@@ -114,6 +114,7 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
       {"threads", &o.threads}};
   const std::map<std::string, double*> reals = {{"coarsening_ratio", &o.coarsening_ratio},
                                                 {"tangential_lambda", &o.tangential_lambda},
+                                                {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
                                                 {"length_lambda", &o.length_lambda},
                                                 {"regularization_decay", &o.regularization_decay},
                                                 {"level_tolerance", &o.level_tolerance},
@@ -457,6 +458,7 @@ int main(int argc, char** argv) {
             {"fold_repair_rounds", ro.fold_repair_rounds},
             {"fold_repair_rings", ro.fold_repair_rings},
             {"fold_repair_sweeps", ro.fold_repair_sweeps},
+            {"fold_repair_max_fraction", ro.fold_repair_max_fraction},
             {"regularization_iterations", ro.regularization_iterations},
             {"coarse_regularization_iterations", ro.coarse_regularization_iterations},
             {"max_cycles", ro.max_cycles},

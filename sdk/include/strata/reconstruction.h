@@ -69,6 +69,10 @@ struct ReconstructOptions {
   //! pairs and 4 rounds none; at 100k prisms 3 rounds left 28 (after a retry) and 6 none, so the
   //! retry did not run. 0: no repair.
   int fold_repair_rounds = 6;
+  //! No repair when the new pairs outnumber this fraction of the prisms: so many are a global
+  //! self-contact (a limb bent into the body), not local folds. The repair also stops after two
+  //! rounds without progress.
+  double fold_repair_max_fraction = 0.01;
   //! Rings of vertices around the new pairs' triangles smoothed in the first repair round.
   int fold_repair_rings = 2;
   //! Regularization sweeps per repair round.
