@@ -74,6 +74,7 @@ struct GnScratch {
   double damping = kMinDamping;  // of the exact steps, adapted step by step
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   std::vector<std::array<Vec3, 3>> grad;
+  std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag, values;
   std::vector<Vec3> delta;
   std::vector<Vec3> jt;  // J^T x per level vertex, inside the matrix-free products
@@ -922,13 +923,21 @@ class VolumeReconstructor::Impl {
 
   // (J^T x) at level-local vertex k: its faces' gradients at its corners weighted by x, summed in
   // face order (a scatter over the faces would sum the same terms in the same order).
+  // Reads the step's gradients in vertex order (w.gv, see vertex_gradients()): contiguous, where
+  // w.grad[face][corner] would be a scattered load per entry.
   static Vec3 gather_jt(const Level& L, const GnScratch& w, const std::vector<double>& x, int k) {
     Vec3 acc = Vec3::Zero();
-    for (int t = L.vf_offsets[k]; t < L.vf_offsets[k + 1]; ++t) {
-      const int e = L.vf[t];
-      acc += x[e / 3] * w.grad[e / 3][e % 3];
-    }
+    for (int t = L.vf_offsets[k]; t < L.vf_offsets[k + 1]; ++t) acc += x[L.vf[t] / 3] * w.gv[t];
     return acc;
+  }
+
+  // w.gv[t] = the gradient of entry L.vf[t] (face * 3 + corner): the step's gradients in the
+  // order gather_jt() reads them.
+  void vertex_gradients(const Level& L, GnScratch& w) const {
+    w.gv.resize(L.vf.size());
+    for_each(L.verts.size(), [&](std::size_t k) {
+      for (int t = L.vf_offsets[k]; t < L.vf_offsets[k + 1]; ++t) w.gv[t] = w.grad[L.vf[t] / 3][L.vf[t] % 3];
+    });
   }
 
   // f(i) for i in [0, n): on the solver's threads when n is large enough to pay for them. Every
@@ -980,6 +989,7 @@ class VolumeReconstructor::Impl {
       for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
     });
+    vertex_gradients(L, w);
     double rr = 0.0;
     for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     const double rr0 = rr;
