@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
 #include "paper_cases.h"
 #include "strata/edit_script.h"
@@ -196,6 +198,7 @@ TEST(RegionEditor, BentCylinderKeepsItsCrossSection) {
   std::map<long, std::vector<int>> rings;
   for (int i = 0; i < m.num_vertices(); ++i) rings[std::lround(m.vertices[i].z() * 1000)].push_back(i);
   int checked = 0;
+  double min_radius = 1e300, max_radius = 0.0;
   for (const auto& [key, ids] : rings) {
     if (ids.size() < 8) continue;
     Vec3 c = Vec3::Zero();
@@ -205,10 +208,15 @@ TEST(RegionEditor, BentCylinderKeepsItsCrossSection) {
       const double radius = (r.positions[i] - c).norm();
       ASSERT_GT(radius, 0.9) << "ring z = " << key / 1000.0;
       ASSERT_LT(radius, 1.1) << "ring z = " << key / 1000.0;
+      min_radius = std::min(min_radius, radius);
+      max_radius = std::max(max_radius, radius);
     }
     ++checked;
   }
   EXPECT_GT(checked, 40);
+  // The measured extremes (unit rest radius), for the record.
+  RecordProperty("min_radius", std::to_string(min_radius));
+  RecordProperty("max_radius", std::to_string(max_radius));
   // The top ring's axis direction: the normal of its best plane turned from +z to +x.
   const std::vector<int>& top = rings.rbegin()->second;
   Vec3 c = Vec3::Zero();
