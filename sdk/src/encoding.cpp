@@ -1,11 +1,13 @@
 #include "strata/encoding.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include "internal/closest_point.h"
@@ -103,29 +105,37 @@ class Encoder {
         opt_(o),
         normals_(vertex_normals(base.vertices, base.faces)),
         adj_(internal::build_adjacency(base.num_vertices(), base.faces)),
-        tree_(base.vertices, base.faces),
-        mark_(base.faces.size(), -1) {}
+        tree_(base.vertices, base.faces) {}
 
-  // Base point of detail vertex p (index i, for the ring-search marks).
-  BasePoint project(int i, const Vec3& p, EncodeReport& report) {
+  // One thread's ring-search state: the faces of the rings, and each base face's last stamp.
+  struct Scratch {
+    std::vector<int> mark, ring;
+  };
+  Scratch scratch() const { return Scratch{std::vector<int>(base_.faces.size(), -1), {}}; }
+
+  // Base point of detail vertex p (index i, for the ring-search marks). Depends on nothing but
+  // p, so vertices may be projected in any order and on any thread (each with its own scratch).
+  BasePoint project(int i, const Vec3& p, EncodeReport& report, Scratch& sc) const {
+    std::vector<int>& ring = sc.ring;
+    std::vector<int>& mark = sc.mark;
     const auto hit = tree_.closest(p);
     const double dc = std::sqrt(hit.distance_sq);
     const double T = opt_.max_distance_ratio * dc + 1e-12;
     // Search outwards ring by ring and stop after the first ring (past the closest face's
     // neighbourhood) that yields a projection: nearer solutions lie in the inner rings.
-    ring_.clear();
-    ring_.push_back(hit.face);
-    mark_[hit.face] = i;
+    ring.clear();
+    ring.push_back(hit.face);
+    mark[hit.face] = i;
     int found = 0;
     double best = INFINITY;
     BasePoint bp;
     Vec3 best_q = Vec3::Zero();
     std::size_t begin = 0;  // first face of the ring being tested
     for (int r = 0; r <= opt_.search_rings; ++r) {
-      const std::size_t end = ring_.size();
-      for (std::size_t k = begin; k < end; ++k) test_face(ring_[k], p, T, found, best, best_q, bp);
+      const std::size_t end = ring.size();
+      for (std::size_t k = begin; k < end; ++k) test_face(ring[k], p, T, found, best, best_q, bp);
       if (found > 0 && r >= 1) break;
-      if (r < opt_.search_rings) grow_ring(i, begin);
+      if (r < opt_.search_rings) grow_ring(i, begin, sc);
       begin = end;
     }
     if (found == 0) {
@@ -140,16 +150,18 @@ class Encoder {
   }
 
  private:
-  // Appends the faces sharing a vertex with ring_[begin..) that are not yet marked.
-  void grow_ring(int stamp, std::size_t begin) {
-    const std::size_t end = ring_.size();
+  // Appends the faces sharing a vertex with ring[begin..) that are not yet marked.
+  void grow_ring(int stamp, std::size_t begin, Scratch& sc) const {
+    std::vector<int>& ring = sc.ring;
+    std::vector<int>& mark = sc.mark;
+    const std::size_t end = ring.size();
     for (std::size_t k = begin; k < end; ++k)
-      for (int v : base_.faces[ring_[k]])
+      for (int v : base_.faces[ring[k]])
         for (int s = adj_.face_offsets[v]; s < adj_.face_offsets[v + 1]; ++s) {
           const int g = adj_.faces[s];
-          if (mark_[g] != stamp) {
-            mark_[g] = stamp;
-            ring_.push_back(g);
+          if (mark[g] != stamp) {
+            mark[g] = stamp;
+            ring.push_back(g);
           }
         }
   }
@@ -194,8 +206,6 @@ class Encoder {
   std::vector<Vec3> normals_;
   internal::Adjacency adj_;
   internal::TriangleTree tree_;
-  std::vector<int> mark_;
-  std::vector<int> ring_;
 };
 
 // The regularization weights of the detail at rest (section 4.2): normalized clamped cotangent
@@ -287,8 +297,20 @@ DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const E
   report.num_vertices = n;
   std::vector<BasePoint> points(n);
   {
-    Encoder enc(base, options);
-    for (int i = 0; i < n; ++i) points[i] = enc.project(i, detail.vertices[i], report);
+    // The projections are independent: chunks run on TBB's threads, each with its own scratch
+    // and counts (summed at the end, so the result does not depend on the threads).
+    const Encoder enc(base, options);
+    tbb::enumerable_thread_specific<Encoder::Scratch> scratch([&] { return enc.scratch(); });
+    std::mutex counts;
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+      Encoder::Scratch& sc = scratch.local();
+      EncodeReport part;
+      for (int i = r.begin(); i != r.end(); ++i) points[i] = enc.project(i, detail.vertices[i], part, sc);
+      const std::lock_guard<std::mutex> lock(counts);
+      report.num_projected += part.num_projected;
+      report.num_fallback += part.num_fallback;
+      report.num_ambiguous += part.num_ambiguous;
+    });
   }
   DetailEncoding e = encoding_over_mesh(detail, base, std::move(points));
   report.max_tangential_offset = e.report.max_tangential_offset;

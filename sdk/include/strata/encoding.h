@@ -92,7 +92,8 @@ struct DetailEncoding {
 //! to the base's interpolated (Phong) vertex normal at q_i, then stores the target volumes, the
 //! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
 //! have any connectivity. Where no such point exists near the closest point, the closest point
-//! is used and counted in the report.
+//! is used and counted in the report. The projections run on TBB's threads (the caller's task
+//! arena); the result does not depend on their number.
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).
 //! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates.
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
