@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 
@@ -97,7 +98,8 @@ TEST(Encoding, VectorsOverTheOriginalBaseReturnTheDetail) {
   const DetailEncoding e = encode_detail(c.detail, c.base);
   const std::vector<Vec3> p = reconstruct_vectors(e, c.base.vertices);
   double worst = 0.0;
-  for (int i = 0; i < c.detail.num_vertices(); ++i) worst = std::max(worst, (p[i] - c.detail.vertices[i]).norm());
+  for (int i = 0; i < c.detail.num_vertices(); ++i)
+    worst = std::max(worst, (p[i] - c.detail.vertices[i]).norm());
   EXPECT_LE(worst, 1e-12);
 }
 
@@ -130,4 +132,30 @@ TEST(Encoding, RejectsBadInput) {
   std::vector<Vec3> nan_base = c.base.vertices;
   nan_base[0][0] = INFINITY;
   EXPECT_THROW(reconstruct_vectors(e, nan_base), InvalidInput);
+}
+
+// The projections run on TBB's threads: one thread and three give the same base points, offsets,
+// targets and counts (several chunks of projections, so the counts are summed across threads).
+TEST(Encoding, TheSameForAnyThreadCount) {
+  cases::CylinderCaseOptions o;
+  o.target_detail_triangles = 8000;
+  o.detail = cases::DetailKind::Cuboid;
+  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  ASSERT_GT(c.detail.num_vertices(), 3 * 1024);
+  auto encode_on = [&](int threads) {
+    tbb::task_arena arena(threads);
+    return arena.execute([&] { return encode_detail(c.detail, c.base); });
+  };
+  const DetailEncoding one = encode_on(1), three = encode_on(3);
+  ASSERT_EQ(one.base_points.size(), three.base_points.size());
+  for (std::size_t i = 0; i < one.base_points.size(); ++i) {
+    ASSERT_EQ(one.base_points[i].face, three.base_points[i].face) << "vertex " << i;
+    ASSERT_EQ(one.base_points[i].bary, three.base_points[i].bary) << "vertex " << i;
+    ASSERT_EQ(one.normal_offsets[i], three.normal_offsets[i]) << "vertex " << i;
+  }
+  EXPECT_EQ(one.target_volumes, three.target_volumes);
+  EXPECT_EQ(one.report.num_projected, three.report.num_projected);
+  EXPECT_EQ(one.report.num_fallback, three.report.num_fallback);
+  EXPECT_EQ(one.report.num_ambiguous, three.report.num_ambiguous);
+  EXPECT_EQ(one.report.num_projected + one.report.num_fallback, c.detail.num_vertices());
 }
