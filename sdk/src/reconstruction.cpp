@@ -45,21 +45,12 @@ struct Level {
   std::vector<double> weights;
   std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
   std::vector<int> inserted, ring_offsets, ring_vertices;
-  // Pattern of J J^T (prisms sharing a vertex), kept for every Gauss-Newton step: row j holds
-  // (prism k, corner of the shared vertex in j, corner in k), one entry per shared vertex; a
-  // pair sharing an edge appears twice. Sorted by k within a row.
-  std::vector<int> jj_offsets;
-  std::vector<int> jj_prism;
-  std::vector<std::uint8_t> jj_corner_j, jj_corner_k;
-  // The same rows with each prism k once (the matrix's sparsity): jj_col[jj_row[j] ..
-  // jj_row[j+1]), and the merged entry each shared-vertex entry above adds to.
-  std::vector<int> jj_row, jj_col, jj_entry;
-  // The direct solver of J W^-1 J^T: its lower triangle with the pattern fixed, where each
-  // pattern entry lands in its value array (-1: upper triangle, skipped), the diagonal's slots,
-  // and the Cholesky factorization whose symbolic analysis is done once per level.
+  // The direct solver of J J^T (prisms sharing a vertex): its lower triangle with the pattern
+  // fixed, the diagonal's slots in its value array, and the Cholesky factorization whose symbolic
+  // analysis is done once per level. The values are written straight into the matrix from the
+  // gradients (assemble()); no per-entry index arrays are kept.
   // Mutable: refactorized in every step of a (logically const) reconstruction.
   mutable Eigen::SparseMatrix<double> jj;
-  std::vector<int> jj_slot;
   std::vector<int> jj_diag_slot;
   mutable std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> llt;
 };
@@ -75,7 +66,7 @@ struct GnScratch {
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
-  std::vector<double> r, y, z, p, Ap, diag, values;
+  std::vector<double> r, y, z, p, Ap, diag;
   std::vector<Vec3> delta;
   std::vector<Vec3> jt;  // J^T x per level vertex, inside the matrix-free products
 };
@@ -443,88 +434,63 @@ class VolumeReconstructor::Impl {
     L.mean_abs_target = L.targets.empty() ? 0.0 : sum / L.targets.size();
   }
 
+  // The lower triangle of J J^T's pattern: prism j and every prism k <= j that shares a vertex
+  // with it.
   static void build_jj_pattern(const std::vector<Face>& lf, const internal::Adjacency& adj, Level& L) {
-    const std::size_t m = lf.size();
-    L.jj_offsets.assign(m + 1, 0);
-    L.jj_row.assign(1, 0);
-    struct E {
-      int k;
-      std::uint8_t cj, ck;
-    };
-    std::vector<E> row;
-    for (std::size_t j = 0; j < m; ++j) {
-      row.clear();
-      for (int cj = 0; cj < 3; ++cj) {
-        const int v = lf[j][cj];
-        for (int t = adj.face_offsets[v]; t < adj.face_offsets[v + 1]; ++t)
-          row.push_back(E{adj.faces[t], static_cast<std::uint8_t>(cj), adj.corners[t]});
-      }
-      std::sort(row.begin(), row.end(), [](const E& a, const E& b) { return a.k < b.k; });
-      for (const E& e : row) {
-        L.jj_prism.push_back(e.k);
-        L.jj_corner_j.push_back(e.cj);
-        L.jj_corner_k.push_back(e.ck);
-        if (L.jj_col.size() == static_cast<std::size_t>(L.jj_row.back()) || L.jj_col.back() != e.k)
-          L.jj_col.push_back(e.k);
-        L.jj_entry.push_back(static_cast<int>(L.jj_col.size()) - 1);
-      }
-      L.jj_offsets[j + 1] = static_cast<int>(L.jj_prism.size());
-      L.jj_row.push_back(static_cast<int>(L.jj_col.size()));
-    }
+    const int m = static_cast<int>(lf.size());
     std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(L.jj_col.size() / 2 + m);
-    for (std::size_t j = 0; j < m; ++j)
-      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
-        if (L.jj_col[t] <= static_cast<int>(j)) trip.emplace_back(static_cast<int>(j), L.jj_col[t], 1.0);
-    L.jj.resize(static_cast<int>(m), static_cast<int>(m));
+    trip.reserve(8 * static_cast<std::size_t>(m));
+    std::vector<int> row;
+    for (int j = 0; j < m; ++j) {
+      row.clear();
+      for (int v : lf[j])
+        for (int t = adj.face_offsets[v]; t < adj.face_offsets[v + 1]; ++t)
+          if (adj.faces[t] <= j) row.push_back(adj.faces[t]);
+      std::sort(row.begin(), row.end());
+      row.erase(std::unique(row.begin(), row.end()), row.end());
+      for (int k : row) trip.emplace_back(j, k, 1.0);
+    }
+    L.jj.resize(m, m);
     L.jj.setFromTriplets(trip.begin(), trip.end());
     L.jj.makeCompressed();
-    auto slot = [&](int row, int col) {
-      const int* inner = L.jj.innerIndexPtr();
-      const int b = L.jj.outerIndexPtr()[col], e = L.jj.outerIndexPtr()[col + 1];
-      return static_cast<int>(std::lower_bound(inner + b, inner + e, row) - inner);
-    };
-    L.jj_slot.assign(L.jj_col.size(), -1);
     L.jj_diag_slot.resize(m);
-    for (std::size_t j = 0; j < m; ++j) {
-      L.jj_diag_slot[j] = slot(static_cast<int>(j), static_cast<int>(j));
-      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
-        if (L.jj_col[t] <= static_cast<int>(j)) L.jj_slot[t] = slot(static_cast<int>(j), L.jj_col[t]);
-    }
+    for (int j = 0; j < m; ++j) L.jj_diag_slot[j] = jj_slot(L, j, j);
     L.llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
     const internal::SerialOpenMp serial;
     L.llt->analyzePattern(L.jj);
   }
 
-  // J J^T's values on the merged pattern for gradients g (dot products of the gradients of the
-  // shared vertices), and the inverse diagonal.
-  static void jj_values(const Level& L, const std::vector<std::array<Vec3, 3>>& g,
-                        std::vector<double>& values, std::vector<double>& inv_diag) {
-    const std::size_t m = L.faces.size();
-    values.assign(L.jj_col.size(), 0.0);
-    for (std::size_t j = 0; j < m; ++j)
-      for (int t = L.jj_offsets[j]; t < L.jj_offsets[j + 1]; ++t)
-        values[L.jj_entry[t]] += g[j][L.jj_corner_j[t]].dot(g[L.jj_prism[t]][L.jj_corner_k[t]]);
-    inv_diag.resize(m);
-    for (std::size_t j = 0; j < m; ++j) {
-      double d = 0.0;
-      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
-        if (L.jj_col[t] == static_cast<int>(j)) d = values[t];
-      inv_diag[j] = d > 0 ? 1.0 / d : 0.0;
-    }
+  // Where entry (row, col), row >= col, of J J^T's lower triangle lives in L.jj's value array.
+  static int jj_slot(const Level& L, int row, int col) {
+    const int* inner = L.jj.innerIndexPtr();
+    const int b = L.jj.outerIndexPtr()[col], e = L.jj.outerIndexPtr()[col + 1];
+    return static_cast<int>(std::lower_bound(inner + b, inner + e, row) - inner);
   }
 
-  // Writes the lower triangle of J J^T (+ the damping's diagonal shift) into L.jj's fixed pattern.
-  static void assemble(const Level& L, const std::vector<double>& values, double damping) {
+  // Writes the lower triangle of J J^T for gradients g (each entry the dot products of the two
+  // prisms' gradients at their shared vertices, summed vertex by vertex) into L.jj's fixed
+  // pattern, plus the damping's diagonal shift eps = damping * max diagonal.
+  static void assemble(const Level& L, const std::vector<std::array<Vec3, 3>>& g, double damping) {
     const std::size_t m = L.faces.size();
     double* val = L.jj.valuePtr();
     std::fill(val, val + L.jj.nonZeros(), 0.0);
-    double max_diag = 0.0;
-    for (std::size_t j = 0; j < m; ++j) {
-      for (int t = L.jj_row[j]; t < L.jj_row[j + 1]; ++t)
-        if (L.jj_slot[t] >= 0) val[L.jj_slot[t]] += values[t];
-      max_diag = std::max(max_diag, val[L.jj_diag_slot[j]]);
+    const int nv = static_cast<int>(L.vf_offsets.size()) - 1;
+    for (int k = 0; k < nv; ++k) {
+      // The vertex's (face * 3 + corner) entries, faces ascending: each pair a <= b is the lower
+      // entry (row b, column a).
+      const int b0 = L.vf_offsets[k], b1 = L.vf_offsets[k + 1];
+      for (int ta = b0; ta < b1; ++ta) {
+        const int fa = L.vf[ta] / 3;
+        const Vec3& ga = g[fa][L.vf[ta] % 3];
+        val[L.jj_diag_slot[fa]] += ga.squaredNorm();
+        for (int tb = ta + 1; tb < b1; ++tb) {
+          const int fb = L.vf[tb] / 3;
+          val[jj_slot(L, fb, fa)] += ga.dot(g[fb][L.vf[tb] % 3]);
+        }
+      }
     }
+    double max_diag = 0.0;
+    for (std::size_t j = 0; j < m; ++j) max_diag = std::max(max_diag, val[L.jj_diag_slot[j]]);
     const double eps = damping * max_diag + 1e-300;
     for (std::size_t j = 0; j < m; ++j) val[L.jj_diag_slot[j]] += eps;
   }
@@ -994,7 +960,6 @@ class VolumeReconstructor::Impl {
     for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     const double rr0 = rr;
     if (direct) {
-      jj_values(L, w.grad, w.values, w.diag);
       solve_direct(L, w, rr, st);
     } else {
       // Matrix-free: J J^T x = J (J^T x), J^T x gathered per vertex. Half the memory traffic of a
@@ -1067,7 +1032,7 @@ class VolumeReconstructor::Impl {
   void solve_direct(const Level& L, GnScratch& w, double, ReconstructStats& st) const {
     const std::size_t m = L.faces.size();
     assert(L.llt && "exact steps only on levels with J J^T's pattern (make_level)");
-    assemble(L, w.values, w.damping);
+    assemble(L, w.grad, w.damping);
     const internal::SerialOpenMp serial;
     L.llt->factorize(L.jj);
     if (L.llt->info() != Eigen::Success)
