@@ -493,6 +493,9 @@ TEST(PaperCasesOptions, OutOfRangeOptionsThrow) {
   throws([](CylinderCaseOptions& o) { o.bend_radius = 1.0; });  // = radius: S' would fold
   throws([](CylinderCaseOptions& o) { o.bend_end = 4.5; });     // not the arc length
   throws([](CylinderCaseOptions& o) { o.target_detail_triangles = -5; });
+  throws([](CylinderCaseOptions& o) { o.jitter = -0.1; });
+  throws([](CylinderCaseOptions& o) { o.jitter = 0.5; });
+  throws([](CylinderCaseOptions& o) { o.jitter = std::nan(""); });
   CylinderCaseOptions flat;
   flat.bend_radius = 0.0;
   EXPECT_THROW(bend_point(Vec3::Zero(), flat), InvalidInput);
@@ -559,6 +562,64 @@ TEST(PaperCasesTarget, OneMillionPrisms) {
     EXPECT_NEAR(c.detail.num_faces(), 1000000, 200000);
     std::printf("[ target   ] %-15s asked 1000000 got %7d in %.3f s\n", c.name.c_str(), c.detail.num_faces(),
                 seconds);
+  }
+}
+
+// The scan-like variant (jitter): the same surfaces, an irregular Delaunay triangulation. It stays a
+// valid oriented tube on the analytic detail surface with the same counts, its valences vary as a
+// scan's (no global checkerboard of up and down triangles), the cuboid keeps its flat sides and
+// sharp corners, and it is the same every time.
+TEST(PaperCasesJitter, IrregularValidDeterministicTubesOnTheSameSurfaces) {
+  for (DetailKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    CylinderCaseOptions o = options_for(kind);
+    const CylinderCase regular = make_cylinder_case(o);
+    o.jitter = 0.4;
+    const CylinderCase c = make_cylinder_case(o);
+    expect_valid_tube(c.detail, o.length, "jittered detail");
+    EXPECT_EQ(c.detail.num_vertices(), regular.detail.num_vertices());
+    EXPECT_EQ(c.detail.num_faces(), regular.detail.num_faces());
+    EXPECT_EQ(c.base.vertices, regular.base.vertices);
+    EXPECT_EQ(c.edited_base.vertices, regular.edited_base.vertices);
+    const CylinderCase again = make_cylinder_case(o);
+    EXPECT_EQ(again.detail.vertices, c.detail.vertices);
+    EXPECT_EQ(again.detail.faces, c.detail.faces);
+
+    std::vector<int> valence(c.detail.num_vertices(), 0);
+    for (const Face& f : c.detail.faces)
+      for (int v : f) ++valence[v];
+    int interior = 0, odd = 0, moved = 0;
+    for (int v = 0; v < c.detail.num_vertices(); ++v) {
+      const double z = c.detail.vertices[v].z();
+      if (z == 0.0 || z == o.length) continue;
+      ++interior;
+      odd += valence[v] % 2;
+      moved += (c.detail.vertices[v] - regular.detail.vertices[v]).norm() > 1e-9;
+    }
+    EXPECT_GT(odd, interior / 4) << "odd valences (a regular grid has none inside)";
+    EXPECT_GT(moved, interior * 9 / 10);
+    for (const Vec3& p : c.detail.vertices) {
+      if (kind == DetailKind::Cuboid) {
+        const double a = o.radius + o.detail_height;
+        EXPECT_TRUE(std::abs(p.x()) == a || std::abs(p.y()) == a) << p.transpose();
+      } else {
+        const double h = detail_offset(o, std::atan2(p.y(), p.x()), p.z());
+        EXPECT_NEAR(std::hypot(p.x(), p.y()), o.radius + h, 1e-12);
+      }
+    }
+    if (kind == DetailKind::Cuboid) {
+      // The corner columns stay, and every face lies flat on one side.
+      const double a = o.radius + o.detail_height;
+      int corners = 0;
+      for (const Vec3& p : c.detail.vertices) corners += std::abs(p.x()) == a && std::abs(p.y()) == a;
+      EXPECT_EQ(corners, 4 * (c.detail.num_vertices() / 96));
+      for (const Face& f : c.detail.faces) {
+        const Vec3 &p0 = c.detail.vertices[f[0]], &p1 = c.detail.vertices[f[1]],
+                   &p2 = c.detail.vertices[f[2]];
+        EXPECT_TRUE((p0.x() == p1.x() && p1.x() == p2.x() && std::abs(p0.x()) == a) ||
+                    (p0.y() == p1.y() && p1.y() == p2.y() && std::abs(p0.y()) == a));
+      }
+    }
   }
 }
 

@@ -1,9 +1,14 @@
 #include "paper_cases.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "strata/exceptions.h"
 
@@ -75,34 +80,47 @@ int rings_for(double length, double spacing) {
   return std::max(1, static_cast<int>(std::lround(length / spacing)));
 }
 
+// A tube's connectivity with its vertices' coordinates in grid units: u around (periodic with
+// `segments`), z along the axis (0 to `rings`). Counter-clockwise in (u, z) is outward.
+// cell_u and cell_z are the grid spacing in world units (for Delaunay tests in the unrolled plane).
+struct TubeGrid {
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<Face> faces;
+  std::vector<char> fixed_u;  // vertices whose u stays put (the square tube's corners)
+  int segments = 0, rings = 0;
+  double cell_u = 1.0, cell_z = 1.0;
+};
+
 // A tube of `rings` + 1 rings of `segments` vertices each, alternate rings shifted by half a
-// segment so that the triangles are near-equilateral. `point(theta, z)` places a vertex.
-template <class PointFn>
-TriMesh staggered_tube(int segments, int rings, double length, PointFn point) {
-  TriMesh m;
+// segment so that the triangles are near-equilateral (at radius rho).
+TubeGrid staggered_grid(int segments, int rings, double rho, double length) {
+  TubeGrid g;
   const int n = segments;
-  m.vertices.reserve(static_cast<size_t>(n) * (rings + 1));
-  m.faces.reserve(2 * static_cast<size_t>(n) * rings);
+  g.segments = n;
+  g.rings = rings;
+  g.cell_u = 2.0 * kPi * rho / n;
+  g.cell_z = length / rings;
+  g.uv.reserve(static_cast<size_t>(n) * (rings + 1));
+  g.faces.reserve(2 * static_cast<size_t>(n) * rings);
   for (int i = 0; i <= rings; ++i) {
-    const double z = length * i / rings;
     const double shift = (i % 2) ? 0.5 : 0.0;
-    for (int j = 0; j < n; ++j) m.vertices.push_back(point(2.0 * kPi * (j + shift) / n, z));
+    for (int j = 0; j < n; ++j) g.uv.emplace_back(j + shift, i);
   }
-  // Counter-clockwise in the (theta, z) parameter plane is outward (d/dtheta x d/dz points out).
   for (int i = 0; i < rings; ++i) {
     const int a = i * n, b = (i + 1) * n;
     for (int j = 0; j < n; ++j) {
       const int j1 = (j + 1) % n;
       if (i % 2 == 0) {  // ring i unshifted, ring i+1 shifted by +1/2
-        m.faces.push_back({a + j, a + j1, b + j});
-        m.faces.push_back({a + j1, b + j1, b + j});
+        g.faces.push_back({a + j, a + j1, b + j});
+        g.faces.push_back({a + j1, b + j1, b + j});
       } else {  // ring i shifted, ring i+1 unshifted
-        m.faces.push_back({a + j, b + j1, b + j});
-        m.faces.push_back({a + j, a + j1, b + j1});
+        g.faces.push_back({a + j, b + j1, b + j});
+        g.faces.push_back({a + j, a + j1, b + j1});
       }
     }
   }
-  return m;
+  g.fixed_u.assign(g.uv.size(), 0);
+  return g;
 }
 
 // Rings for a staggered tube of mean radius rho: equilateral triangles have height sqrt(3)/2 side.
@@ -118,42 +136,139 @@ int cuboid_rings(int segments, double a, double length) {
   return rings_for(length, 8.0 * a / segments);
 }
 
-TriMesh square_tube(int segments, int rings, double a, double length) {
-  TriMesh m;
+// The square tube's grid: columns uniform in arc length along the perimeter, starting at the
+// corner (a, -a) and turning counter-clockwise, so that the four corners are grid columns.
+TubeGrid square_grid(int segments, int rings, double a, double length) {
+  TubeGrid g;
   const int n = segments;
-  m.vertices.reserve(static_cast<size_t>(n) * (rings + 1));
-  m.faces.reserve(2 * static_cast<size_t>(n) * rings);
+  g.segments = n;
+  g.rings = rings;
+  g.cell_u = 8.0 * a / n;
+  g.cell_z = length / rings;
   const int per_side = n / 4;
-  for (int i = 0; i <= rings; ++i) {
-    const double z = length * i / rings;
+  for (int i = 0; i <= rings; ++i)
     for (int j = 0; j < n; ++j) {
-      // The coordinate that is constant along a side is set exactly, so the sides are exactly flat.
-      const double u = -a + 2.0 * a * (j % per_side) / per_side;  // from -a to a along the side
-      switch (j / per_side) {
-        case 0:  // x = +a, y rising
-          m.vertices.emplace_back(a, u, z);
-          break;
-        case 1:  // y = +a, x falling
-          m.vertices.emplace_back(-u, a, z);
-          break;
-        case 2:  // x = -a, y falling
-          m.vertices.emplace_back(-a, -u, z);
-          break;
-        default:  // y = -a, x rising
-          m.vertices.emplace_back(u, -a, z);
-          break;
-      }
+      g.uv.emplace_back(j, i);
+      g.fixed_u.push_back(j % per_side == 0);
     }
-  }
   for (int i = 0; i < rings; ++i) {
     const int a0 = i * n, b0 = (i + 1) * n;
     for (int j = 0; j < n; ++j) {
       const int j1 = (j + 1) % n;
-      m.faces.push_back({a0 + j, a0 + j1, b0 + j1});
-      m.faces.push_back({a0 + j, b0 + j1, b0 + j});
+      g.faces.push_back({a0 + j, a0 + j1, b0 + j1});
+      g.faces.push_back({a0 + j, b0 + j1, b0 + j});
     }
   }
-  return m;
+  return g;
+}
+
+// The point of the square tube of half side a at column u (of `segments`, from the corner (a, -a)
+// counter-clockwise) and height z. The coordinate that is constant along a side is set exactly, so
+// the sides are exactly flat, and whole columns give the grid's points exactly.
+Vec3 square_point(double a, int segments, double u, double z) {
+  const int per_side = segments / 4;
+  const double w = u - segments * std::floor(u / segments);
+  const int k = std::min(3, static_cast<int>(std::floor(w / per_side)));
+  const double t = -a + 2.0 * a * (w - k * per_side) / per_side;  // from -a to a along the side
+  switch (k) {
+    case 0:  // x = +a, y rising
+      return {a, t, z};
+    case 1:  // y = +a, x falling
+      return {-t, a, z};
+    case 2:  // x = -a, y falling
+      return {-a, -t, z};
+    default:  // y = -a, x rising
+      return {t, -a, z};
+  }
+}
+
+// Makes the grid irregular, as a scanned surface is: every vertex off the two end rings moves by
+// up to `jitter` grid cells in the parameter plane (deterministically; the square tube's corner
+// columns only along z), then edges are flipped until the triangulation is Delaunay in the
+// unrolled plane (edges along a corner column are kept, so the sharp edges stay).
+void make_irregular(TubeGrid& g, double jitter, unsigned seed) {
+  const int n = g.segments;
+  const double du = g.cell_u, dz = g.cell_z;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (std::size_t v = 0; v < g.uv.size(); ++v) {
+    const double ju = unit(rng), jz = unit(rng);  // drawn for every vertex: the sequence is fixed
+    const int ring = static_cast<int>(v) / n;
+    if (ring == 0 || ring == g.rings) continue;
+    if (!g.fixed_u[v]) g.uv[v].x() += jitter * ju;
+    g.uv[v].y() += jitter * jz;
+  }
+  // Metric coordinates in the unrolled plane, periodic in u with period n * du.
+  const double period = n * du;
+  std::vector<Eigen::Vector2d> xy(g.uv.size());
+  for (std::size_t v = 0; v < g.uv.size(); ++v) xy[v] = Eigen::Vector2d(g.uv[v].x() * du, g.uv[v].y() * dz);
+  // The image of vertex v nearest to the reference point r (u is periodic).
+  auto near = [&](int v, const Eigen::Vector2d& r) {
+    Eigen::Vector2d p = xy[v];
+    p.x() -= period * std::round((p.x() - r.x()) / period);
+    return p;
+  };
+  auto orient = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  };
+  // d strictly inside the circumcircle of the counter-clockwise triangle (a, b, c).
+  auto in_circle = [du, dz](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                            const Eigen::Vector2d& d) {
+    const Eigen::Vector2d pa = a - d, pb = b - d, pc = c - d;
+    return pa.squaredNorm() * (pb.x() * pc.y() - pb.y() * pc.x()) -
+               pb.squaredNorm() * (pa.x() * pc.y() - pa.y() * pc.x()) +
+               pc.squaredNorm() * (pa.x() * pb.y() - pa.y() * pb.x()) >
+           1e-12 * (pa.squaredNorm() + pb.squaredNorm() + pc.squaredNorm()) * (du * dz);
+  };
+  // Edge -> its (up to two) faces, kept up to date through the flips.
+  std::map<std::pair<int, int>, std::array<int, 2>> edges;
+  auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  auto link = [&](int j) {
+    for (int k = 0; k < 3; ++k) {
+      auto& e = edges.try_emplace(key(g.faces[j][k], g.faces[j][(k + 1) % 3]), std::array<int, 2>{-1, -1})
+                    .first->second;
+      (e[0] < 0 ? e[0] : e[1]) = j;
+    }
+  };
+  auto unlink = [&](int j) {
+    for (int k = 0; k < 3; ++k) {
+      auto& e = edges[key(g.faces[j][k], g.faces[j][(k + 1) % 3])];
+      if (e[0] == j) e[0] = e[1];
+      e[1] = -1;
+    }
+  };
+  for (int j = 0; j < static_cast<int>(g.faces.size()); ++j) link(j);
+  auto corner_edge = [&](int a, int b) { return g.fixed_u[a] && g.fixed_u[b] && g.uv[a].x() == g.uv[b].x(); };
+  std::vector<std::pair<int, int>> stack;
+  for (const auto& [e, f] : edges) stack.push_back(e);
+  while (!stack.empty()) {
+    const auto [a, b] = stack.back();
+    stack.pop_back();
+    const auto it = edges.find(key(a, b));
+    if (it == edges.end() || it->second[1] < 0 || corner_edge(a, b)) continue;
+    const int j1 = it->second[0], j2 = it->second[1];
+    // j1 holds the edge as (s, t) in its counter-clockwise order; c and d are the opposite corners.
+    int k = 0;
+    while (!((g.faces[j1][k] == a && g.faces[j1][(k + 1) % 3] == b) ||
+             (g.faces[j1][k] == b && g.faces[j1][(k + 1) % 3] == a)))
+      ++k;
+    const int s = g.faces[j1][k], t = g.faces[j1][(k + 1) % 3], c = g.faces[j1][(k + 2) % 3];
+    int d = -1;
+    for (int v : g.faces[j2])
+      if (v != a && v != b) d = v;
+    const Eigen::Vector2d ps = xy[s], pt = near(t, ps), pc = near(c, ps), pd = near(d, ps);
+    if (!in_circle(ps, pt, pc, pd)) continue;
+    if (orient(ps, pd, pc) <= 0 || orient(pd, pt, pc) <= 0) continue;  // not convex: no flip
+    if (edges.count(key(c, d))) continue;
+    unlink(j1);
+    unlink(j2);
+    edges.erase(key(s, t));
+    g.faces[j1] = {s, d, c};
+    g.faces[j2] = {d, t, c};
+    link(j1);
+    link(j2);
+    for (const auto& e : {key(s, d), key(d, t), key(t, c), key(c, s)}) stack.push_back(e);
+  }
 }
 
 // Detail resolution: segments around and rings along z.
@@ -193,6 +308,7 @@ void check_options(const CylinderCaseOptions& o) {
   require(o.base_segments >= 3, "base_segments must be >= 3");
   require(o.target_detail_triangles > 0 || o.detail_segments >= 3, "detail_segments must be >= 3");
   require(o.target_detail_triangles >= 0, "target_detail_triangles must be >= 0");
+  require(finite(o.jitter) && o.jitter >= 0.0 && o.jitter <= 0.45, "jitter must be in [0, 0.45]");
   require(finite(o.detail_height) && o.detail_height > 0.0, "detail_height must be > 0");
   require(o.detail == DetailKind::Bumps || o.detail == DetailKind::Rings || o.detail == DetailKind::Cuboid,
           "unknown detail kind");
@@ -266,21 +382,32 @@ CylinderCase make_cylinder_case(const CylinderCaseOptions& o) {
   out.inner_bend_radius = o.bend_radius - R;
 
   const int base_rings = staggered_rings(o.base_segments, R, o.length);
-  out.base = staggered_tube(o.base_segments, base_rings, o.length, [R](double theta, double z) {
-    return Vec3(R * std::cos(theta), R * std::sin(theta), z);
-  });
+  const TubeGrid base = staggered_grid(o.base_segments, base_rings, R, o.length);
+  out.base.faces = base.faces;
+  for (const Eigen::Vector2d& p : base.uv) {
+    const double theta = 2.0 * kPi * p.x() / base.segments, z = o.length * p.y() / base.rings;
+    out.base.vertices.emplace_back(R * std::cos(theta), R * std::sin(theta), z);
+  }
   out.edited_base.faces = out.base.faces;
   out.edited_base.vertices.reserve(out.base.vertices.size());
   for (const Vec3& p : out.base.vertices) out.edited_base.vertices.push_back(apply_bend(p, bend));
 
   const Resolution res = detail_resolution(o);
-  if (o.detail == DetailKind::Cuboid) {
-    out.detail = square_tube(res.segments, res.rings, R + o.detail_height, o.length);
-  } else {
-    out.detail = staggered_tube(res.segments, res.rings, o.length, [&o, R](double theta, double z) {
+  const double a = R + o.detail_height;  // mean radius (Bumps/Rings) or half side (Cuboid)
+  TubeGrid grid = o.detail == DetailKind::Cuboid ? square_grid(res.segments, res.rings, a, o.length)
+                                                 : staggered_grid(res.segments, res.rings, a, o.length);
+  if (o.jitter > 0) make_irregular(grid, o.jitter, 20261125u);
+  out.detail.faces = std::move(grid.faces);
+  out.detail.vertices.reserve(grid.uv.size());
+  for (const Eigen::Vector2d& p : grid.uv) {
+    const double z = o.length * p.y() / grid.rings;
+    if (o.detail == DetailKind::Cuboid) {
+      out.detail.vertices.push_back(square_point(a, grid.segments, p.x(), z));
+    } else {
+      const double theta = 2.0 * kPi * p.x() / grid.segments;
       const double r = R + detail_offset(o, theta, z);
-      return Vec3(r * std::cos(theta), r * std::sin(theta), z);
-    });
+      out.detail.vertices.emplace_back(r * std::cos(theta), r * std::sin(theta), z);
+    }
   }
   out.max_detail_height = 0.0;
   for (const Vec3& p : out.detail.vertices)

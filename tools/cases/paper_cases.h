@@ -77,6 +77,11 @@ struct CylinderCaseOptions {
   //! detail triangles, i.e. prisms (for 10k / 100k / 1M-prism benchmarks); detail_segments is
   //! then ignored. Default: 0 (use detail_segments).
   int target_detail_triangles = 0;
+  //! Irregular detail triangulation, as a scan's: every detail vertex off the two end rings moves
+  //! by up to this fraction of the grid spacing within the surface (deterministically; the
+  //! cuboid's corner columns only along the axis), and the triangulation is made Delaunay in the
+  //! tube's parameter plane. In [0, 0.45]. Default: 0 (the regular staggered or square grid).
+  double jitter = 0.0;
 
   //! The bend angle in radians.
   double bend_angle() const;

@@ -16,14 +16,16 @@ struct GenerateCmdOptions {
   std::string case_name;
   int triangles = 0;
   double bend_degrees = 90.0;
+  double jitter = 0.0;
   std::string out_dir;
 };
 
 int run_generate(const GenerateCmdOptions& o) {
   const std::optional<cases::DetailKind> kind = cases::parse_detail_kind(o.case_name);
   if (!kind) throw InvalidInput("unknown case '" + o.case_name + "' (expected bumps, rings or cuboid)");
-  const cases::CylinderCase c =
-      cases::make_cylinder_case(paper_case_options(*kind, o.triangles, o.bend_degrees));
+  cases::CylinderCaseOptions options = paper_case_options(*kind, o.triangles, o.bend_degrees);
+  options.jitter = o.jitter;
+  const cases::CylinderCase c = cases::make_cylinder_case(options);
   ensure_directory(o.out_dir);
   const std::filesystem::path dir(o.out_dir);
   const std::pair<const TriMesh*, const char*> files[] = {
@@ -53,6 +55,11 @@ Subcommand register_generate(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--bend-degrees", o->bend_degrees, "Bend angle of the edited base, in degrees")
       ->check(CLI::Range(0.0, 360.0))
+      ->capture_default_str();
+  app->add_option("--jitter", o->jitter,
+                  "Irregular detail triangulation, as a scan's: vertices moved by up to this fraction of the "
+                  "grid spacing, then Delaunay in the tube's parameter plane (0: the regular grid)")
+      ->check(CLI::Range(0.0, 0.45))
       ->capture_default_str();
   app->add_option("--out-dir", o->out_dir, "Directory to write the three meshes to (created if needed)")
       ->required();
