@@ -396,6 +396,38 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
   EXPECT_NO_THROW(layers::read_model(good));
 }
 
+// The reconstruction options travel with the model, the multigrid solver's included; an unknown
+// solver name is rejected and named.
+TEST(LayersFile, SolverOptionsRoundTrip) {
+  LayeredModel model = model_of("camel");
+  layers::ModelOptions o = model.options();
+  o.reconstruct = multigrid_reconstruct_options();
+  o.reconstruct.multigrid.iterations = 7;
+  o.reconstruct.multigrid.smoothness = 0.03;
+  o.reconstruct.multigrid.polish_damping = 2e-8;
+  model.set_options(o);
+  test::ScratchDir tmp("strata_layers");
+  const std::string path = tmp.file("mg.strata");
+  layers::write_model(model, path);
+  const ReconstructOptions back = layers::read_model(path).options().reconstruct;
+  EXPECT_EQ(back.step_solver, VolumeStepSolver::Multigrid);
+  EXPECT_EQ(back.polish_solver, VolumeStepSolver::Multigrid);
+  EXPECT_EQ(back.volume_scales, o.reconstruct.volume_scales);
+  EXPECT_EQ(back.tolerance, o.reconstruct.tolerance);
+  EXPECT_EQ(back.multigrid.iterations, 7);
+  EXPECT_EQ(back.multigrid.smoothness, 0.03);
+  EXPECT_EQ(back.multigrid.polish_damping, 2e-8);
+  EXPECT_EQ(back.multigrid.polish_iterations, o.reconstruct.multigrid.polish_iterations);
+
+  const layers::StrataContainer c = layers::read_strata_container(path);
+  layers::StrataContainer bad = c;
+  nlohmann::json m = nlohmann::json::parse(bad.model_json);
+  m["options"]["reconstruct"]["polish_solver"] = "jacobi-cg";  // not a polish solver
+  bad.model_json = m.dump();
+  layers::write_strata_container(bad, tmp.file("bad.strata"));
+  expect_rejected(tmp.file("bad.strata"), "a Jacobi-CG polish");
+}
+
 TEST(LayersFile, ForeignAndMissingFilesAreNamed) {
   test::ScratchDir tmp("strata_layers");
   write_bytes(tmp.file("scan.strata"), read_bytes(scan_path("bear")));

@@ -40,6 +40,18 @@ const char* method_name(EditOptions::Method m) {
   return m == EditOptions::Method::Vectors ? "vectors" : "volumes";
 }
 
+const char* solver_name(VolumeStepSolver s) {
+  switch (s) {
+    case VolumeStepSolver::Direct:
+      return "direct";
+    case VolumeStepSolver::Multigrid:
+      return "multigrid";
+    case VolumeStepSolver::JacobiCG:
+      break;
+  }
+  return "jacobi-cg";
+}
+
 json options_json(const ModelOptions& o) {
   const ReconstructOptions& r = o.reconstruct;
   return {{"method", method_name(o.method)},
@@ -70,10 +82,20 @@ json options_json(const ModelOptions& o) {
             {"max_final_steps", r.max_final_steps},
             {"min_length_fraction", r.min_length_fraction},
             {"fixed_point_tolerance", r.fixed_point_tolerance},
-            {"step_solver", r.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi-cg"},
+            {"step_solver", solver_name(r.step_solver)},
+            {"polish_solver", solver_name(r.polish_solver)},
             {"direct_max_prisms", r.direct_max_prisms},
             {"cg_tolerance", r.cg_tolerance},
-            {"cg_max_iterations", r.cg_max_iterations}}},
+            {"cg_max_iterations", r.cg_max_iterations},
+            {"multigrid",
+             {{"iterations", r.multigrid.iterations},
+              {"tolerance", r.multigrid.tolerance},
+              {"damping", r.multigrid.damping},
+              {"smoothness", r.multigrid.smoothness},
+              {"polish_iterations", r.multigrid.polish_iterations},
+              {"polish_tolerance", r.multigrid.polish_tolerance},
+              {"polish_damping", r.multigrid.polish_damping},
+              {"polish_smoothness", r.multigrid.polish_smoothness}}}}},
           {"projection",
            {{"seed_resolution", o.projection.seed_resolution},
             {"max_iterations", o.projection.max_iterations},
@@ -178,13 +200,32 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.max_final_steps = static_cast<int>(h.integer(r, "max_final_steps", wr, 0, 100000));
   ro.min_length_fraction = h.number(r, "min_length_fraction", wr);
   ro.fixed_point_tolerance = h.number(r, "fixed_point_tolerance", wr);
-  const std::string solver = h.text(r, "step_solver", wr);
-  if (solver != "direct" && solver != "jacobi-cg")
-    h.fail("options.reconstruct: unknown step_solver '" + solver + "'");
-  ro.step_solver = solver == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
+  auto solver = [&](const char* key, bool cycle_steps) {
+    const std::string name = h.text(r, key, wr);
+    if (name == "direct") return VolumeStepSolver::Direct;
+    if (name == "multigrid") return VolumeStepSolver::Multigrid;
+    if (name == "jacobi-cg" && cycle_steps) return VolumeStepSolver::JacobiCG;
+    h.fail("options.reconstruct: unknown " + std::string(key) + " '" + name + "'");
+  };
+  ro.step_solver = solver("step_solver", true);
+  // Files written before the multigrid solver existed polished by factorizations.
+  ro.polish_solver = r.contains("polish_solver") ? solver("polish_solver", false) : VolumeStepSolver::Direct;
   ro.direct_max_prisms = static_cast<int>(h.integer(r, "direct_max_prisms", wr, 0, kMaxCount));
   ro.cg_tolerance = h.number(r, "cg_tolerance", wr);
   ro.cg_max_iterations = static_cast<int>(h.integer(r, "cg_max_iterations", wr, 1, 1000000));
+  if (r.contains("multigrid")) {
+    const json& mg = h.at(r, "multigrid", wr);
+    const std::string wm = wr + ".multigrid";
+    MultigridStepOptions& mo = ro.multigrid;
+    mo.iterations = static_cast<int>(h.integer(mg, "iterations", wm, 1, 1000000));
+    mo.tolerance = h.number(mg, "tolerance", wm);
+    mo.damping = h.number(mg, "damping", wm);
+    mo.smoothness = h.number(mg, "smoothness", wm);
+    mo.polish_iterations = static_cast<int>(h.integer(mg, "polish_iterations", wm, 1, 1000000));
+    mo.polish_tolerance = h.number(mg, "polish_tolerance", wm);
+    mo.polish_damping = h.number(mg, "polish_damping", wm);
+    mo.polish_smoothness = h.number(mg, "polish_smoothness", wm);
+  }
   const json& p = h.at(j, "projection", w);
   const std::string wp = "options.projection";
   o.projection.seed_resolution = static_cast<int>(h.integer(p, "seed_resolution", wp, 1, 64));

@@ -1,7 +1,5 @@
 #include "strata/reconstruction.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <Eigen/CholmodSupport>
@@ -16,8 +14,10 @@
 #include <iterator>
 
 #include "internal/hierarchy.h"
+#include "internal/parallel.h"
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
+#include "internal/vertex_multigrid.h"
 #include "strata/exceptions.h"
 #include "strata/intersections.h"
 #include "strata/prism.h"
@@ -50,15 +50,27 @@ struct Level {
   // analysis is done once per level. The values are written straight into the matrix from the
   // gradients (assemble()); no per-entry index arrays are kept.
   // Mutable: refactorized in every step of a (logically const) reconstruction.
+  // Built lazily (ensure_factorizable()) on a multigrid polish's finest level, only if it stalls.
   mutable Eigen::SparseMatrix<double> jj;
-  std::vector<int> jj_diag_slot;
+  mutable std::vector<int> jj_diag_slot;
   mutable std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> llt;
+  // The vertex-space multigrid of the step (VolumeStepSolver::Multigrid), if used on this level,
+  // and the level-local vertices it must not move (the pinned ones; empty if none).
+  std::unique_ptr<internal::VertexMultigrid> mg;
+  std::vector<char> fixed;
 };
 
 // Relative diagonal shift of the exact steps' system J J^T + eps I (eps = damping * max diagonal):
 // at least enough to factorize the singular clean start, at most a short gradient-like step.
 constexpr double kMinDamping = 1e-10;
 constexpr double kMaxDamping = 1e-2;
+
+// How a Gauss-Newton step's linear system is solved.
+enum class StepSolve {
+  Cycle,      // during the cycles: ReconstructOptions::step_solver (inexact unless Direct)
+  Exact,      // the polish: ReconstructOptions::polish_solver
+  Factorized  // a Cholesky factorization, whatever the options
+};
 
 // Scratch of one Gauss-Newton step, reused across steps.
 struct GnScratch {
@@ -68,7 +80,9 @@ struct GnScratch {
   std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag;
   std::vector<Vec3> delta;
-  std::vector<Vec3> jt;  // J^T x per level vertex, inside the matrix-free products
+  std::vector<Vec3> jt;      // J^T x per level vertex, inside the matrix-free products
+  std::vector<Vec3> ldelta;  // the multigrid step per level vertex
+  internal::VertexMultigrid::Workspace mgw;
 };
 
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
@@ -309,8 +323,7 @@ class VolumeReconstructor::Impl {
         regularize_sweeps(L, s, st);
       } else if (!finest && warm.level_steps > 0) {
         regularize_sweeps(L, s, st);
-        project(L, s, a, opt_.level_tolerance, warm.level_steps,
-                static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms, st, V);
+        project(L, s, a, opt_.level_tolerance, warm.level_steps, cycle_solve(L), st, V);
         ++st.cycles;
       } else {
         s.volume_iterations = opt_.volume_iterations;
@@ -375,6 +388,11 @@ class VolumeReconstructor::Impl {
         opt_.cg_max_iterations < 1 || opt_.threads < 0 || opt_.max_final_steps < 0 ||
         opt_.tangential_lambda < 0 || opt_.length_lambda < 0)
       throw InvalidInput("reconstruction options out of range");
+    const MultigridStepOptions& mo = opt_.multigrid;
+    if (opt_.polish_solver == VolumeStepSolver::JacobiCG || mo.iterations < 1 || mo.polish_iterations < 1 ||
+        !(mo.tolerance >= 0) || !(mo.polish_tolerance >= 0) || !(mo.damping > 0) ||
+        !(mo.polish_damping > 0) || !(mo.smoothness >= 0) || !(mo.polish_smoothness >= 0))
+      throw InvalidInput("reconstruction options out of range (polish_solver or multigrid)");
   }
 
   void make_level(internal::Hierarchy::Level& hl, bool finest, Level& L) {
@@ -407,7 +425,8 @@ class VolumeReconstructor::Impl {
     L.boundary = internal::boundary_vertices(nv, lf);
     // J J^T's pattern and symbolic factorization only where exact steps are taken: the finest
     // level (the polish), and the levels the options solve directly.
-    if (finest || opt_.step_solver == VolumeStepSolver::Direct ||
+    if ((finest && opt_.polish_solver == VolumeStepSolver::Direct) ||
+        opt_.step_solver == VolumeStepSolver::Direct ||
         static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms)
       build_jj_pattern(lf, adj, L);
     if (finest) {
@@ -429,6 +448,14 @@ class VolumeReconstructor::Impl {
         L.targets[j] = prism_volume(p[f[0]], p[f[1]], p[f[2]], q[f[0]], q[f[1]], q[f[2]]);
       }
     }
+    if (opt_.step_solver == VolumeStepSolver::Multigrid ||
+        (finest && opt_.polish_solver == VolumeStepSolver::Multigrid)) {
+      L.mg = std::make_unique<internal::VertexMultigrid>(nv, lf, L.nb_offsets, L.nb, L.weights);
+      if (!enc_.pinned.empty()) {
+        L.fixed.assign(nv, 0);
+        for (int k = 0; k < nv; ++k) L.fixed[k] = enc_.pinned[L.verts[k]];
+      }
+    }
     double sum = 0.0;
     for (double v : L.targets) sum += std::abs(v);
     L.mean_abs_target = L.targets.empty() ? 0.0 : sum / L.targets.size();
@@ -436,7 +463,7 @@ class VolumeReconstructor::Impl {
 
   // The lower triangle of J J^T's pattern: prism j and every prism k <= j that shares a vertex
   // with it.
-  static void build_jj_pattern(const std::vector<Face>& lf, const internal::Adjacency& adj, Level& L) {
+  static void build_jj_pattern(const std::vector<Face>& lf, const internal::Adjacency& adj, const Level& L) {
     const int m = static_cast<int>(lf.size());
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(8 * static_cast<std::size_t>(m));
@@ -852,13 +879,13 @@ class VolumeReconstructor::Impl {
 
   // Volume steps until the max relative error is at most tol, at most max_steps of them; exact
   // (factorized) steps when `direct`. Returns the steps taken; V holds the final volumes.
-  int project(const Level& L, State& s, double h, double tol, int max_steps, bool direct,
+  int project(const Level& L, State& s, double h, double tol, int max_steps, StepSolve how,
               ReconstructStats& st, std::vector<double>& V) const {
     compute_volumes(L, s, V);
     double err = relative_error(L, h, V, nullptr);
     int steps = 0;
     for (; steps < max_steps && err > tol; ++steps) {
-      gauss_newton_step(L, s, h, direct, st, V);
+      gauss_newton_step(L, s, h, how, st, V);
       err = relative_error(L, h, V, nullptr);
     }
     st.volume_sweeps += steps;
@@ -868,15 +895,36 @@ class VolumeReconstructor::Impl {
   // During the cycles: inexact steps, unless the level is small or the options ask for exact ones.
   int project(const Level& L, State& s, double h, double tol, ReconstructStats& st,
               std::vector<double>& V) const {
-    const bool direct = opt_.step_solver == VolumeStepSolver::Direct ||
-                        static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms;
-    return project(L, s, h, tol, s.volume_iterations, direct, st, V);
+    return project(L, s, h, tol, s.volume_iterations, cycle_solve(L), st, V);
   }
 
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
   // tolerance holds: the volume terms get all the weight at the end (section 4.2).
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
-    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, true, st, V);
+    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Exact, st, V);
+    if (opt_.polish_solver != VolumeStepSolver::Multigrid ||
+        relative_error(L, s.amplitude, V, nullptr) <= tol)
+      return;
+    // A multigrid polish that stalls (its linear solves leave what the hierarchy does not
+    // represent, as a regular grid's checkerboard modes) is finished by factorized steps.
+    ensure_factorizable(L);
+    s.gn.damping = kMinDamping;
+    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Factorized, st, V);
+  }
+
+  // Cycle steps: factorized on levels the options solve directly, else as step_solver says.
+  StepSolve cycle_solve(const Level& L) const {
+    return opt_.step_solver == VolumeStepSolver::Direct ||
+                   static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms
+               ? StepSolve::Factorized
+               : StepSolve::Cycle;
+  }
+
+  // J J^T's pattern and symbolic analysis for a level built without them (make_level()).
+  void ensure_factorizable(const Level& L) const {
+    if (L.llt) return;
+    const std::vector<Face>& lf = L.local_faces.empty() ? L.faces : L.local_faces;
+    build_jj_pattern(lf, internal::build_adjacency(static_cast<int>(L.verts.size()), lf), L);
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
@@ -910,17 +958,7 @@ class VolumeReconstructor::Impl {
   // index is independent, so the result does not depend on the threads (reductions stay serial).
   template <class F>
   void for_each(std::size_t n, F&& f) const {
-    constexpr std::size_t kGrain = 2048;
-    if (!arena_ || n < 2 * kGrain) {
-      for (std::size_t i = 0; i < n; ++i) f(i);
-      return;
-    }
-    arena_->execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
-                        });
-    });
+    internal::parallel_for_each(arena_.get(), n, std::forward<F>(f));
   }
 
   // max_j |h V*_j - V_j| / mean_j |h V*_j|, and optionally the RMS of the same ratio.
@@ -941,8 +979,14 @@ class VolumeReconstructor::Impl {
   // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
   // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
   // the projection of the current positions onto the linearized constraint set.
-  void gauss_newton_step(const Level& L, State& s, double h, bool direct, ReconstructStats& st,
+  void gauss_newton_step(const Level& L, State& s, double h, StepSolve how, ReconstructStats& st,
                          std::vector<double>& V) const {
+    // Exact steps (the polish, or factorized ones) are undone when they do not help, and adapt
+    // the Levenberg-Marquardt damping; inexact ones are kept, as the cycles' regularization expects.
+    const bool direct = how != StepSolve::Cycle;
+    const bool use_mg = how == StepSolve::Exact
+                            ? opt_.polish_solver == VolumeStepSolver::Multigrid
+                            : how == StepSolve::Cycle && opt_.step_solver == VolumeStepSolver::Multigrid;
     GnScratch& w = s.gn;
     const std::size_t m = L.faces.size();
     w.grad.resize(m);
@@ -955,11 +999,13 @@ class VolumeReconstructor::Impl {
       for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
     });
-    vertex_gradients(L, w);
+    if (!use_mg) vertex_gradients(L, w);
     double rr = 0.0;
     for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     const double rr0 = rr;
-    if (direct) {
+    if (use_mg) {
+      solve_multigrid(L, w, how == StepSolve::Exact, st);
+    } else if (direct) {
       solve_direct(L, w, rr, st);
     } else {
       // Matrix-free: J J^T x = J (J^T x), J^T x gathered per vertex. Half the memory traffic of a
@@ -986,7 +1032,7 @@ class VolumeReconstructor::Impl {
     w.delta.resize(s.P.size());
     for_each(L.verts.size(), [&](std::size_t k) {
       const int i = L.verts[k];
-      w.delta[i] = gather_jt(L, w, w.y, static_cast<int>(k));
+      w.delta[i] = use_mg ? w.ldelta[k] : gather_jt(L, w, w.y, static_cast<int>(k));
       s.P[i] += w.delta[i];
     });
     double alpha = 1.0;
@@ -1041,6 +1087,30 @@ class VolumeReconstructor::Impl {
     const Eigen::VectorXd y = L.llt->solve(r);
     w.y.assign(y.data(), y.data() + m);
     ++st.factorizations;
+  }
+
+  // The step by the level's vertex-space multigrid (VolumeStepSolver::Multigrid): w.ldelta per
+  // level vertex. An exact step's damping is at least the polish's and grows as the direct
+  // steps' does (Levenberg-Marquardt).
+  void solve_multigrid(const Level& L, GnScratch& w, bool exact, ReconstructStats& st) const {
+    const MultigridStepOptions& mo = opt_.multigrid;
+    double diag = 0.0;  // the mean diagonal of J^T J
+    for (const auto& g : w.grad) diag += g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm();
+    diag /= 3.0 * static_cast<double>(std::max<std::size_t>(1, L.verts.size()));
+    if (!(diag > 0)) diag = 1.0;
+    internal::VertexStepSystem sys;
+    sys.faces = L.local_faces.empty() ? &L.faces : &L.local_faces;
+    sys.grad = &w.grad;
+    sys.vf_offsets = &L.vf_offsets;
+    sys.vf = &L.vf;
+    sys.r = &w.r;
+    sys.fixed = L.fixed.empty() ? nullptr : &L.fixed;
+    sys.eps = (exact ? std::max(mo.polish_damping, w.damping) : mo.damping) * diag;
+    sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
+    const internal::VertexStepResult res =
+        L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
+                    exact ? mo.polish_iterations : mo.iterations, w.ldelta, w.mgw, arena_.get());
+    st.cg_iterations += res.iterations;
   }
 
   // z = D^-1 res with D the diagonal of J J^T.
@@ -1181,6 +1251,18 @@ class VolumeReconstructor::Impl {
   // The solver's threads (ReconstructOptions::threads); null: the calling thread only.
   std::unique_ptr<tbb::task_arena> arena_;
 };
+
+ReconstructOptions multigrid_reconstruct_options() {
+  ReconstructOptions o;
+  o.step_solver = VolumeStepSolver::Multigrid;
+  o.polish_solver = VolumeStepSolver::Multigrid;
+  o.volume_scales = 3;
+  o.max_cycles = 2;
+  o.final_max_cycles = 3;
+  o.volume_iterations = 1;
+  o.tolerance = 5e-4;
+  return o;
+}
 
 VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)
     : impl_(std::make_unique<Impl>(std::move(encoding), std::move(options))) {}

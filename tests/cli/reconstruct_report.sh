@@ -86,3 +86,30 @@ if errors:
     sys.exit(1)
 print("reconstruct_report: all checks passed")
 PY
+
+# The scan-like triangulation of the same case (--jitter) rebuilt by the multigrid solver: the
+# report names the solver, the result holds the volumes without new pairs and without one
+# factorization.
+"$STRATA" generate --case cuboid --triangles 3000 --jitter 0.4 --out-dir "$TMP/irregular" >/dev/null
+"$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
+  --edited-base "$TMP/irregular/edited_base.obj" --solver multigrid -o "$TMP/mg.obj" --report "$TMP/mg.json" -q \
+  >/dev/null
+python3 - "$TMP/mg.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+errors = []
+if r.get("solver") != "multigrid": errors.append("solver is %r" % r.get("solver"))
+if not r["volume_metrics"]["max_relative_error"] <= 1e-3: errors.append("max error %g" % r["volume_metrics"]["max_relative_error"])
+if r["intersections"]["new_pairs"] != 0: errors.append("%d new pairs" % r["intersections"]["new_pairs"])
+if r["iterations"].get("factorizations", 0) != 0: errors.append("%d factorizations" % r["iterations"]["factorizations"])
+if errors:
+    print("FAIL (multigrid):\n  " + "\n  ".join(errors), file=sys.stderr)
+    sys.exit(1)
+print("reconstruct_report: multigrid checks passed")
+PY
+if "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
+  --edited-base "$TMP/irregular/edited_base.obj" --solver magic -o "$TMP/x.obj" >/dev/null 2>&1; then
+  echo "FAIL: --solver magic accepted" >&2
+  exit 1
+fi
+[ ! -e "$TMP/x.obj" ] || { echo "FAIL: output written for a bad --solver" >&2; exit 1; }

@@ -7,6 +7,10 @@
 // on the calling thread (the SDK caps its hard-coded num_threads(4) regions; OMP_NUM_THREADS=1,
 // set by re-executing when unset, pins any other OpenMP pool); the self-intersection search runs
 // with IntersectionOptions::parallel = false.
+//
+// --jitter J: the scan-like (irregular) triangulation of the cases (CylinderCaseOptions::jitter).
+// --solver multigrid: multigrid_reconstruct_options() instead of the defaults (--set still applies
+// after it).
 
 #include <poll.h>
 #include <signal.h>
@@ -86,8 +90,16 @@ struct Args {
   cases::DetailKind detail = cases::DetailKind::Bumps;
   std::string out;
   double max_seconds = 900.0;
+  double jitter = 0.0;
+  int finest_volume_iterations = 0;               // 0: the options' own
   ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
 };
+
+const char* solver_name(VolumeStepSolver s) {
+  return s == VolumeStepSolver::Direct      ? "direct"
+         : s == VolumeStepSolver::Multigrid ? "multigrid"
+                                            : "jacobi_cg";
+}
 
 // --set NAME=VALUE: one reconstruction option by its field name (for tuning runs).
 void set_option(ReconstructOptions& o, const std::string& kv) {
@@ -111,17 +123,26 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
       {"max_final_steps", &o.max_final_steps},
       {"direct_max_prisms", &o.direct_max_prisms},
       {"cg_max_iterations", &o.cg_max_iterations},
+      {"multigrid.iterations", &o.multigrid.iterations},
+      {"multigrid.polish_iterations", &o.multigrid.polish_iterations},
       {"threads", &o.threads}};
-  const std::map<std::string, double*> reals = {{"coarsening_ratio", &o.coarsening_ratio},
-                                                {"tangential_lambda", &o.tangential_lambda},
-                                                {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
-                                                {"length_lambda", &o.length_lambda},
-                                                {"regularization_decay", &o.regularization_decay},
-                                                {"level_tolerance", &o.level_tolerance},
-                                                {"tolerance", &o.tolerance},
-                                                {"min_length_fraction", &o.min_length_fraction},
-                                                {"fixed_point_tolerance", &o.fixed_point_tolerance},
-                                                {"cg_tolerance", &o.cg_tolerance}};
+  const std::map<std::string, double*> reals = {
+      {"coarsening_ratio", &o.coarsening_ratio},
+      {"tangential_lambda", &o.tangential_lambda},
+      {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
+      {"length_lambda", &o.length_lambda},
+      {"regularization_decay", &o.regularization_decay},
+      {"level_tolerance", &o.level_tolerance},
+      {"tolerance", &o.tolerance},
+      {"min_length_fraction", &o.min_length_fraction},
+      {"fixed_point_tolerance", &o.fixed_point_tolerance},
+      {"cg_tolerance", &o.cg_tolerance},
+      {"multigrid.tolerance", &o.multigrid.tolerance},
+      {"multigrid.damping", &o.multigrid.damping},
+      {"multigrid.smoothness", &o.multigrid.smoothness},
+      {"multigrid.polish_tolerance", &o.multigrid.polish_tolerance},
+      {"multigrid.polish_damping", &o.multigrid.polish_damping},
+      {"multigrid.polish_smoothness", &o.multigrid.polish_smoothness}};
   if (auto it = ints.find(k); it != ints.end()) {
     *it->second = std::stoi(v);
   } else if (auto jt = reals.find(k); jt != reals.end()) {
@@ -129,9 +150,13 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
   } else if (k == "retry_on_new_intersections") {
     if (v != "true" && v != "false") throw std::runtime_error("retry_on_new_intersections is true or false");
     o.retry_on_new_intersections = v == "true";
-  } else if (k == "step_solver") {
-    if (v != "jacobi_cg" && v != "direct") throw std::runtime_error("step_solver is jacobi_cg or direct");
-    o.step_solver = v == "direct" ? VolumeStepSolver::Direct : VolumeStepSolver::JacobiCG;
+  } else if (k == "step_solver" || k == "polish_solver") {
+    const VolumeStepSolver solver = v == "direct"      ? VolumeStepSolver::Direct
+                                    : v == "multigrid" ? VolumeStepSolver::Multigrid
+                                    : v == "jacobi_cg"
+                                        ? VolumeStepSolver::JacobiCG
+                                        : throw std::runtime_error(k + " is jacobi_cg, direct or multigrid");
+    (k == "step_solver" ? o.step_solver : o.polish_solver) = solver;
   } else {
     throw std::runtime_error("--set: unknown reconstruction option '" + k + "'");
   }
@@ -139,6 +164,8 @@ void set_option(ReconstructOptions& o, const std::string& kv) {
 
 Args parse_args(int argc, char** argv) {
   Args a;
+  bool multigrid = false;
+  std::vector<std::string> sets;  // applied after the --solver preset, whatever the order
   auto value = [&](int& i) -> std::string {
     if (i + 1 >= argc) throw std::runtime_error(std::string(argv[i]) + " needs a value");
     return argv[++i];
@@ -162,10 +189,16 @@ Args parse_args(int argc, char** argv) {
       a.detail = *kind;
     } else if (opt == "--out") {
       a.out = value(i);
+    } else if (opt == "--jitter") {
+      a.jitter = std::stod(value(i));
     } else if (opt == "--finest-volume-iterations") {
-      a.reconstruct.finest_volume_iterations = std::stoi(value(i));
+      a.finest_volume_iterations = std::stoi(value(i));
+    } else if (opt == "--solver") {
+      const std::string v = value(i);
+      if (v != "legacy" && v != "multigrid") throw std::runtime_error("--solver is legacy or multigrid");
+      multigrid = v == "multigrid";
     } else if (opt == "--set") {
-      set_option(a.reconstruct, value(i));
+      sets.push_back(value(i));
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
@@ -173,6 +206,12 @@ Args parse_args(int argc, char** argv) {
       throw std::runtime_error("unknown argument '" + opt + "'");
     }
   }
+  if (multigrid) {
+    a.reconstruct = multigrid_reconstruct_options();
+    a.reconstruct.threads = 1;
+  }
+  if (a.finest_volume_iterations > 0) a.reconstruct.finest_volume_iterations = a.finest_volume_iterations;
+  for (const std::string& kv : sets) set_option(a.reconstruct, kv);
   return a;
 }
 
@@ -200,6 +239,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   cases::CylinderCaseOptions co;
   co.detail = args.detail;
   co.target_detail_triangles = size;
+  co.jitter = args.jitter;
   cases::CylinderCase c = timed("generate", [&] { return cases::make_cylinder_case(co); });
   DetailEncoding enc = timed("encode", [&] { return encode_detail(c.detail, c.base); });
   const std::vector<Vec3> edited = std::move(c.edited_base.vertices);
@@ -240,6 +280,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   };
   return json{{"size", size},
               {"case", cases::to_string(args.detail)},
+              {"jitter", args.jitter},
               {"prisms", prisms},
               {"detail_vertices", e.num_detail_vertices()},
               {"base_vertices", base_vertices},
@@ -380,8 +421,8 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv);
   } catch (const std::exception& ex) {
     std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
-              << "[--case bumps|rings|cuboid] [--finest-volume-iterations N] [--set OPTION=VALUE] [--out "
-                 "FILE.json] "
+              << "[--case bumps|rings|cuboid] [--jitter J] [--solver legacy|multigrid] "
+                 "[--finest-volume-iterations N] [--set OPTION=VALUE] [--out FILE.json] "
               << "[--max-seconds S]" << std::endl;
     return 2;
   }
@@ -429,7 +470,8 @@ int main(int argc, char** argv) {
 
     const json report {
       {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
-          {"case", cases::to_string(args.detail)}, {"sizes", args.sizes}, {"max_seconds", args.max_seconds},
+          {"case", cases::to_string(args.detail)}, {"jitter", args.jitter}, {"sizes", args.sizes},
+          {"max_seconds", args.max_seconds},
           {"machine",
            {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
             {"cpu_model", cpu_model()},
@@ -473,7 +515,17 @@ int main(int argc, char** argv) {
             {"regularization_decay", ro.regularization_decay},
             {"direct_max_prisms", ro.direct_max_prisms},
             {"tolerance", ro.tolerance},
-            {"step_solver", ro.step_solver == VolumeStepSolver::Direct ? "direct" : "jacobi_cg"}}},
+            {"multigrid",
+             {{"iterations", ro.multigrid.iterations},
+              {"tolerance", ro.multigrid.tolerance},
+              {"damping", ro.multigrid.damping},
+              {"smoothness", ro.multigrid.smoothness},
+              {"polish_iterations", ro.multigrid.polish_iterations},
+              {"polish_tolerance", ro.multigrid.polish_tolerance},
+              {"polish_damping", ro.multigrid.polish_damping},
+              {"polish_smoothness", ro.multigrid.polish_smoothness}}},
+            {"step_solver", solver_name(ro.step_solver)},
+            {"polish_solver", solver_name(ro.polish_solver)}}},
           {"parent_baseline_rss_bytes", parent_rss}, {"results", results}, {"time_ratio_1m_over_100k", ratio},
       {
         "targets", {

@@ -25,12 +25,13 @@ struct DeformCmdOptions {
   std::string base_output;  // empty: not written
   std::string report;       // empty: no report
   double smoothing = 0.25;
-  std::string base = "faired";  // or "subdiv"
-  std::string cage;             // subdiv: given cage (empty: fitted)
-  std::string cage_tags;        // subdiv: its sharpness tags (optional)
-  int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
-  int handle_rings = 3;         // EditOptions / CageEditOptions::handle_solved_rings
-  int threads = 0;              // ReconstructOptions::threads (0: all cores)
+  std::string base = "faired";    // or "subdiv"
+  std::string cage;               // subdiv: given cage (empty: fitted)
+  std::string cage_tags;          // subdiv: its sharpness tags (optional)
+  int cage_faces = 0;             // subdiv, fitted cage: its face count (0: fit_cage's default)
+  int handle_rings = 3;           // EditOptions / CageEditOptions::handle_solved_rings
+  int threads = 0;                // ReconstructOptions::threads (0: all cores)
+  std::string solver = "legacy";  // --solver: solver_options()
   bool quiet = false;
 };
 
@@ -71,7 +72,8 @@ int run_deform(const DeformCmdOptions& o) {
     throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
   if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
   if (!subdiv && o.handle_rings < 0)
-    throw InvalidInput("--handle-rings must be >= 0 with --base faired (negative: solve every vertex, --base subdiv)");
+    throw InvalidInput(
+        "--handle-rings must be >= 0 with --base faired (negative: solve every vertex, --base subdiv)");
   if (!o.cage.empty() && o.cage_faces > 0)
     throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
   Stopwatch total;
@@ -116,6 +118,7 @@ int run_deform(const DeformCmdOptions& o) {
   }
 
   EditOptions options;
+  options.reconstruct = solver_options(o.solver);
   options.smoothing_fraction = o.smoothing;
   options.handle_solved_rings = o.handle_rings;
   options.reconstruct.threads = o.threads;
@@ -154,6 +157,7 @@ int run_deform(const DeformCmdOptions& o) {
       CageEditOptions co;
       co.method = options.method;
       co.handle_solved_rings = o.handle_rings;
+      co.reconstruct = solver_options(o.solver);
       co.reconstruct.threads = o.threads;
       co.reconstruct.progress = log.progress(label + ": " + to_string(method));
       std::unique_ptr<CageEditor> editor;
@@ -198,6 +202,7 @@ int run_deform(const DeformCmdOptions& o) {
 
   json report{{"command", "deform"},
               {"method", to_string(method)},
+              {"solver", o.solver},
               {"base", o.base},
               {"cage", cage_json},
               {"input", mesh_json(input.mesh, input.name)},
@@ -266,17 +271,21 @@ Subcommand register_deform(CLI::App& parent) {
       ->check(CLI::IsMember({"faired", "subdiv"}))
       ->capture_default_str();
   app->add_option("--cage", o->cage,
-                  "With --base subdiv: the cage (OBJ, OFF or PLY; triangles: Loop, quads or other polygons: Catmull-Clark); default: a Loop cage fitted to the input");
+                  "With --base subdiv: the cage (OBJ, OFF or PLY; triangles: Loop, quads or other polygons: "
+                  "Catmull-Clark); default: a Loop cage fitted to the input");
   app->add_option("--cage-tags", o->cage_tags,
                   "With --cage: its crease and corner tags (JSON, see cage_io.h)");
-  app->add_option("--handle-rings", o->handle_rings,
-                  "Handle vertices that move rigidly are placed exactly (as by vectors) and not solved, except "
-                  "within this many edges of the blended part; with --base subdiv a negative value solves all")
+  app->add_option(
+         "--handle-rings", o->handle_rings,
+         "Handle vertices that move rigidly are placed exactly (as by vectors) and not solved, except "
+         "within this many edges of the blended part; with --base subdiv a negative value solves all")
       ->capture_default_str();
-  app->add_option("--threads", o->threads,
-                  "Threads of the volume solver's sweeps (0: all cores, 1: one); the result is the same for any count")
+  app->add_option(
+         "--threads", o->threads,
+         "Threads of the volume solver's sweeps (0: all cores, 1: one); the result is the same for any count")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  add_solver_option(app, o->solver);
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--report", o->report, "Also write a JSON report (metrics, sizes, timings) here");

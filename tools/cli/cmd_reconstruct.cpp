@@ -17,7 +17,8 @@ struct ReconstructCmdOptions {
   std::string edited_base;
   std::string method = "volumes";
   std::string output;
-  std::string report;  // empty: no report
+  std::string report;             // empty: no report
+  std::string solver = "legacy";  // --solver: solver_options()
   bool quiet = false;
 };
 
@@ -77,7 +78,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   const TimedIntersections& input = in.input;
   times.encode = in.encode_seconds;
 
-  ReconstructOptions options;
+  ReconstructOptions options = solver_options(o.solver);
   options.progress = log.progress(to_string(method));
   MethodOutcome outcome = run_method(method, {encoding, edited.mesh.vertices, input.result}, options, log);
   times.setup = outcome.times.setup;
@@ -95,6 +96,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
 
   json report{{"command", "reconstruct"},
               {"method", to_string(method)},
+              {"solver", o.solver},
               {"inputs",
                {{"detail", mesh_json(detail.mesh, detail.name)},
                 {"base", mesh_json(base.mesh, base.name)},
@@ -129,6 +131,7 @@ Subcommand register_reconstruct(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("-o,--output", o->output, "Reconstructed detail mesh to write (atomically)")->required();
   app->add_option("--report", o->report, "Also write a JSON report (metrics, timings, iterations) here");
+  add_solver_option(app, o->solver);
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->footer(
       "Example:\n  strata reconstruct --detail detail.obj --base base.obj --edited-base edited_base.obj \\\n"

@@ -141,6 +141,19 @@ cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triang
   return o;
 }
 
+void add_solver_option(CLI::App* app, std::string& solver) {
+  app->add_option(
+         "--solver", solver,
+         "Volume solver: legacy (conjugate-gradient cycles, a factorized polish) or multigrid (a "
+         "vertex-space multigrid throughout, no factorization; for large irregular meshes such as scans)")
+      ->check(CLI::IsMember({"legacy", "multigrid"}))
+      ->capture_default_str();
+}
+
+ReconstructOptions solver_options(const std::string& solver) {
+  return solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
+}
+
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   TimedIntersections t;
   Stopwatch sw;

@@ -113,6 +113,12 @@ void ensure_directory(const std::string& dir);
 //! resolution) and the given bend angle.
 cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triangles, double bend_degrees);
 
+//! Adds `--solver legacy|multigrid` (default legacy) to \p app, stored in \p solver.
+void add_solver_option(CLI::App* app, std::string& solver);
+//! The reconstruction options a --solver value stands for: the defaults (legacy: conjugate-gradient
+//! cycles and a factorized polish) or multigrid_reconstruct_options().
+ReconstructOptions solver_options(const std::string& solver);
+
 //! Self-intersecting pairs of one mesh, with all pairs collected (for count_new_intersections).
 struct TimedIntersections {
   IntersectionResult result;

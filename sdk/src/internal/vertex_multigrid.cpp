@@ -1,0 +1,447 @@
+#include "internal/vertex_multigrid.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <utility>
+
+#include "internal/parallel.h"
+#include "internal/topology.h"
+
+namespace strata::internal {
+namespace {
+
+using Mat3 = Eigen::Matrix3d;
+
+// Greedy aggregation of a graph in CSR form (no self loops): a vertex whose neighbours are all
+// free takes them as its aggregate; the others join an aggregate of such a root next to them, or
+// form their own with their free neighbours. Deterministic (vertex order). Returns the count.
+int aggregate(int n, const std::vector<int>& off, const std::vector<int>& nb, std::vector<int>& agg) {
+  agg.assign(n, -1);
+  int na = 0;
+  for (int i = 0; i < n; ++i) {
+    if (agg[i] >= 0) continue;
+    bool free = true;
+    for (int t = off[i]; t < off[i + 1] && free; ++t) free = agg[nb[t]] < 0;
+    if (!free) continue;
+    agg[i] = na;
+    for (int t = off[i]; t < off[i + 1]; ++t) agg[nb[t]] = na;
+    ++na;
+  }
+  const std::vector<int> roots = agg;
+  for (int i = 0; i < n; ++i) {
+    if (agg[i] >= 0) continue;
+    for (int t = off[i]; t < off[i + 1]; ++t)
+      if (roots[nb[t]] >= 0) {
+        agg[i] = roots[nb[t]];
+        break;
+      }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (agg[i] >= 0) continue;
+    agg[i] = na;
+    for (int t = off[i]; t < off[i + 1]; ++t)
+      if (agg[nb[t]] < 0) agg[nb[t]] = na;
+    ++na;
+  }
+  return na;
+}
+
+// Block CSR pattern (rows, sorted columns, diagonal slots) from (row, col) pairs; every row gets
+// its diagonal block.
+void build_pattern(int n, std::vector<std::pair<int, int>>& pairs, std::vector<int>& row,
+                   std::vector<int>& col, std::vector<int>& diag) {
+  for (int i = 0; i < n; ++i) pairs.emplace_back(i, i);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  row.assign(n + 1, 0);
+  col.resize(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    ++row[pairs[k].first + 1];
+    col[k] = pairs[k].second;
+  }
+  for (int i = 0; i < n; ++i) row[i + 1] += row[i];
+  diag.resize(n);
+  for (int i = 0; i < n; ++i)
+    diag[i] =
+        static_cast<int>(std::lower_bound(col.begin() + row[i], col.begin() + row[i + 1], i) - col.begin());
+}
+
+int slot_of(const std::vector<int>& row, const std::vector<int>& col, int i, int j) {
+  const auto b = col.begin() + row[i], e = col.begin() + row[i + 1];
+  const auto it = std::lower_bound(b, e, j);
+  assert(it != e && *it == j);
+  return static_cast<int>(it - col.begin());
+}
+
+// The graph of a block pattern without its diagonal, in CSR form.
+void pattern_graph(const std::vector<int>& row, const std::vector<int>& col, std::vector<int>& off,
+                   std::vector<int>& nb) {
+  const int n = static_cast<int>(row.size()) - 1;
+  off.assign(n + 1, 0);
+  nb.clear();
+  for (int i = 0; i < n; ++i) {
+    for (int t = row[i]; t < row[i + 1]; ++t)
+      if (col[t] != i) nb.push_back(col[t]);
+    off[i + 1] = static_cast<int>(nb.size());
+  }
+}
+
+constexpr int kCorners[6][2] = {{0, 1}, {1, 0}, {0, 2}, {2, 0}, {1, 2}, {2, 1}};
+
+}  // namespace
+
+VertexMultigrid::VertexMultigrid(int num_vertices, const std::vector<Face>& faces,
+                                 const std::vector<int>& nb_offsets, const std::vector<int>& nb,
+                                 const std::vector<double>& weights, const VertexMultigridOptions& options)
+    : n0_(num_vertices), opt_(options) {
+  if (n0_ == 0) return;
+  // The smoothness term's graph: w_kl = (w(k,l) + w(l,k)) / 2 over the union of both directions.
+  {
+    std::vector<std::pair<std::pair<int, int>, double>> entries;
+    for (int k = 0; k < n0_; ++k)
+      for (int t = nb_offsets[k]; t < nb_offsets[k + 1]; ++t) {
+        entries.push_back({{k, nb[t]}, 0.5 * weights[t]});
+        entries.push_back({{nb[t], k}, 0.5 * weights[t]});
+      }
+    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    lap_offsets_.assign(n0_ + 1, 0);
+    for (std::size_t e = 0; e < entries.size();) {
+      std::size_t f = e;
+      double w = 0.0;
+      for (; f < entries.size() && entries[f].first == entries[e].first; ++f) w += entries[f].second;
+      if (entries[e].first.first != entries[e].first.second) {
+        lap_nb_.push_back(entries[e].first.second);
+        lap_w_.push_back(w);
+        ++lap_offsets_[entries[e].first.first + 1];
+      }
+      e = f;
+    }
+    for (int k = 0; k < n0_; ++k) lap_offsets_[k + 1] += lap_offsets_[k];
+  }
+  // Level 0 -> 1: aggregates of the mesh's vertex graph.
+  const Adjacency adj = build_adjacency(n0_, faces);
+  const int n1 = aggregate(n0_, adj.neighbor_offsets, adj.neighbors, agg0_);
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(6 * faces.size());
+  for (const Face& f : faces)
+    for (const auto& c : kCorners) pairs.emplace_back(agg0_[f[c[0]]], agg0_[f[c[1]]]);
+  for (int k = 0; k < n0_; ++k)
+    for (int t = lap_offsets_[k]; t < lap_offsets_[k + 1]; ++t)
+      pairs.emplace_back(agg0_[k], agg0_[lap_nb_[t]]);
+  coarse_.emplace_back();
+  Coarse* c = &coarse_.back();
+  c->n = n1;
+  build_pattern(n1, pairs, c->row, c->col, c->diag);
+  lap_slot_.resize(lap_nb_.size());
+  for (int k = 0; k < n0_; ++k)
+    for (int t = lap_offsets_[k]; t < lap_offsets_[k + 1]; ++t)
+      lap_slot_[t] = slot_of(c->row, c->col, agg0_[k], agg0_[lap_nb_[t]]);
+  face_slot_.resize(faces.size());
+  for (std::size_t j = 0; j < faces.size(); ++j)
+    for (int k = 0; k < 6; ++k)
+      face_slot_[j][k] =
+          slot_of(c->row, c->col, agg0_[faces[j][kCorners[k][0]]], agg0_[faces[j][kCorners[k][1]]]);
+  // Coarser levels: aggregates of each level's block graph, until it is small enough to solve
+  // densely or stops shrinking.
+  std::vector<int> off, gnb;
+  while (static_cast<int>(coarse_.size()) + 1 < opt_.max_levels &&
+         coarse_.back().n > opt_.max_coarse_vertices) {
+    c = &coarse_.back();
+    pattern_graph(c->row, c->col, off, gnb);
+    std::vector<int> agg;
+    const int na = aggregate(c->n, off, gnb, agg);
+    if (na >= c->n) break;
+    pairs.clear();
+    for (int i = 0; i < c->n; ++i)
+      for (int t = c->row[i]; t < c->row[i + 1]; ++t) pairs.emplace_back(agg[i], agg[c->col[t]]);
+    Coarse next;
+    next.n = na;
+    build_pattern(na, pairs, next.row, next.col, next.diag);
+    c->to_coarse_slot.resize(c->col.size());
+    for (int i = 0; i < c->n; ++i)
+      for (int t = c->row[i]; t < c->row[i + 1]; ++t)
+        c->to_coarse_slot[t] = slot_of(next.row, next.col, agg[i], agg[c->col[t]]);
+    c->agg = std::move(agg);
+    coarse_.push_back(std::move(next));
+  }
+}
+
+std::vector<int> VertexMultigrid::level_sizes() const {
+  std::vector<int> out{n0_};
+  for (const Coarse& c : coarse_) out.push_back(c.n);
+  return out;
+}
+
+VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tolerance, int max_iterations,
+                                        std::vector<Vec3>& delta, Workspace& ws,
+                                        tbb::task_arena* arena) const {
+  const std::vector<Face>& faces = *sys.faces;
+  const std::vector<std::array<Vec3, 3>>& grad = *sys.grad;
+  const std::vector<int>& vfo = *sys.vf_offsets;
+  const std::vector<int>& vf = *sys.vf;
+  const std::vector<double>& r = *sys.r;
+  const double eps = sys.eps, eps_lap = sys.eps_lap;
+  const std::size_t m = faces.size();
+  const std::size_t n = static_cast<std::size_t>(n0_);
+  const int nc = static_cast<int>(coarse_.size());
+  assert(grad.size() == m && r.size() == m && vfo.size() == n + 1 && eps > 0);
+  VertexStepResult result;
+  delta.assign(n, Vec3::Zero());
+  double rr0 = 0.0;
+  for (double v : r) rr0 += v * v;
+  result.relative_residual = rr0 > 0 ? 1.0 : 0.0;
+  if (n == 0 || m == 0 || !(rr0 > 0)) return result;
+
+  // --- This solve's operators: J in single precision, the fine block diagonal, the Galerkin
+  // coarse blocks (assembled face by face in face order), their inverses and the coarsest factor.
+  ws.gf.resize(9 * m);
+  parallel_for_each(arena, m, [&](std::size_t j) {
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) ws.gf[9 * j + 3 * c + k] = static_cast<float>(grad[j][c][k]);
+  });
+  const float* gf = ws.gf.data();
+  auto g_at = [gf](std::size_t entry) {  // the gradient of vertex-face entry face * 3 + corner
+    const float* g = gf + 3 * entry;
+    return Vec3(g[0], g[1], g[2]);
+  };
+  auto lap_sum = [&](std::size_t v) {
+    double w = 0.0;
+    for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t) w += lap_w_[t];
+    return w;
+  };
+  ws.fine.dinv.resize(n);
+  parallel_for_each(arena, n, [&](std::size_t v) {
+    Mat3 d = (eps + eps_lap * lap_sum(v)) * Mat3::Identity();
+    for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
+      const Vec3 g = g_at(vf[t]);
+      d.noalias() += g * g.transpose();
+    }
+    ws.fine.dinv[v] = d.inverse();
+  });
+  ws.levels.resize(nc);
+  {
+    std::vector<Mat3>& val = ws.levels[0].val;
+    const Coarse& c = coarse_[0];
+    val.assign(c.col.size(), Mat3::Zero());
+    for (std::size_t j = 0; j < m; ++j) {
+      const Face& f = faces[j];
+      const Vec3 g[3] = {g_at(3 * j), g_at(3 * j + 1), g_at(3 * j + 2)};
+      for (int a = 0; a < 3; ++a) val[c.diag[agg0_[f[a]]]].noalias() += g[a] * g[a].transpose();
+      for (int k = 0; k < 6; ++k)
+        val[face_slot_[j][k]].noalias() += g[kCorners[k][0]] * g[kCorners[k][1]].transpose();
+    }
+    for (std::size_t v = 0; v < n; ++v) {
+      for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
+        val[lap_slot_[t]].diagonal().array() -= eps_lap * lap_w_[t];
+      val[c.diag[agg0_[v]]].diagonal().array() += eps + eps_lap * lap_sum(v);
+    }
+  }
+  for (int l = 0; l + 1 < nc; ++l) {
+    const Coarse& c = coarse_[l];
+    std::vector<Mat3>& next = ws.levels[l + 1].val;
+    next.assign(coarse_[l + 1].col.size(), Mat3::Zero());
+    for (std::size_t t = 0; t < c.col.size(); ++t) next[c.to_coarse_slot[t]] += ws.levels[l].val[t];
+  }
+  for (int l = 0; l < nc; ++l) {
+    const Coarse& c = coarse_[l];
+    Workspace::Level& L = ws.levels[l];
+    L.dinv.resize(c.n);
+    for (int i = 0; i < c.n; ++i) L.dinv[i] = L.val[c.diag[i]].inverse();
+    L.valf.resize(L.val.size());
+    for (std::size_t t = 0; t < L.val.size(); ++t) L.valf[t] = L.val[t].cast<float>();
+  }
+  {
+    const Coarse& c = coarse_.back();
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * c.n, 3 * c.n);
+    const std::vector<Mat3>& val = ws.levels.back().val;
+    for (int i = 0; i < c.n; ++i)
+      for (int t = c.row[i]; t < c.row[i + 1]; ++t) dense.block<3, 3>(3 * i, 3 * c.col[t]) = val[t];
+    ws.coarsest.compute(dense);
+  }
+
+  // --- Products with the level operators.
+  // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into jx if given. Per vertex the
+  // terms are summed in one order, eps x and L x first, then the faces' J^T J terms in ascending
+  // face order, in the serial pass (faces scattered) as in the threaded one (faces gathered).
+  auto fine_apply = [&](const std::vector<Vec3>& x, std::vector<Vec3>& y, std::vector<double>* jx) {
+    y.resize(n);
+    auto start = [&](std::size_t v) {
+      Vec3 acc = eps * x[v];
+      if (eps_lap > 0)
+        for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
+          acc += (eps_lap * lap_w_[t]) * (x[v] - x[lap_nb_[t]]);
+      return acc;
+    };
+    auto jdot = [&](std::size_t j) {
+      const Face& f = faces[j];
+      const float* g = gf + 9 * j;
+      const Vec3 &a = x[f[0]], &b = x[f[1]], &c = x[f[2]];
+      return (g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) + (g[3] * b[0] + g[4] * b[1] + g[5] * b[2]) +
+             (g[6] * c[0] + g[7] * c[1] + g[8] * c[2]);
+    };
+    if (!arena || n < 4096) {
+      for (std::size_t v = 0; v < n; ++v) y[v] = start(v);
+      for (std::size_t j = 0; j < m; ++j) {
+        const double t = jdot(j);
+        if (jx) (*jx)[j] = t;
+        const Face& f = faces[j];
+        const float* g = gf + 9 * j;
+        for (int c = 0; c < 3; ++c) {
+          Vec3& yc = y[f[c]];
+          yc[0] += t * g[3 * c];
+          yc[1] += t * g[3 * c + 1];
+          yc[2] += t * g[3 * c + 2];
+        }
+      }
+    } else {
+      std::vector<double>& out = jx ? *jx : ws.jx;
+      out.resize(m);
+      parallel_for_each(arena, m, [&](std::size_t j) { out[j] = jdot(j); });
+      parallel_for_each(arena, n, [&](std::size_t v) {
+        Vec3 acc = start(v);
+        for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
+          const double s = out[vf[t] / 3];
+          const float* g = gf + 3 * vf[t];
+          acc[0] += s * g[0];
+          acc[1] += s * g[1];
+          acc[2] += s * g[2];
+        }
+        y[v] = acc;
+      });
+    }
+  };
+  auto coarse_apply = [&](int l, const std::vector<Vec3>& x, std::vector<Vec3>& y) {
+    const Coarse& c = coarse_[l];
+    const std::vector<Eigen::Matrix3f>& val = ws.levels[l].valf;
+    y.resize(c.n);
+    parallel_for_each(arena, static_cast<std::size_t>(c.n), [&](std::size_t i) {
+      Vec3 acc = Vec3::Zero();
+      for (int t = c.row[i]; t < c.row[i + 1]; ++t) acc.noalias() += val[t].cast<double>() * x[c.col[t]];
+      y[i] = acc;
+    });
+  };
+  // Level l's operator and data: l = 0 fine, l >= 1 coarse_[l - 1].
+  auto apply = [&](int l, const std::vector<Vec3>& x, std::vector<Vec3>& y) {
+    if (l == 0)
+      fine_apply(x, y, nullptr);
+    else
+      coarse_apply(l - 1, x, y);
+  };
+  auto data = [&](int l) -> Workspace::Level& { return l == 0 ? ws.fine : ws.levels[l - 1]; };
+
+  // Chebyshev smoothing of level l's system A x = b from x = 0 or the given x: the polynomial in
+  // D^-1 A that is smallest on [bound / ratio, bound].
+  const double lmax = 3.0 * 1.02, lmin = lmax / opt_.smoothing_ratio;
+  const double theta = 0.5 * (lmax + lmin), half = 0.5 * (lmax - lmin), sigma = theta / half;
+  auto smooth = [&](int l, const std::vector<Vec3>& b, std::vector<Vec3>& x, bool from_zero) {
+    Workspace::Level& L = data(l);
+    const std::size_t k = b.size();
+    std::vector<Vec3>& res = L.r;
+    std::vector<Vec3>& d = L.d;
+    std::vector<Vec3>& t = L.t;
+    res.resize(k);
+    d.resize(k);
+    if (from_zero) {
+      x.assign(k, Vec3::Zero());
+      res = b;
+    } else {
+      apply(l, x, t);
+      for (std::size_t i = 0; i < k; ++i) res[i] = b[i] - t[i];
+    }
+    double rho0 = 1.0 / sigma;
+    for (std::size_t i = 0; i < k; ++i) d[i] = L.dinv[i] * res[i] / theta;
+    for (int deg = 1;; ++deg) {
+      for (std::size_t i = 0; i < k; ++i) x[i] += d[i];
+      if (deg >= opt_.smoothing_degree) break;
+      apply(l, d, t);
+      const double rho1 = 1.0 / (2.0 * sigma - rho0);
+      for (std::size_t i = 0; i < k; ++i) {
+        res[i] -= t[i];
+        d[i] = rho1 * rho0 * d[i] + (2.0 * rho1 / half) * (L.dinv[i] * res[i]);
+      }
+      rho0 = rho1;
+    }
+  };
+  // One V-cycle for level l: x ~ A_l^-1 b. Symmetric (the same smoother before and after the
+  // coarse correction), so it preconditions conjugate gradients.
+  auto vcycle = [&](int l, const std::vector<Vec3>& b, std::vector<Vec3>& x, auto&& self) -> void {
+    if (l == nc) {
+      const int k = static_cast<int>(b.size());
+      Eigen::VectorXd rhs(3 * k);
+      for (int i = 0; i < k; ++i) rhs.segment<3>(3 * i) = b[i];
+      const Eigen::VectorXd sol = ws.coarsest.solve(rhs);
+      x.resize(k);
+      for (int i = 0; i < k; ++i) x[i] = sol.segment<3>(3 * i);
+      return;
+    }
+    Workspace::Level& L = data(l);
+    Workspace::Level& C = ws.levels[l];
+    const std::vector<int>& agg = l == 0 ? agg0_ : coarse_[l - 1].agg;
+    smooth(l, b, x, true);
+    apply(l, x, L.t);
+    C.b.assign(coarse_[l].n, Vec3::Zero());
+    for (std::size_t i = 0; i < b.size(); ++i) C.b[agg[i]] += b[i] - L.t[i];
+    self(l + 1, C.b, C.x, self);
+    for (std::size_t i = 0; i < b.size(); ++i) x[i] += C.x[agg[i]];
+    smooth(l, b, x, false);
+  };
+  // Fixed vertices: their entries of the residual, the preconditioned residual and K p are held
+  // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
+  // free block of the V-cycle).
+  const std::vector<char>* fixed = sys.fixed;
+  auto clear_fixed = [&](std::vector<Vec3>& v) {
+    if (fixed)
+      for (std::size_t i = 0; i < n; ++i)
+        if ((*fixed)[i]) v[i].setZero();
+  };
+  auto dot = [](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+    return s;
+  };
+
+  // --- Preconditioned conjugate gradients from delta = 0, tracking rho = r - J delta.
+  ws.rho = r;
+  ws.res.resize(n);
+  parallel_for_each(arena, n, [&](std::size_t v) {
+    Vec3 acc = Vec3::Zero();
+    for (int t = vfo[v]; t < vfo[v + 1]; ++t) acc += r[vf[t] / 3] * g_at(vf[t]);
+    ws.res[v] = acc;
+  });
+  clear_fixed(ws.res);
+  vcycle(0, ws.res, ws.z, vcycle);
+  clear_fixed(ws.z);
+  ws.p = ws.z;
+  double rz = dot(ws.res, ws.z);
+  const double stop = tolerance * tolerance * rr0;
+  ws.jp.resize(m);
+  for (int it = 0; it < max_iterations; ++it) {
+    fine_apply(ws.p, ws.kp, &ws.jp);
+    clear_fixed(ws.kp);
+    const double pkp = dot(ws.p, ws.kp);
+    if (!(pkp > 0)) break;
+    const double alpha = rz / pkp;
+    for (std::size_t v = 0; v < n; ++v) {
+      delta[v] += alpha * ws.p[v];
+      ws.res[v] -= alpha * ws.kp[v];
+    }
+    double rr = 0.0;
+    for (std::size_t j = 0; j < m; ++j) {
+      ws.rho[j] -= alpha * ws.jp[j];
+      rr += ws.rho[j] * ws.rho[j];
+    }
+    result.iterations = it + 1;
+    result.relative_residual = std::sqrt(rr / rr0);
+    if (rr <= stop) break;
+    vcycle(0, ws.res, ws.z, vcycle);
+    clear_fixed(ws.z);
+    const double rz_new = dot(ws.res, ws.z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (std::size_t v = 0; v < n; ++v) ws.p[v] = ws.z[v] + beta * ws.p[v];
+  }
+  return result;
+}
+
+}  // namespace strata::internal
