@@ -11,8 +11,8 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 JOBS=${STRATA_JOBS:-2}
 
 # Left out under the sanitizers (covered by the Release run): the viewer (Mesa's GL drivers are not
-# instrumented, and it is not built there) and the benchmarks, which time large
-# meshes. Everything else, the CLI tests included, runs under ASan + UBSan in about two minutes
+# instrumented, and it is not built there) and the benchmark tests, which time large
+# meshes (the benchmark programs are built, for the CLI test of their --help). Everything else, the CLI tests included, runs under ASan + UBSan in about two minutes
 # on 2 cores; --timeout stops a test that got slow instead of eating the CI budget.
 ASAN_EXCLUDE='Benchmark|viewer'
 
@@ -47,7 +47,8 @@ section "sanitizer build (build-asan/, Debug at -O1, -DSTRATA_SANITIZE=ON)"
 # than -O0 (measured: ~2 min for the whole filtered suite instead of far more).
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1" -DSTRATA_SANITIZE=ON \
   -DCGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE=TRUE
-cmake --build build-asan -j"$JOBS" --target strata_tests strata
+cmake --build build-asan -j"$JOBS" --target strata_tests strata strata_bench strata_bench_drag strata_bench_subdiv \
+  strata_bench_layers
 
 section "fast tests under ASan + UBSan (excluding: $ASAN_EXCLUDE)"
 # A sanitizer report exits with a code no test expects, so the CLI's error-path tests catch it too.

@@ -17,7 +17,19 @@ grep -q "cage" <<<"$out" || fail "strata --help does not list 'cage'"
 sub_out=$("$STRATA" cage fit --help) || fail "strata cage fit --help exited non-zero"
 grep -q "Usage: strata cage fit" <<<"$sub_out" || fail "strata cage fit --help prints no usage line"
 
+# The benchmark programs beside strata: --help prints the usage and exits 0 (it does not run the
+# benchmark); an option without its value is a usage error.
+BIN=$(dirname "$STRATA")
+for b in strata_bench strata_bench_drag strata_bench_subdiv strata_bench_layers; do
+  [ -x "$BIN/$b" ] || fail "$b not built beside strata"
+  b_out=$(timeout 60 "$BIN/$b" --help) || fail "$b --help exited non-zero"
+  grep -q "usage: $b" <<<"$b_out" || fail "$b --help prints no usage line"
+done
 set +e
+for cmd in "strata_bench --sizes" "strata_bench_drag --steps" "strata_bench_subdiv --points" "strata_bench_layers"; do
+  timeout 60 "$BIN/"$cmd >/dev/null 2>&1; rc=$?
+  [ "$rc" -eq 2 ] || fail "$cmd exited $rc, expected 2"
+done
 "$STRATA" >/dev/null 2>&1; rc=$?
 [ "$rc" -eq 2 ] || fail "strata without a subcommand exited $rc, expected 2"
 err=$("$STRATA" frobnicate 2>&1 >/dev/null); rc=$?

@@ -28,6 +28,18 @@ int main(int argc, char** argv) {
   double degrees = 90.0;
   EditOptions opt;
   opt.reconstruct.threads = 1;  // the measure: one thread (--threads N to compare)
+  const char* usage =
+      "usage: strata_bench_drag [--region-triangles N] [--steps S] [--degrees D] "
+      "[--drag-end state|clean] [--threads N]\n";
+  for (int a = 1; a < argc; ++a)
+    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
+      std::cout << usage;
+      return 0;
+    }
+  if (argc % 2 == 0) {  // every option takes one value
+    std::cerr << usage;
+    return 2;
+  }
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string k = argv[a];
     if (k == "--region-triangles")
@@ -43,8 +55,7 @@ int main(int argc, char** argv) {
       opt.drag_end = std::string(argv[a + 1]) == "state" ? EditOptions::DragEnd::FromDragState
                                                          : EditOptions::DragEnd::CleanStart;
     else {
-      std::cerr << "usage: strata_bench_drag [--region-triangles N] [--steps S] [--degrees D] "
-                   "[--drag-end state|clean] [--threads N]\n";
+      std::cerr << usage;
       return 2;
     }
   }

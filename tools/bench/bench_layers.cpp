@@ -26,7 +26,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 long long peak_rss_bytes() {
   rusage ru{};
@@ -125,9 +127,9 @@ int main(int argc, char** argv) {
       r["obj_bytes"] = obj_bytes;
       r["size_ratio_to_obj"] = static_cast<double>(strata_bytes) / static_cast<double>(obj_bytes);
       const std::vector<Vec3>& fin = back.band(back.num_bands() - 1).mesh.vertices;
-      r["finest_band_bit_exact"] = back.band(back.num_bands() - 1).mesh.faces == scan.faces &&
-                                   fin.size() == scan.vertices.size() &&
-                                   std::memcmp(fin.data(), scan.vertices.data(), fin.size() * sizeof(Vec3)) == 0;
+      r["finest_band_bit_exact"] =
+          back.band(back.num_bands() - 1).mesh.faces == scan.faces && fin.size() == scan.vertices.size() &&
+          std::memcmp(fin.data(), scan.vertices.data(), fin.size() * sizeof(Vec3)) == 0;
       nlohmann::json band_sizes = nlohmann::json::array();
       for (int k = 0; k < model.num_bands(); ++k)
         band_sizes.push_back(k == 0 ? model.band(0).cage.num_faces() : model.band(k).mesh.num_faces());

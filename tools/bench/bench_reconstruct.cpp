@@ -91,7 +91,8 @@ struct Args {
   std::string out;
   double max_seconds = 900.0;
   double jitter = 0.0;
-  int finest_volume_iterations = 0;               // 0: the options' own
+  int finest_volume_iterations = 0;  // 0: the options' own
+  bool help = false;
   ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
 };
 
@@ -172,6 +173,10 @@ Args parse_args(int argc, char** argv) {
   };
   for (int i = 1; i < argc; ++i) {
     const std::string opt = argv[i];
+    if (opt == "--help" || opt == "-h") {
+      a.help = true;
+      return a;
+    }
     if (opt == "--sizes") {
       a.sizes.clear();
       std::stringstream ss(value(i));
@@ -416,15 +421,25 @@ int main(int argc, char** argv) {
     std::perror("strata_bench: re-exec");
     return 1;
   }
+  const char* usage =
+      "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
+      "[--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
+      "[--out FILE.json] [--max-seconds S]\n"
+      "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
+      "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
+      "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
+      "  --solver: legacy (the default options) or multigrid (multigrid_reconstruct_options())\n"
+      "  --set OPTION=VALUE: a ReconstructOptions field (multigrid.* for MultigridStepOptions)\n";
   Args args;
   try {
     args = parse_args(argc, argv);
   } catch (const std::exception& ex) {
-    std::cerr << "strata_bench: " << ex.what() << "\nusage: strata_bench [--sizes 10000,100000,1000000] "
-              << "[--case bumps|rings|cuboid] [--jitter J] [--solver legacy|multigrid] "
-                 "[--finest-volume-iterations N] [--set OPTION=VALUE] [--out FILE.json] "
-              << "[--max-seconds S]" << std::endl;
+    std::cerr << "strata_bench: " << ex.what() << "\n" << usage;
     return 2;
+  }
+  if (args.help) {
+    std::cout << usage;
+    return 0;
   }
   try {
     const long long parent_rss = max_rss_bytes();

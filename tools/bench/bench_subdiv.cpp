@@ -133,6 +133,16 @@ nlohmann::json run(const char* name, const PolyMesh& cage, int num_points, unsig
 
 int main(int argc, char** argv) {
   int num_points = 1000000, threads = 0;
+  const char* usage = "usage: strata_bench_subdiv [--points N] [--threads T]\n";
+  for (int a = 1; a < argc; ++a)
+    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
+      std::cout << usage;
+      return 0;
+    }
+  if (argc % 2 == 0) {  // every option takes one value
+    std::cerr << usage;
+    return 2;
+  }
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string k = argv[a];
     if (k == "--points")
@@ -140,7 +150,7 @@ int main(int argc, char** argv) {
     else if (k == "--threads")
       threads = std::atoi(argv[a + 1]);
     else {
-      std::cerr << "usage: strata_bench_subdiv [--points N] [--threads T]\n";
+      std::cerr << usage;
       return 2;
     }
   }
@@ -161,7 +171,9 @@ int main(int argc, char** argv) {
       {"threads", threads == 0 ? "all (" + std::to_string(tbb::this_task_arena::max_concurrency()) + ")"
                                : std::to_string(threads)},
       {"targets",
-       {{"project_1m_le_5s", nullptr}, {"reevaluate_1m_le_50ms", nullptr}, {"reevaluate_frames_1m_le_50ms", nullptr}}},
+       {{"project_1m_le_5s", nullptr},
+        {"reevaluate_1m_le_50ms", nullptr},
+        {"reevaluate_frames_1m_le_50ms", nullptr}}},
       {"results", results}};
   // The target: the base points (positions, and the derivatives with them) after a cage
   // edit. The full base frames (unit normals and tangents too, into fresh arrays) are reported
@@ -172,7 +184,9 @@ int main(int argc, char** argv) {
     const auto& sec = r["seconds"];
     proj_ok = proj_ok && sec["project"].get<double>() * scale <= 5.0;
     reev_ok = reev_ok && (sec["cage_edit_set_control_points"].get<double>() +
-                          sec["reevaluate_points_and_derivatives_kept_buffers"].get<double>()) * scale <= 0.05;
+                          sec["reevaluate_points_and_derivatives_kept_buffers"].get<double>()) *
+                                 scale <=
+                             0.05;
     frames_ok = frames_ok && sec["reevaluate_total"].get<double>() * scale <= 0.05;
   }
   j["targets"]["project_1m_le_5s"] = proj_ok;
