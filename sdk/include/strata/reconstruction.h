@@ -37,8 +37,10 @@ enum class VolumeStepSolver {
 //! J^T J, so they do not depend on the mesh's scale.
 struct MultigridStepOptions {
   //! Conjugate-gradient iterations per Gauss-Newton step during the cycles: a fixed budget (the
-  //! regularization that follows each step does not need the step exact).
-  int iterations = 10;
+  //! regularization that follows each step does not need the step exact). On the 100k bends over
+  //! scan-like triangulations 6 took 1.73-1.80 s against 10's 1.95-2.15 s (best of three, back to
+  //! back), the polish taking one or two more steps.
+  int iterations = 6;
   //! A cycle step's solve stops earlier once the linearized residual ||r - J delta|| falls to this
   //! fraction of ||r|| (0: never).
   double tolerance = 0.0;

@@ -217,46 +217,45 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       const Vec3 g = g_at(vf[t]);
       d.noalias() += g * g.transpose();
     }
-    ws.fine.dinv[v] = d.inverse();
+    ws.fine.dinv[v] = d.inverse().cast<float>();
   });
   ws.levels.resize(nc);
   {
-    std::vector<Mat3>& val = ws.levels[0].val;
+    std::vector<Eigen::Matrix3f>& val = ws.levels[0].val;
     const Coarse& c = coarse_[0];
-    val.assign(c.col.size(), Mat3::Zero());
+    val.assign(c.col.size(), Eigen::Matrix3f::Zero());
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = faces[j];
       const Vec3 g[3] = {g_at(3 * j), g_at(3 * j + 1), g_at(3 * j + 2)};
-      for (int a = 0; a < 3; ++a) val[c.diag[agg0_[f[a]]]].noalias() += g[a] * g[a].transpose();
+      for (int a = 0; a < 3; ++a) val[c.diag[agg0_[f[a]]]] += (g[a] * g[a].transpose()).cast<float>();
       for (int k = 0; k < 6; ++k)
-        val[face_slot_[j][k]].noalias() += g[kCorners[k][0]] * g[kCorners[k][1]].transpose();
+        val[face_slot_[j][k]] += (g[kCorners[k][0]] * g[kCorners[k][1]].transpose()).cast<float>();
     }
     for (std::size_t v = 0; v < n; ++v) {
       for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
-        val[lap_slot_[t]].diagonal().array() -= eps_lap * lap_w_[t];
-      val[c.diag[agg0_[v]]].diagonal().array() += eps + eps_lap * lap_sum(v);
+        val[lap_slot_[t]].diagonal().array() -= static_cast<float>(eps_lap * lap_w_[t]);
+      val[c.diag[agg0_[v]]].diagonal().array() += static_cast<float>(eps + eps_lap * lap_sum(v));
     }
   }
   for (int l = 0; l + 1 < nc; ++l) {
     const Coarse& c = coarse_[l];
-    std::vector<Mat3>& next = ws.levels[l + 1].val;
-    next.assign(coarse_[l + 1].col.size(), Mat3::Zero());
+    std::vector<Eigen::Matrix3f>& next = ws.levels[l + 1].val;
+    next.assign(coarse_[l + 1].col.size(), Eigen::Matrix3f::Zero());
     for (std::size_t t = 0; t < c.col.size(); ++t) next[c.to_coarse_slot[t]] += ws.levels[l].val[t];
   }
   for (int l = 0; l < nc; ++l) {
     const Coarse& c = coarse_[l];
     Workspace::Level& L = ws.levels[l];
     L.dinv.resize(c.n);
-    for (int i = 0; i < c.n; ++i) L.dinv[i] = L.val[c.diag[i]].inverse();
-    L.valf.resize(L.val.size());
-    for (std::size_t t = 0; t < L.val.size(); ++t) L.valf[t] = L.val[t].cast<float>();
+    for (int i = 0; i < c.n; ++i) L.dinv[i] = L.val[c.diag[i]].cast<double>().inverse().cast<float>();
   }
   {
     const Coarse& c = coarse_.back();
     Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * c.n, 3 * c.n);
-    const std::vector<Mat3>& val = ws.levels.back().val;
+    const std::vector<Eigen::Matrix3f>& val = ws.levels.back().val;
     for (int i = 0; i < c.n; ++i)
-      for (int t = c.row[i]; t < c.row[i + 1]; ++t) dense.block<3, 3>(3 * i, 3 * c.col[t]) = val[t];
+      for (int t = c.row[i]; t < c.row[i + 1]; ++t)
+        dense.block<3, 3>(3 * i, 3 * c.col[t]) = val[t].cast<double>();
     ws.coarsest.compute(dense);
   }
 
@@ -313,7 +312,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
   auto coarse_apply = [&](int l, const std::vector<Vec3>& x, std::vector<Vec3>& y) {
     const Coarse& c = coarse_[l];
-    const std::vector<Eigen::Matrix3f>& val = ws.levels[l].valf;
+    const std::vector<Eigen::Matrix3f>& val = ws.levels[l].val;
     y.resize(c.n);
     parallel_for_each(arena, static_cast<std::size_t>(c.n), [&](std::size_t i) {
       Vec3 acc = Vec3::Zero();
@@ -350,7 +349,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       for (std::size_t i = 0; i < k; ++i) res[i] = b[i] - t[i];
     }
     double rho0 = 1.0 / sigma;
-    for (std::size_t i = 0; i < k; ++i) d[i] = L.dinv[i] * res[i] / theta;
+    for (std::size_t i = 0; i < k; ++i) d[i] = L.dinv[i].cast<double>() * res[i] / theta;
     for (int deg = 1;; ++deg) {
       for (std::size_t i = 0; i < k; ++i) x[i] += d[i];
       if (deg >= opt_.smoothing_degree) break;
@@ -358,7 +357,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       const double rho1 = 1.0 / (2.0 * sigma - rho0);
       for (std::size_t i = 0; i < k; ++i) {
         res[i] -= t[i];
-        d[i] = rho1 * rho0 * d[i] + (2.0 * rho1 / half) * (L.dinv[i] * res[i]);
+        d[i] = rho1 * rho0 * d[i] + (2.0 * rho1 / half) * (L.dinv[i].cast<double>() * res[i]);
       }
       rho0 = rho1;
     }
