@@ -181,8 +181,9 @@ struct ReconstructOptions {
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
 //! full scale), one volume step a cycle, and a tolerance of 5e-4 (half the acceptance's 1e-3). The
 //! other fields keep their defaults. On the 100k bends over scan-like (irregular) triangulations,
-//! 2.1-2.5 s on one thread and 975-1,004 bytes per prism, where the defaults take 6-7 s and 2 KB
-//! (README, Measured results). Regular triangulations need the defaults (see Multigrid).
+//! 1.59-1.84 s on one thread and 924-931 bytes per prism (best of three), where the defaults take
+//! 6-7 s and 2 KB (README, Measured results). On regular triangulations its polish stalls and
+//! factorized steps finish it, no faster than the defaults (see Multigrid).
 ReconstructOptions multigrid_reconstruct_options();
 
 //! Iteration counts and timings of one reconstruction.
