@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "bench_args.h"
 #include "paper_cases.h"
 #include "strata/editing.h"
 #include "strata/intersections.h"
@@ -31,15 +32,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: strata_bench_drag [--region-triangles N] [--steps S] [--degrees D] "
       "[--drag-end state|clean] [--threads N]\n";
-  for (int a = 1; a < argc; ++a)
-    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
-      std::cout << usage;
-      return 0;
-    }
-  if (argc % 2 == 0) {  // every option takes one value
-    std::cerr << usage;
-    return 2;
-  }
+  if (const int rc = bench::help_or_usage_error(argc, argv, usage); rc >= 0) return rc;
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string k = argv[a];
     if (k == "--region-triangles")

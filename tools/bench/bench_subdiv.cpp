@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 
+#include "bench_args.h"
 #include "paper_cases.h"
 #include "strata/encoding.h"
 #include "strata/subdiv.h"
@@ -134,15 +135,7 @@ nlohmann::json run(const char* name, const PolyMesh& cage, int num_points, unsig
 int main(int argc, char** argv) {
   int num_points = 1000000, threads = 0;
   const char* usage = "usage: strata_bench_subdiv [--points N] [--threads T]\n";
-  for (int a = 1; a < argc; ++a)
-    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
-      std::cout << usage;
-      return 0;
-    }
-  if (argc % 2 == 0) {  // every option takes one value
-    std::cerr << usage;
-    return 2;
-  }
+  if (const int rc = bench::help_or_usage_error(argc, argv, usage); rc >= 0) return rc;
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string k = argv[a];
     if (k == "--points")
