@@ -221,7 +221,8 @@ Args parse_args(int argc, char** argv) {
       std::size_t used = 0;
       const std::string v = value(i);
       a.repeat = std::stoi(v, &used);
-      if (used != v.size() || a.repeat < 1 || a.repeat > 100) throw std::runtime_error("--repeat is 1 to 100");
+      if (used != v.size() || a.repeat < 1 || a.repeat > 100)
+        throw std::runtime_error("--repeat is 1 to 100");
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
@@ -289,7 +290,8 @@ json run_size(const Args& args, int size, long long parent_rss) {
     solves.push_back(again.stats.seconds_solve);
     frame_secs.push_back(again.stats.seconds_frames);
     if (again.positions != r.positions)
-      throw std::runtime_error("run " + std::to_string(k + 1) + " of --repeat gave other positions than the first");
+      throw std::runtime_error("run " + std::to_string(k + 1) +
+                               " of --repeat gave other positions than the first");
     log("reconstruct run " + std::to_string(k + 1) + " in " + std::to_string(wall.back()) + " s");
   }
   sec["reconstruct_runs"] = wall;
