@@ -341,23 +341,25 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     std::vector<Vec3>& t = L.t;
     res.resize(k);
     d.resize(k);
-    if (from_zero) {
+    if (from_zero)
       x.assign(k, Vec3::Zero());
-      res = b;
-    } else {
+    else
       apply(l, x, t);
-      for (std::size_t i = 0; i < k; ++i) res[i] = b[i] - t[i];
+    // One pass per degree: residual, search direction and update together (the same operations
+    // in the same order as separate loops, so the same result).
+    for (std::size_t i = 0; i < k; ++i) {
+      res[i] = from_zero ? b[i] : Vec3(b[i] - t[i]);
+      d[i] = L.dinv[i].cast<double>() * res[i] / theta;
+      x[i] += d[i];
     }
     double rho0 = 1.0 / sigma;
-    for (std::size_t i = 0; i < k; ++i) d[i] = L.dinv[i].cast<double>() * res[i] / theta;
-    for (int deg = 1;; ++deg) {
-      for (std::size_t i = 0; i < k; ++i) x[i] += d[i];
-      if (deg >= opt_.smoothing_degree) break;
+    for (int deg = 2; deg <= opt_.smoothing_degree; ++deg) {
       apply(l, d, t);
       const double rho1 = 1.0 / (2.0 * sigma - rho0);
       for (std::size_t i = 0; i < k; ++i) {
         res[i] -= t[i];
         d[i] = rho1 * rho0 * d[i] + (2.0 * rho1 / half) * (L.dinv[i].cast<double>() * res[i]);
+        x[i] += d[i];
       }
       rho0 = rho1;
     }
