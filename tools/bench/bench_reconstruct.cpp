@@ -32,7 +32,6 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -115,65 +114,11 @@ const char* solver_name(VolumeStepSolver s) {
                                             : "jacobi_cg";
 }
 
-// --set NAME=VALUE: one reconstruction option by its field name (for tuning runs).
+// --set NAME=VALUE: one reconstruction option by its field name (set_reconstruct_option()).
 void set_option(ReconstructOptions& o, const std::string& kv) {
   const auto eq = kv.find('=');
   if (eq == std::string::npos) throw std::runtime_error("--set needs NAME=VALUE, got '" + kv + "'");
-  const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
-  const std::map<std::string, int*> ints = {
-      {"volume_scales", &o.volume_scales},
-      {"max_levels", &o.max_levels},
-      {"coarsest_vertices", &o.coarsest_vertices},
-      {"volume_iterations", &o.volume_iterations},
-      {"finest_volume_iterations", &o.finest_volume_iterations},
-      {"retry_volume_iterations", &o.retry_volume_iterations},
-      {"fold_repair_rounds", &o.fold_repair_rounds},
-      {"fold_repair_rings", &o.fold_repair_rings},
-      {"fold_repair_sweeps", &o.fold_repair_sweeps},
-      {"regularization_iterations", &o.regularization_iterations},
-      {"coarse_regularization_iterations", &o.coarse_regularization_iterations},
-      {"max_cycles", &o.max_cycles},
-      {"final_max_cycles", &o.final_max_cycles},
-      {"max_final_steps", &o.max_final_steps},
-      {"direct_max_prisms", &o.direct_max_prisms},
-      {"cg_max_iterations", &o.cg_max_iterations},
-      {"multigrid.iterations", &o.multigrid.iterations},
-      {"multigrid.polish_iterations", &o.multigrid.polish_iterations},
-      {"threads", &o.threads}};
-  const std::map<std::string, double*> reals = {
-      {"coarsening_ratio", &o.coarsening_ratio},
-      {"tangential_lambda", &o.tangential_lambda},
-      {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
-      {"length_lambda", &o.length_lambda},
-      {"regularization_decay", &o.regularization_decay},
-      {"level_tolerance", &o.level_tolerance},
-      {"tolerance", &o.tolerance},
-      {"min_length_fraction", &o.min_length_fraction},
-      {"fixed_point_tolerance", &o.fixed_point_tolerance},
-      {"cg_tolerance", &o.cg_tolerance},
-      {"multigrid.tolerance", &o.multigrid.tolerance},
-      {"multigrid.damping", &o.multigrid.damping},
-      {"multigrid.smoothness", &o.multigrid.smoothness},
-      {"multigrid.polish_tolerance", &o.multigrid.polish_tolerance},
-      {"multigrid.polish_damping", &o.multigrid.polish_damping},
-      {"multigrid.polish_smoothness", &o.multigrid.polish_smoothness}};
-  if (auto it = ints.find(k); it != ints.end()) {
-    *it->second = std::stoi(v);
-  } else if (auto jt = reals.find(k); jt != reals.end()) {
-    *jt->second = std::stod(v);
-  } else if (k == "retry_on_new_intersections") {
-    if (v != "true" && v != "false") throw std::runtime_error("retry_on_new_intersections is true or false");
-    o.retry_on_new_intersections = v == "true";
-  } else if (k == "step_solver" || k == "polish_solver") {
-    const VolumeStepSolver solver = v == "direct"      ? VolumeStepSolver::Direct
-                                    : v == "multigrid" ? VolumeStepSolver::Multigrid
-                                    : v == "jacobi_cg"
-                                        ? VolumeStepSolver::JacobiCG
-                                        : throw std::runtime_error(k + " is jacobi_cg, direct or multigrid");
-    (k == "step_solver" ? o.step_solver : o.polish_solver) = solver;
-  } else {
-    throw std::runtime_error("--set: unknown reconstruction option '" + k + "'");
-  }
+  set_reconstruct_option(o, kv.substr(0, eq), kv.substr(eq + 1));
 }
 
 Args parse_args(int argc, char** argv) {

@@ -25,13 +25,13 @@ struct DeformCmdOptions {
   std::string base_output;  // empty: not written
   std::string report;       // empty: no report
   double smoothing = 0.25;
-  std::string base = "faired";    // or "subdiv"
-  std::string cage;               // subdiv: given cage (empty: fitted)
-  std::string cage_tags;          // subdiv: its sharpness tags (optional)
-  int cage_faces = 0;             // subdiv, fitted cage: its face count (0: fit_cage's default)
-  int handle_rings = 3;           // EditOptions / CageEditOptions::handle_solved_rings
-  int threads = 0;                // ReconstructOptions::threads (0: all cores)
-  std::string solver = "legacy";  // --solver: solver_options()
+  std::string base = "faired";  // or "subdiv"
+  std::string cage;             // subdiv: given cage (empty: fitted)
+  std::string cage_tags;        // subdiv: its sharpness tags (optional)
+  int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
+  int handle_rings = 3;         // EditOptions / CageEditOptions::handle_solved_rings
+  int threads = 0;              // ReconstructOptions::threads (0: all cores)
+  SolverChoice solver;          // --solver, --set: solver_options()
   bool quiet = false;
 };
 
@@ -118,10 +118,9 @@ int run_deform(const DeformCmdOptions& o) {
   }
 
   EditOptions options;
-  options.reconstruct = solver_options(o.solver);
+  options.reconstruct = solver_options(o.solver, o.threads);
   options.smoothing_fraction = o.smoothing;
   options.handle_solved_rings = o.handle_rings;
-  options.reconstruct.threads = o.threads;
   options.method = method == Method::Volumes ? EditOptions::Method::Volumes : EditOptions::Method::Vectors;
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
@@ -157,8 +156,7 @@ int run_deform(const DeformCmdOptions& o) {
       CageEditOptions co;
       co.method = options.method;
       co.handle_solved_rings = o.handle_rings;
-      co.reconstruct = solver_options(o.solver);
-      co.reconstruct.threads = o.threads;
+      co.reconstruct = solver_options(o.solver, o.threads);
       co.reconstruct.progress = log.progress(label + ": " + to_string(method));
       std::unique_ptr<CageEditor> editor;
       try {
@@ -202,7 +200,8 @@ int run_deform(const DeformCmdOptions& o) {
 
   json report{{"command", "deform"},
               {"method", to_string(method)},
-              {"solver", o.solver},
+              {"solver", o.solver.solver},
+              {"set", o.solver.sets},
               {"base", o.base},
               {"cage", cage_json},
               {"input", mesh_json(input.mesh, input.name)},

@@ -17,8 +17,8 @@ struct ReconstructCmdOptions {
   std::string edited_base;
   std::string method = "volumes";
   std::string output;
-  std::string report;             // empty: no report
-  std::string solver = "legacy";  // --solver: solver_options()
+  std::string report;   // empty: no report
+  SolverChoice solver;  // --solver, --set: solver_options()
   bool quiet = false;
 };
 
@@ -96,7 +96,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
 
   json report{{"command", "reconstruct"},
               {"method", to_string(method)},
-              {"solver", o.solver},
+              {"solver", o.solver.solver},
+              {"set", o.solver.sets},
               {"inputs",
                {{"detail", mesh_json(detail.mesh, detail.name)},
                 {"base", mesh_json(base.mesh, base.name)},

@@ -141,17 +141,47 @@ cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triang
   return o;
 }
 
-void add_solver_option(CLI::App* app, std::string& solver) {
+namespace {
+// "NAME=VALUE" applied to \p o (set_reconstruct_option() throws for a bad name or value).
+void apply_set(ReconstructOptions& o, const std::string& kv) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos) throw InvalidInput("not NAME=VALUE: '" + kv + "'");
+  set_reconstruct_option(o, kv.substr(0, eq), kv.substr(eq + 1));
+}
+}  // namespace
+
+void add_solver_option(CLI::App* app, SolverChoice& choice) {
   app->add_option(
-         "--solver", solver,
+         "--solver", choice.solver,
          "Volume solver: legacy (conjugate-gradient cycles, a factorized polish) or multigrid (a "
          "vertex-space multigrid throughout, no factorization; for large irregular meshes such as scans)")
       ->check(CLI::IsMember({"legacy", "multigrid"}))
       ->capture_default_str();
+  std::string names;
+  for (const std::string& n : reconstruct_option_names()) names += (names.empty() ? "" : ", ") + n;
+  app->add_option("--set", choice.sets,
+                  "NAME=VALUE: one reconstruction option after the solver's preset, for tuning (repeatable; "
+                  "README, How the reconstruction works). Names: " +
+                      names)
+      ->check(CLI::Validator(
+          [](std::string& kv) -> std::string {
+            try {
+              ReconstructOptions scratch;
+              apply_set(scratch, kv);
+            } catch (const Error& e) {
+              return e.what();
+            }
+            return {};
+          },
+          "NAME=VALUE"));
 }
 
-ReconstructOptions solver_options(const std::string& solver) {
-  return solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
+ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
+  ReconstructOptions o =
+      choice.solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
+  o.threads = threads;
+  for (const std::string& kv : choice.sets) apply_set(o, kv);
+  return o;
 }
 
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {

@@ -113,11 +113,19 @@ void ensure_directory(const std::string& dir);
 //! resolution) and the given bend angle.
 cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triangles, double bend_degrees);
 
-//! Adds `--solver legacy|multigrid` (default legacy) to \p app, stored in \p solver.
-void add_solver_option(CLI::App* app, std::string& solver);
-//! The reconstruction options a --solver value stands for: the defaults (legacy: conjugate-gradient
-//! cycles and a factorized polish) or multigrid_reconstruct_options().
-ReconstructOptions solver_options(const std::string& solver);
+//! The volume solver a command line chose: `--solver legacy|multigrid` and any number of
+//! `--set NAME=VALUE` (set_reconstruct_option()), applied in order after the solver's preset.
+struct SolverChoice {
+  std::string solver = "legacy";
+  std::vector<std::string> sets;
+};
+//! Adds `--solver` and `--set` to \p app, stored in \p choice. A --set whose name or value
+//! set_reconstruct_option() refuses is a usage error.
+void add_solver_option(CLI::App* app, SolverChoice& choice);
+//! The reconstruction options \p choice stands for: the defaults (legacy: conjugate-gradient
+//! cycles and a factorized polish) or multigrid_reconstruct_options(), with \p threads solver
+//! threads (0: all cores), then the --set values (the last word, threads included).
+ReconstructOptions solver_options(const SolverChoice& choice, int threads = 0);
 
 //! Self-intersecting pairs of one mesh, with all pairs collected (for count_new_intersections).
 struct TimedIntersections {

@@ -186,6 +186,18 @@ struct ReconstructOptions {
 //! factorized steps finish it, no faster than the defaults (see Multigrid).
 ReconstructOptions multigrid_reconstruct_options();
 
+//! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
+//! for a MultigridStepOptions field) from text, as tools and configuration files give it: whole
+//! numbers for counts, decimals for reals, true/false for flags, jacobi_cg/direct/multigrid for
+//! step_solver and polish_solver. For tuning a solve from a command line (`--set NAME=VALUE`);
+//! the ranges are checked by VolumeReconstructor, as for any options.
+//! \throw InvalidInput for an unknown name, or a value that is not of the field's type (the
+//!        message names both).
+void set_reconstruct_option(ReconstructOptions& options, const std::string& name, const std::string& value);
+
+//! The names set_reconstruct_option() takes, sorted.
+std::vector<std::string> reconstruct_option_names();
+
 //! Iteration counts and timings of one reconstruction.
 struct ReconstructStats {
   int levels = 0;                   //!< multigrid levels used, finest included

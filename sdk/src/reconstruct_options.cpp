@@ -1,0 +1,114 @@
+// ReconstructOptions by field name (set_reconstruct_option()): one table of the fields, so that
+// tools (the CLI's and the benchmark's --set) do not each keep a list of their own.
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <variant>
+
+#include "strata/exceptions.h"
+#include "strata/reconstruction.h"
+
+namespace strata {
+namespace {
+
+using Field = std::variant<int*, double*, bool*, VolumeStepSolver*>;
+
+struct Named {
+  const char* name;
+  Field field;
+};
+
+// Every field but progress (a callback), in the header's order.
+std::vector<Named> fields(ReconstructOptions& o) {
+  MultigridStepOptions& m = o.multigrid;
+  return {{"volume_scales", &o.volume_scales},
+          {"max_levels", &o.max_levels},
+          {"coarsest_vertices", &o.coarsest_vertices},
+          {"coarsening_ratio", &o.coarsening_ratio},
+          {"volume_iterations", &o.volume_iterations},
+          {"retry_volume_iterations", &o.retry_volume_iterations},
+          {"retry_on_new_intersections", &o.retry_on_new_intersections},
+          {"fold_repair_rounds", &o.fold_repair_rounds},
+          {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
+          {"fold_repair_rings", &o.fold_repair_rings},
+          {"fold_repair_sweeps", &o.fold_repair_sweeps},
+          {"finest_volume_iterations", &o.finest_volume_iterations},
+          {"regularization_iterations", &o.regularization_iterations},
+          {"coarse_regularization_iterations", &o.coarse_regularization_iterations},
+          {"max_cycles", &o.max_cycles},
+          {"final_max_cycles", &o.final_max_cycles},
+          {"tangential_lambda", &o.tangential_lambda},
+          {"length_lambda", &o.length_lambda},
+          {"regularization_decay", &o.regularization_decay},
+          {"level_tolerance", &o.level_tolerance},
+          {"tolerance", &o.tolerance},
+          {"max_final_steps", &o.max_final_steps},
+          {"min_length_fraction", &o.min_length_fraction},
+          {"fixed_point_tolerance", &o.fixed_point_tolerance},
+          {"step_solver", &o.step_solver},
+          {"direct_max_prisms", &o.direct_max_prisms},
+          {"cg_tolerance", &o.cg_tolerance},
+          {"cg_max_iterations", &o.cg_max_iterations},
+          {"polish_solver", &o.polish_solver},
+          {"threads", &o.threads},
+          {"multigrid.iterations", &m.iterations},
+          {"multigrid.tolerance", &m.tolerance},
+          {"multigrid.damping", &m.damping},
+          {"multigrid.smoothness", &m.smoothness},
+          {"multigrid.polish_iterations", &m.polish_iterations},
+          {"multigrid.polish_tolerance", &m.polish_tolerance},
+          {"multigrid.polish_damping", &m.polish_damping},
+          {"multigrid.polish_smoothness", &m.polish_smoothness}};
+}
+
+[[noreturn]] void bad_value(const std::string& name, const std::string& value, const char* expected) {
+  throw InvalidInput("reconstruction option " + name + ": '" + value + "' is not " + expected);
+}
+
+}  // namespace
+
+void set_reconstruct_option(ReconstructOptions& options, const std::string& name, const std::string& value) {
+  for (const Named& f : fields(options)) {
+    if (name != f.name) continue;
+    const char* text = value.c_str();
+    char* end = nullptr;
+    errno = 0;
+    if (auto* i = std::get_if<int*>(&f.field)) {
+      const long v = std::strtol(text, &end, 10);
+      if (value.empty() || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
+        bad_value(name, value, "a whole number");
+      **i = static_cast<int>(v);
+    } else if (auto* d = std::get_if<double*>(&f.field)) {
+      const double v = std::strtod(text, &end);
+      if (value.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+        bad_value(name, value, "a finite number");
+      **d = v;
+    } else if (auto* b = std::get_if<bool*>(&f.field)) {
+      if (value != "true" && value != "false") bad_value(name, value, "true or false");
+      **b = value == "true";
+    } else {
+      VolumeStepSolver* s = std::get<VolumeStepSolver*>(f.field);
+      if (value == "jacobi_cg")
+        *s = VolumeStepSolver::JacobiCG;
+      else if (value == "direct")
+        *s = VolumeStepSolver::Direct;
+      else if (value == "multigrid")
+        *s = VolumeStepSolver::Multigrid;
+      else
+        bad_value(name, value, "jacobi_cg, direct or multigrid");
+    }
+    return;
+  }
+  throw InvalidInput("unknown reconstruction option '" + name + "'");
+}
+
+std::vector<std::string> reconstruct_option_names() {
+  ReconstructOptions o;
+  std::vector<std::string> out;
+  for (const Named& f : fields(o)) out.emplace_back(f.name);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace strata

@@ -1,0 +1,85 @@
+// set_reconstruct_option(): ReconstructOptions by field name, as the CLI's and the benchmark's
+// --set NAME=VALUE give them.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "strata/exceptions.h"
+#include "strata/reconstruction.h"
+
+namespace strata {
+namespace {
+
+TEST(ReconstructOptionNames, SetEachKindOfField) {
+  ReconstructOptions o;
+  set_reconstruct_option(o, "volume_scales", "7");
+  set_reconstruct_option(o, "tolerance", "2.5e-5");
+  set_reconstruct_option(o, "retry_on_new_intersections", "false");
+  set_reconstruct_option(o, "polish_solver", "multigrid");
+  set_reconstruct_option(o, "step_solver", "direct");
+  set_reconstruct_option(o, "multigrid.iterations", "20");
+  set_reconstruct_option(o, "multigrid.smoothness", "0.1");
+  set_reconstruct_option(o, "threads", "-1");  // parsed; VolumeReconstructor checks the range
+  EXPECT_EQ(o.volume_scales, 7);
+  EXPECT_EQ(o.tolerance, 2.5e-5);
+  EXPECT_FALSE(o.retry_on_new_intersections);
+  EXPECT_EQ(o.polish_solver, VolumeStepSolver::Multigrid);
+  EXPECT_EQ(o.step_solver, VolumeStepSolver::Direct);
+  EXPECT_EQ(o.multigrid.iterations, 20);
+  EXPECT_EQ(o.multigrid.smoothness, 0.1);
+  EXPECT_EQ(o.threads, -1);
+  // Nothing else moved.
+  ReconstructOptions d;
+  EXPECT_EQ(o.volume_iterations, d.volume_iterations);
+  EXPECT_EQ(o.multigrid.polish_iterations, d.multigrid.polish_iterations);
+}
+
+// Every listed name is settable by a value of one of the four kinds, and exactly one kind: the
+// table and the names agree.
+TEST(ReconstructOptionNames, EveryNameTakesExactlyOneKindOfValue) {
+  const std::vector<std::string> names = reconstruct_option_names();
+  ASSERT_GE(names.size(), 38u);
+  EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
+  for (const std::string& n : names) {
+    int accepted = 0;
+    for (const char* v : {"3", "true", "direct"}) {
+      ReconstructOptions o;
+      try {
+        set_reconstruct_option(o, n, v);
+        ++accepted;
+      } catch (const InvalidInput&) {
+      }
+    }
+    EXPECT_EQ(accepted, 1) << n;
+  }
+}
+
+TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
+  auto message = [](const std::string& name, const std::string& value) {
+    ReconstructOptions o;
+    try {
+      set_reconstruct_option(o, name, value);
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("volume_scale", "3").find("unknown reconstruction option 'volume_scale'"),
+            std::string::npos);
+  EXPECT_NE(message("volume_scales", "3.5").find("volume_scales: '3.5' is not a whole number"),
+            std::string::npos);
+  EXPECT_NE(message("volume_scales", "").find("is not a whole number"), std::string::npos);
+  EXPECT_NE(message("volume_scales", "99999999999").find("is not a whole number"), std::string::npos);
+  EXPECT_NE(message("tolerance", "nan").find("tolerance: 'nan' is not a finite number"), std::string::npos);
+  EXPECT_NE(message("tolerance", "1e999").find("is not a finite number"), std::string::npos);
+  EXPECT_NE(message("tolerance", "0.1x").find("is not a finite number"), std::string::npos);
+  EXPECT_NE(message("retry_on_new_intersections", "1").find("is not true or false"), std::string::npos);
+  EXPECT_NE(message("polish_solver", "cholesky").find("is not jacobi_cg, direct or multigrid"),
+            std::string::npos);
+  EXPECT_NE(message("progress", "x").find("unknown"), std::string::npos);  // a callback: not settable
+}
+
+}  // namespace
+}  // namespace strata
