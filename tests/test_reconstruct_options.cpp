@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "paper_cases.h"
+#include "strata/encoding.h"
 #include "strata/exceptions.h"
 #include "strata/reconstruction.h"
 
@@ -79,6 +81,38 @@ TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
   EXPECT_NE(message("polish_solver", "cholesky").find("is not jacobi_cg, direct or multigrid"),
             std::string::npos);
   EXPECT_NE(message("progress", "x").find("unknown"), std::string::npos);  // a callback: not settable
+}
+
+// An option out of the solver's range is refused by VolumeReconstructor with its name and value,
+// so that a --set that parses but cannot work says which one it was.
+TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
+  cases::CylinderCaseOptions co;
+  co.target_detail_triangles = 500;
+  const cases::CylinderCase c = cases::make_cylinder_case(co);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  auto refusal = [&](const std::string& name, const std::string& value) {
+    ReconstructOptions o;
+    set_reconstruct_option(o, name, value);
+    try {
+      VolumeReconstructor rec(e, o);
+    } catch (const InvalidInput& ex) {
+      return std::string(ex.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal("volume_scales", "0"),
+            "reconstruction option volume_scales = 0 is out of range (at least 1)");
+  EXPECT_EQ(refusal("threads", "-2"),
+            "reconstruction option threads = -2 is out of range (at least 0; 0 is all cores)");
+  EXPECT_EQ(refusal("coarsening_ratio", "1"),
+            "reconstruction option coarsening_ratio = 1 is out of range (between 0 and 1)");
+  EXPECT_EQ(refusal("multigrid.damping", "0"),
+            "reconstruction option multigrid.damping = 0 is out of range (above 0)");
+  EXPECT_EQ(refusal("polish_solver", "jacobi_cg"),
+            "reconstruction option polish_solver = jacobi_cg is out of range (direct or multigrid)");
+  EXPECT_EQ(refusal("tangential_lambda", "-0.5"),
+            "reconstruction option tangential_lambda = -0.5 is out of range (at least 0)");
+  EXPECT_EQ(refusal("volume_scales", "3"), "accepted");
 }
 
 }  // namespace
