@@ -25,9 +25,10 @@ PY
 grep -q "reconstruct run 3 in" "$TMP/err" || fail "no progress line for the third run"
 
 set +e
-for bad in 0 -1 x 101; do
-  "$BENCH" --sizes 3000 --repeat "$bad" >/dev/null 2>&1; rc=$?
+for bad in 0 -1 x 101 99999999999 2x; do
+  err=$("$BENCH" --sizes 3000 --repeat "$bad" 2>&1 >/dev/null); rc=$?
   [ "$rc" -eq 2 ] || fail "--repeat $bad exited $rc, expected 2"
+  grep -qF -- "--repeat is a whole number from 1 to 100, got '$bad'" <<<"$err" || fail "--repeat $bad: $err"
 done
 set -e
 echo "bench_repeat: all checks passed"

@@ -163,11 +163,15 @@ Args parse_args(int argc, char** argv) {
     } else if (opt == "--set") {
       sets.push_back(value(i));
     } else if (opt == "--repeat") {
-      std::size_t used = 0;
       const std::string v = value(i);
-      a.repeat = std::stoi(v, &used);
-      if (used != v.size() || a.repeat < 1 || a.repeat > 100)
-        throw std::runtime_error("--repeat is 1 to 100");
+      std::size_t used = 0;
+      try {
+        a.repeat = std::stoi(v, &used);
+      } catch (const std::exception&) {
+        used = 0;  // not a number, or out of int's range
+      }
+      if (used == 0 || used != v.size() || a.repeat < 1 || a.repeat > 100)
+        throw std::runtime_error("--repeat is a whole number from 1 to 100, got '" + v + "'");
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
