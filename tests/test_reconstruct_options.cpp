@@ -81,6 +81,12 @@ TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
   EXPECT_NE(message("polish_solver", "cholesky").find("is not jacobi_cg, direct or multigrid"),
             std::string::npos);
   EXPECT_NE(message("progress", "x").find("unknown"), std::string::npos);  // a callback: not settable
+  // One NAME=VALUE argument, as --set gives it: split at the first '='.
+  ReconstructOptions o;
+  set_reconstruct_option(o, "multigrid.tolerance=0.05");
+  EXPECT_EQ(o.multigrid.tolerance, 0.05);
+  EXPECT_THROW(set_reconstruct_option(o, "tolerance"), InvalidInput);
+  EXPECT_THROW(set_reconstruct_option(o, "tolerance=1=2"), InvalidInput);  // value '1=2'
 }
 
 // An option out of the solver's range is refused by VolumeReconstructor with its name and value,

@@ -103,6 +103,12 @@ void set_reconstruct_option(ReconstructOptions& options, const std::string& name
   throw InvalidInput("unknown reconstruction option '" + name + "'");
 }
 
+void set_reconstruct_option(ReconstructOptions& options, const std::string& name_equals_value) {
+  const auto eq = name_equals_value.find('=');
+  if (eq == std::string::npos) throw InvalidInput("not NAME=VALUE: '" + name_equals_value + "'");
+  set_reconstruct_option(options, name_equals_value.substr(0, eq), name_equals_value.substr(eq + 1));
+}
+
 std::vector<std::string> reconstruct_option_names() {
   ReconstructOptions o;
   std::vector<std::string> out;

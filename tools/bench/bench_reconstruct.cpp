@@ -114,13 +114,6 @@ const char* solver_name(VolumeStepSolver s) {
                                             : "jacobi_cg";
 }
 
-// --set NAME=VALUE: one reconstruction option by its field name (set_reconstruct_option()).
-void set_option(ReconstructOptions& o, const std::string& kv) {
-  const auto eq = kv.find('=');
-  if (eq == std::string::npos) throw std::runtime_error("--set needs NAME=VALUE, got '" + kv + "'");
-  set_reconstruct_option(o, kv.substr(0, eq), kv.substr(eq + 1));
-}
-
 Args parse_args(int argc, char** argv) {
   Args a;
   bool multigrid = false;
@@ -184,7 +177,7 @@ Args parse_args(int argc, char** argv) {
     a.reconstruct.threads = 1;
   }
   if (a.finest_volume_iterations > 0) a.reconstruct.finest_volume_iterations = a.finest_volume_iterations;
-  for (const std::string& kv : sets) set_option(a.reconstruct, kv);
+  for (const std::string& kv : sets) set_reconstruct_option(a.reconstruct, kv);  // --set NAME=VALUE
   return a;
 }
 

@@ -141,15 +141,6 @@ cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triang
   return o;
 }
 
-namespace {
-// "NAME=VALUE" applied to \p o (set_reconstruct_option() throws for a bad name or value).
-void apply_set(ReconstructOptions& o, const std::string& kv) {
-  const auto eq = kv.find('=');
-  if (eq == std::string::npos) throw InvalidInput("not NAME=VALUE: '" + kv + "'");
-  set_reconstruct_option(o, kv.substr(0, eq), kv.substr(eq + 1));
-}
-}  // namespace
-
 void add_solver_option(CLI::App* app, SolverChoice& choice) {
   app->add_option(
          "--solver", choice.solver,
@@ -167,7 +158,7 @@ void add_solver_option(CLI::App* app, SolverChoice& choice) {
           [](std::string& kv) -> std::string {
             try {
               ReconstructOptions scratch;
-              apply_set(scratch, kv);
+              set_reconstruct_option(scratch, kv);
             } catch (const Error& e) {
               return e.what();
             }
@@ -180,7 +171,7 @@ ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
   ReconstructOptions o =
       choice.solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
   o.threads = threads;
-  for (const std::string& kv : choice.sets) apply_set(o, kv);
+  for (const std::string& kv : choice.sets) set_reconstruct_option(o, kv);
   return o;
 }
 

@@ -197,6 +197,10 @@ ReconstructOptions multigrid_reconstruct_options();
 //!        message names both).
 void set_reconstruct_option(ReconstructOptions& options, const std::string& name, const std::string& value);
 
+//! The same from one "NAME=VALUE" argument, as `--set` gives it (split at the first '=').
+//! \throw InvalidInput without an '=', or as above.
+void set_reconstruct_option(ReconstructOptions& options, const std::string& name_equals_value);
+
 //! The names set_reconstruct_option() takes, sorted.
 std::vector<std::string> reconstruct_option_names();
 
