@@ -44,6 +44,8 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"level_tolerance", &o.level_tolerance},
           {"tolerance", &o.tolerance},
           {"max_final_steps", &o.max_final_steps},
+          {"local_polish_max_fraction", &o.local_polish_max_fraction},
+          {"local_polish_rings", &o.local_polish_rings},
           {"min_length_fraction", &o.min_length_fraction},
           {"fixed_point_tolerance", &o.fixed_point_tolerance},
           {"step_solver", &o.step_solver},

@@ -401,6 +401,9 @@ class VolumeReconstructor::Impl {
           "at least 0");
     check(o.fold_repair_rings >= 0, "fold_repair_rings", o.fold_repair_rings, "at least 0");
     check(o.fold_repair_sweeps >= 0, "fold_repair_sweeps", o.fold_repair_sweeps, "at least 0");
+    check(o.local_polish_max_fraction >= 0 && o.local_polish_max_fraction <= 1, "local_polish_max_fraction",
+          o.local_polish_max_fraction, "0 to 1");
+    check(o.local_polish_rings >= 0, "local_polish_rings", o.local_polish_rings, "at least 0");
     check(o.finest_volume_iterations >= 1, "finest_volume_iterations", o.finest_volume_iterations,
           "at least 1");
     check(o.regularization_iterations >= 0, "regularization_iterations", o.regularization_iterations,
@@ -671,24 +674,12 @@ class VolumeReconstructor::Impl {
     const Level& F = levels_.back();
     std::vector<Vec3> kept = s.P;
     std::vector<int> seeds = best.new_pair_faces;
-    std::vector<char> in(F.verts.size(), 0);
+    std::vector<char> in;
     std::vector<int> subset, next;
     std::vector<Vec3> smoothed, local_result;
     int stalled = 0;  // rounds since the best result last improved
     for (int round = 0; round < opt_.fold_repair_rounds; ++round) {
-      // The seeds' vertices, grown by rings over the finest level's regularization neighbours.
-      std::fill(in.begin(), in.end(), 0);
-      subset.clear();
-      for (int j : seeds)
-        for (int v : F.faces[j])
-          if (!in[v]) in[v] = 1, subset.push_back(v);
-      for (int ring = 0; ring < opt_.fold_repair_rings + round; ++ring) {
-        next.clear();
-        for (int k : subset)
-          for (int t = F.nb_offsets[k]; t < F.nb_offsets[k + 1]; ++t)
-            if (!in[F.nb[t]]) in[F.nb[t]] = 1, next.push_back(F.nb[t]);
-        subset.insert(subset.end(), next.begin(), next.end());
-      }
+      grow_rings(seeds, opt_.fold_repair_rings + round, in, subset, next);
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
       st.regularization_sweeps += opt_.fold_repair_sweeps;
       // Only the prisms around the smoothed vertices lost their volumes: first restore them by
@@ -697,7 +688,7 @@ class VolumeReconstructor::Impl {
       // (it unfolds more on the rings, at a factorization a step), and the better of the two.
       smoothed = s.P;
       Outcome o;
-      if (local_polish(subset, s, a, st)) o = outcome(s, a, V);
+      if (local_polish(subset, s, a, opt_.tolerance, st)) o = outcome(s, a, V);
       if (!o.converged || o.new_pairs > 0) {
         local_result.swap(s.P);
         s.P = smoothed;
@@ -725,11 +716,31 @@ class VolumeReconstructor::Impl {
     s.P.swap(kept);
   }
 
+  // \p subset = the vertices of the finest level's faces \p seeds, grown by \p rings rings over
+  // the regularization neighbours. \p in (one flag per vertex) and \p next are scratch.
+  void grow_rings(const std::vector<int>& seeds, int rings, std::vector<char>& in, std::vector<int>& subset,
+                  std::vector<int>& next) const {
+    const Level& F = levels_.back();
+    in.assign(F.verts.size(), 0);
+    subset.clear();
+    for (int j : seeds)
+      for (int v : F.faces[j])
+        if (!in[v]) in[v] = 1, subset.push_back(v);
+    for (int ring = 0; ring < rings; ++ring) {
+      next.clear();
+      for (int k : subset)
+        for (int t = F.nb_offsets[k]; t < F.nb_offsets[k + 1]; ++t)
+          if (!in[F.nb[t]]) in[F.nb[t]] = 1, next.push_back(F.nb[t]);
+      subset.insert(subset.end(), next.begin(), next.end());
+    }
+  }
+
   // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
   // those vertices moving (pinned ones excepted), until these prisms meet the tolerance. Prisms
   // without a free vertex do not change. Returns whether the tolerance was reached; on failure
   // the positions are as the last step left them.
-  bool local_polish(const std::vector<int>& free, State& s, double a, ReconstructStats& st) const {
+  bool local_polish(const std::vector<int>& free, State& s, double a, double tol,
+                    ReconstructStats& st) const {
     const Level& F = levels_.back();
     std::vector<char> moves(F.verts.size(), 0);
     for (int v : free)
@@ -763,7 +774,7 @@ class VolumeReconstructor::Impl {
     double damping = kMinDamping;
     for (int step = 0; step <= opt_.max_final_steps; ++step) {
       const auto [rr0, err] = residual(true);
-      if (err <= opt_.tolerance) return true;
+      if (err <= tol) return true;
       if (step == opt_.max_final_steps) break;
       // (J J^T + eps I) y = r over the local prisms: J J^T couples prisms sharing a moving vertex.
       std::vector<Eigen::Triplet<double>> trip;
@@ -785,6 +796,7 @@ class VolumeReconstructor::Impl {
       if (ldlt.info() != Eigen::Success) return false;
       const Eigen::VectorXd y = ldlt.solve(r);
       ++st.factorizations;
+      ++st.local_factorizations;
       ++st.final_sweeps;
       std::vector<Vec3> delta(free.size(), Vec3::Zero());
       for (std::size_t q = 0; q < free.size(); ++q) {
@@ -939,7 +951,26 @@ class VolumeReconstructor::Impl {
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
   // tolerance holds: the volume terms get all the weight at the end (section 4.2).
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
-    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Exact, st, V);
+    if (opt_.local_polish_max_fraction > 0 && &L == &levels_.back()) {
+      // Whole-level steps until few prisms are off, then only their neighbourhoods move.
+      compute_volumes(L, s, V);
+      const double limit = opt_.local_polish_max_fraction * static_cast<double>(L.faces.size());
+      int steps = 0;
+      for (std::vector<int> off;; ++steps) {
+        off.clear();
+        const double scale = std::abs(s.amplitude) * L.mean_abs_target;
+        for (std::size_t j = 0; j < V.size(); ++j)
+          if (std::abs(s.amplitude * L.targets[j] - V[j]) > tol * scale) off.push_back(static_cast<int>(j));
+        if (off.empty() || !(scale > 0)) break;
+        if (static_cast<double>(off.size()) <= limit && finish_locally(off, s, tol, st, V)) break;
+        if (steps == opt_.max_final_steps) break;
+        gauss_newton_step(L, s, s.amplitude, StepSolve::Exact, st, V);
+      }
+      st.volume_sweeps += steps;
+      st.final_sweeps += steps;
+    } else {
+      st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Exact, st, V);
+    }
     if (opt_.polish_solver != VolumeStepSolver::Multigrid ||
         relative_error(L, s.amplitude, V, nullptr) <= tol)
       return;
@@ -948,6 +979,26 @@ class VolumeReconstructor::Impl {
     ensure_factorizable(L);
     s.gn.damping = kMinDamping;
     st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Factorized, st, V);
+  }
+
+  // The polish's end (ReconstructOptions::local_polish_max_fraction): exact steps that move only
+  // the vertices of the finest level's prisms \p off and local_polish_rings rings around them,
+  // a small factorized system where a whole-level step costs a multigrid solve. Returns whether
+  // the tolerance holds on every prism; if not, the positions are as on entry.
+  bool finish_locally(const std::vector<int>& off, State& s, double tol, ReconstructStats& st,
+                      std::vector<double>& V) const {
+    std::vector<char> in;
+    std::vector<int> subset, next;
+    grow_rings(off, opt_.local_polish_rings, in, subset, next);
+    std::vector<Vec3> kept;
+    kept.reserve(subset.size());
+    for (int v : subset) kept.push_back(s.P[v]);
+    if (local_polish(subset, s, s.amplitude, tol, st)) {
+      compute_volumes(levels_.back(), s, V);
+      return true;
+    }
+    for (std::size_t q = 0; q < subset.size(); ++q) s.P[subset[q]] = kept[q];
+    return false;
   }
 
   // Cycle steps: factorized on levels the options solve directly, else as step_solver says.
@@ -1299,6 +1350,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.final_max_cycles = 3;
   o.volume_iterations = 1;
   o.tolerance = 5e-4;
+  o.local_polish_max_fraction = 0.005;
   return o;
 }
 

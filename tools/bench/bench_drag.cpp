@@ -130,7 +130,8 @@ int main(int argc, char** argv) {
                      {"max_distance_to_apply_over_diagonal", apply_distance / bbox_diagonal(m.vertices)},
                      {"cycles", r.stats.cycles},
                      {"cg_iterations", r.stats.cg_iterations},
-                     {"factorizations", r.stats.factorizations}}},
+                     {"factorizations", r.stats.factorizations},
+                     {"local_factorizations", r.stats.local_factorizations}}},
                    {"targets",
                     {{"drag_step_median_le_0_033_s", sorted[sorted.size() / 2] <= 0.033},
                      {"end_drag_exact_le_1_s", exact <= 1.0}}}};

@@ -284,6 +284,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"regularization_sweeps", s.regularization_sweeps},
               {"cg_iterations", s.cg_iterations},
               {"factorizations", s.factorizations},
+              {"local_factorizations", s.local_factorizations},
               {"retries", s.retries},
               {"fold_repairs", s.fold_repairs},
               {"solver_new_intersecting_pairs", s.new_intersecting_pairs},

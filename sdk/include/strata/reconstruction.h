@@ -148,6 +148,13 @@ struct ReconstructOptions {
   //! Exact Gauss-Newton steps (a sparse Cholesky factorization each) at most on the finest level
   //! at full scale after the cycles, to reach `tolerance`.
   int max_final_steps = 10;
+  //! Once at most this fraction of the finest level's prisms is above the tolerance during the
+  //! polish, the remaining steps move only those prisms' vertices and local_polish_rings rings
+  //! around them (a small factorized system each step); if that does not reach the tolerance, the
+  //! whole-level steps go on from where they were. 0: whole-level steps only.
+  double local_polish_max_fraction = 0.0;
+  //! Rings of vertices around the off prisms that a local polish step moves.
+  int local_polish_rings = 2;
   //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
   //! filter's ratio d_i / f_i, which is undefined at f = 0.
   double min_length_fraction = 0.05;
@@ -221,6 +228,9 @@ struct ReconstructStats {
   double seconds_solve = 0.0;    //!< the multigrid solve
   long long step_halvings = 0;   //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
+  //! Of these, the small ones of steps that move a neighbourhood only (the local end of the
+  //! polish, local_polish_max_fraction, and the fold repair's local steps).
+  long long local_factorizations = 0;
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
