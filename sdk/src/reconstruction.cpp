@@ -693,7 +693,7 @@ class VolumeReconstructor::Impl {
         local_result.swap(s.P);
         s.P = smoothed;
         s.gn.damping = kMinDamping;
-        polish(F, s, opt_.tolerance, st, V);
+        polish(F, s, opt_.tolerance, st, V, /*local_end=*/false);
         Outcome global = outcome(s, a, V);
         if (global.better_than(o))
           o = std::move(global);
@@ -950,8 +950,11 @@ class VolumeReconstructor::Impl {
 
   // Exact Gauss-Newton steps (one factorization each, symbolic analysis kept) until the
   // tolerance holds: the volume terms get all the weight at the end (section 4.2).
-  void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V) const {
-    if (opt_.local_polish_max_fraction > 0 && &L == &levels_.back()) {
+  // \p local_end: whether the polish may end locally (local_polish_max_fraction); the fold
+  // repair's whole-level polish may not, since its wide correction is what unfolds.
+  void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V,
+              bool local_end = true) const {
+    if (local_end && opt_.local_polish_max_fraction > 0 && &L == &levels_.back()) {
       // Whole-level steps until few prisms are off, then only their neighbourhoods move.
       compute_volumes(L, s, V);
       const double limit = opt_.local_polish_max_fraction * static_cast<double>(L.faces.size());
