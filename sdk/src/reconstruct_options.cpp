@@ -61,7 +61,8 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"multigrid.polish_iterations", &m.polish_iterations},
           {"multigrid.polish_tolerance", &m.polish_tolerance},
           {"multigrid.polish_damping", &m.polish_damping},
-          {"multigrid.polish_smoothness", &m.polish_smoothness}};
+          {"multigrid.polish_smoothness", &m.polish_smoothness},
+          {"multigrid.single_precision_cycles", &m.single_precision_cycles}};
 }
 
 [[noreturn]] void bad_value(const std::string& name, const std::string& value, const char* expected) {

@@ -1201,7 +1201,8 @@ class VolumeReconstructor::Impl {
     sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
     const internal::VertexStepResult res =
         L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
-                    exact ? mo.polish_iterations : mo.iterations, w.ldelta, w.mgw, arena_.get());
+                    exact ? mo.polish_iterations : mo.iterations, w.ldelta, w.mgw, arena_.get(),
+                    /*single_precision_cycle=*/!exact && mo.single_precision_cycles);
     st.cg_iterations += res.iterations;
   }
 

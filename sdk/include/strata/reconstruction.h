@@ -60,6 +60,10 @@ struct MultigridStepOptions {
   double polish_damping = 1e-8;
   //! Relative eps_lap of the polish's smoothness term.
   double polish_smoothness = 0.0;
+  //! The V-cycle's vectors in single precision during the cycles (its operators always are; the
+  //! conjugate gradients around it run in double). The polish's V-cycle stays in double: its
+  //! nearly singular systems stalled in single precision (the 100k cuboid: 4 factorizations).
+  bool single_precision_cycles = true;
 };
 
 //! User options of the reconstruction (the paper's k, g, n, m, lambdas and tolerances). The

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 #include "internal/parallel.h"
@@ -174,8 +175,8 @@ std::vector<int> VertexMultigrid::level_sizes() const {
 }
 
 VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tolerance, int max_iterations,
-                                        std::vector<Vec3>& delta, Workspace& ws,
-                                        tbb::task_arena* arena) const {
+                                        std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena,
+                                        bool single_precision_cycle) const {
   const std::vector<Face>& faces = *sys.faces;
   const std::vector<std::array<Vec3, 3>>& grad = *sys.grad;
   const std::vector<int>& vfo = *sys.vf_offsets;
@@ -260,47 +261,49 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   }
 
   // --- Products with the level operators.
-  // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into jx if given. Per vertex the
-  // terms are summed in one order, eps x and L x first, then the faces' J^T J terms in ascending
-  // face order, in the serial pass (faces scattered) as in the threaded one (faces gathered).
-  auto fine_apply = [&](const std::vector<Vec3>& x, std::vector<Vec3>& y, std::vector<double>* jx) {
+  // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into jx. Per vertex the terms
+  // are summed in one order, eps x and L x first, then the faces' J^T J terms in ascending face
+  // order, in the serial pass (faces scattered) as in the threaded one (faces gathered). T is
+  // double for the conjugate gradients' product, float for the V-cycle's.
+  auto fine_product = [&](const auto& x, auto& y, auto& jx) {
+    using V3 = std::decay_t<decltype(x[0])>;
+    using T = typename V3::Scalar;
     y.resize(n);
+    jx.resize(m);
     auto start = [&](std::size_t v) {
-      Vec3 acc = eps * x[v];
+      V3 acc = static_cast<T>(eps) * x[v];
       if (eps_lap > 0)
         for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
-          acc += (eps_lap * lap_w_[t]) * (x[v] - x[lap_nb_[t]]);
+          acc += static_cast<T>(eps_lap * lap_w_[t]) * (x[v] - x[lap_nb_[t]]);
       return acc;
     };
     auto jdot = [&](std::size_t j) {
       const Face& f = faces[j];
       const float* g = gf + 9 * j;
-      const Vec3 &a = x[f[0]], &b = x[f[1]], &c = x[f[2]];
+      const V3 &a = x[f[0]], &b = x[f[1]], &c = x[f[2]];
       return (g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) + (g[3] * b[0] + g[4] * b[1] + g[5] * b[2]) +
              (g[6] * c[0] + g[7] * c[1] + g[8] * c[2]);
     };
     if (!arena || n < 4096) {
       for (std::size_t v = 0; v < n; ++v) y[v] = start(v);
       for (std::size_t j = 0; j < m; ++j) {
-        const double t = jdot(j);
-        if (jx) (*jx)[j] = t;
+        const T t = jdot(j);
+        jx[j] = t;
         const Face& f = faces[j];
         const float* g = gf + 9 * j;
         for (int c = 0; c < 3; ++c) {
-          Vec3& yc = y[f[c]];
+          V3& yc = y[f[c]];
           yc[0] += t * g[3 * c];
           yc[1] += t * g[3 * c + 1];
           yc[2] += t * g[3 * c + 2];
         }
       }
     } else {
-      std::vector<double>& out = jx ? *jx : ws.jx;
-      out.resize(m);
-      parallel_for_each(arena, m, [&](std::size_t j) { out[j] = jdot(j); });
+      parallel_for_each(arena, m, [&](std::size_t j) { jx[j] = jdot(j); });
       parallel_for_each(arena, n, [&](std::size_t v) {
-        Vec3 acc = start(v);
+        V3 acc = start(v);
         for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
-          const double s = out[vf[t] / 3];
+          const T s = jx[vf[t] / 3];
           const float* g = gf + 3 * vf[t];
           acc[0] += s * g[0];
           acc[1] += s * g[1];
@@ -310,22 +313,28 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       });
     }
   };
-  auto coarse_apply = [&](int l, const std::vector<Vec3>& x, std::vector<Vec3>& y) {
+  // The V-cycle, in scalar type T (float or double): its vectors are ws's T-typed ones.
+  auto coarse_apply = [&](int l, const auto& x, auto& y) {
+    using V3 = std::decay_t<decltype(x[0])>;
+    using T = typename V3::Scalar;
     const Coarse& c = coarse_[l];
     const std::vector<Eigen::Matrix3f>& val = ws.levels[l].val;
     y.resize(c.n);
     parallel_for_each(arena, static_cast<std::size_t>(c.n), [&](std::size_t i) {
-      Vec3 acc = Vec3::Zero();
-      for (int t = c.row[i]; t < c.row[i + 1]; ++t) acc.noalias() += val[t].cast<double>() * x[c.col[t]];
+      V3 acc = V3::Zero();
+      for (int t = c.row[i]; t < c.row[i + 1]; ++t) acc.noalias() += val[t].cast<T>() * x[c.col[t]];
       y[i] = acc;
     });
   };
   // Level l's operator and data: l = 0 fine, l >= 1 coarse_[l - 1].
-  auto apply = [&](int l, const std::vector<Vec3>& x, std::vector<Vec3>& y) {
-    if (l == 0)
-      fine_apply(x, y, nullptr);
-    else
+  auto apply = [&](int l, const auto& x, auto& y) {
+    using T = typename std::decay_t<decltype(x[0])>::Scalar;
+    if (l > 0)
       coarse_apply(l - 1, x, y);
+    else if constexpr (std::is_same_v<T, float>)
+      fine_product(x, y, ws.jxf);
+    else
+      fine_product(x, y, ws.jx);
   };
   auto data = [&](int l) -> Workspace::Level& { return l == 0 ? ws.fine : ws.levels[l - 1]; };
 
@@ -333,32 +342,36 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   // D^-1 A that is smallest on [bound / ratio, bound].
   const double lmax = 3.0 * 1.02, lmin = lmax / opt_.smoothing_ratio;
   const double theta = 0.5 * (lmax + lmin), half = 0.5 * (lmax - lmin), sigma = theta / half;
-  auto smooth = [&](int l, const std::vector<Vec3>& b, std::vector<Vec3>& x, bool from_zero) {
+  auto smooth = [&](int l, const auto& b, auto& x, bool from_zero) {
+    using V3 = std::decay_t<decltype(b[0])>;
+    using T = typename V3::Scalar;
     Workspace::Level& L = data(l);
+    auto& vec = L.vectors(T{});
     const std::size_t k = b.size();
-    std::vector<Vec3>& res = L.r;
-    std::vector<Vec3>& d = L.d;
-    std::vector<Vec3>& t = L.t;
+    auto& res = vec.r;
+    auto& d = vec.d;
+    auto& t = vec.t;
     res.resize(k);
     d.resize(k);
     if (from_zero)
-      x.assign(k, Vec3::Zero());
+      x.assign(k, V3::Zero());
     else
       apply(l, x, t);
     // One pass per degree: residual, search direction and update together (the same operations
     // in the same order as separate loops, so the same result).
     for (std::size_t i = 0; i < k; ++i) {
-      res[i] = from_zero ? b[i] : Vec3(b[i] - t[i]);
-      d[i] = L.dinv[i].cast<double>() * res[i] / theta;
+      res[i] = from_zero ? b[i] : V3(b[i] - t[i]);
+      d[i] = L.dinv[i].cast<T>() * res[i] / static_cast<T>(theta);
       x[i] += d[i];
     }
     double rho0 = 1.0 / sigma;
     for (int deg = 2; deg <= opt_.smoothing_degree; ++deg) {
       apply(l, d, t);
       const double rho1 = 1.0 / (2.0 * sigma - rho0);
+      const T cd = static_cast<T>(rho1 * rho0), cr = static_cast<T>(2.0 * rho1 / half);
       for (std::size_t i = 0; i < k; ++i) {
         res[i] -= t[i];
-        d[i] = rho1 * rho0 * d[i] + (2.0 * rho1 / half) * (L.dinv[i].cast<double>() * res[i]);
+        d[i] = cd * d[i] + cr * (L.dinv[i].cast<T>() * res[i]);
         x[i] += d[i];
       }
       rho0 = rho1;
@@ -366,26 +379,41 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
   // One V-cycle for level l: x ~ A_l^-1 b. Symmetric (the same smoother before and after the
   // coarse correction), so it preconditions conjugate gradients.
-  auto vcycle = [&](int l, const std::vector<Vec3>& b, std::vector<Vec3>& x, auto&& self) -> void {
+  auto vcycle = [&](int l, const auto& b, auto& x, auto&& self) -> void {
+    using V3 = std::decay_t<decltype(b[0])>;
+    using T = typename V3::Scalar;
     if (l == nc) {
       const int k = static_cast<int>(b.size());
       Eigen::VectorXd rhs(3 * k);
-      for (int i = 0; i < k; ++i) rhs.segment<3>(3 * i) = b[i];
+      for (int i = 0; i < k; ++i) rhs.segment<3>(3 * i) = b[i].template cast<double>();
       const Eigen::VectorXd sol = ws.coarsest.solve(rhs);
       x.resize(k);
-      for (int i = 0; i < k; ++i) x[i] = sol.segment<3>(3 * i);
+      for (int i = 0; i < k; ++i) x[i] = sol.segment<3>(3 * i).template cast<T>();
       return;
     }
-    Workspace::Level& L = data(l);
-    Workspace::Level& C = ws.levels[l];
+    auto& vl = data(l).vectors(T{});
+    auto& vc = ws.levels[l].vectors(T{});
     const std::vector<int>& agg = l == 0 ? agg0_ : coarse_[l - 1].agg;
     smooth(l, b, x, true);
-    apply(l, x, L.t);
-    C.b.assign(coarse_[l].n, Vec3::Zero());
-    for (std::size_t i = 0; i < b.size(); ++i) C.b[agg[i]] += b[i] - L.t[i];
-    self(l + 1, C.b, C.x, self);
-    for (std::size_t i = 0; i < b.size(); ++i) x[i] += C.x[agg[i]];
+    apply(l, x, vl.t);
+    vc.b.assign(coarse_[l].n, V3::Zero());
+    for (std::size_t i = 0; i < b.size(); ++i) vc.b[agg[i]] += b[i] - vl.t[i];
+    self(l + 1, vc.b, vc.x, self);
+    for (std::size_t i = 0; i < b.size(); ++i) x[i] += vc.x[agg[i]];
     smooth(l, b, x, false);
+  };
+  // z = the V-cycle of the conjugate gradients' residual.
+  auto precondition = [&](const std::vector<Vec3>& res, std::vector<Vec3>& z) {
+    if (!single_precision_cycle) {
+      vcycle(0, res, z, vcycle);
+      return;
+    }
+    auto& v = ws.fine.single;
+    v.b.resize(n);
+    for (std::size_t i = 0; i < n; ++i) v.b[i] = res[i].cast<float>();
+    vcycle(0, v.b, v.x, vcycle);
+    z.resize(n);
+    for (std::size_t i = 0; i < n; ++i) z[i] = v.x[i].cast<double>();
   };
   // Fixed vertices: their entries of the residual, the preconditioned residual and K p are held
   // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
@@ -411,14 +439,14 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     ws.res[v] = acc;
   });
   clear_fixed(ws.res);
-  vcycle(0, ws.res, ws.z, vcycle);
+  precondition(ws.res, ws.z);
   clear_fixed(ws.z);
   ws.p = ws.z;
   double rz = dot(ws.res, ws.z);
   const double stop = tolerance * tolerance * rr0;
   ws.jp.resize(m);
   for (int it = 0; it < max_iterations; ++it) {
-    fine_apply(ws.p, ws.kp, &ws.jp);
+    fine_product(ws.p, ws.kp, ws.jp);
     clear_fixed(ws.kp);
     const double pkp = dot(ws.p, ws.kp);
     if (!(pkp > 0)) break;
@@ -435,7 +463,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     result.iterations = it + 1;
     result.relative_residual = std::sqrt(rr / rr0);
     if (rr <= stop) break;
-    vcycle(0, ws.res, ws.z, vcycle);
+    precondition(ws.res, ws.z);
     clear_fixed(ws.z);
     const double rz_new = dot(ws.res, ws.z);
     const double beta = rz_new / rz;

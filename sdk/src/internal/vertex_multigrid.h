@@ -79,12 +79,14 @@ class VertexMultigrid {
   //! ||J delta - r||^2 + eps ||delta||^2 + eps_lap delta^T L delta, with delta = 0 on fixed
   //! vertices, by preconditioned CG from delta = 0, stopping once ||r - J delta|| <= tolerance ||r||
   //! or after max_iterations. J is taken in single precision (the step needs a few digits; the
-  //! volumes it is judged by are double). \p arena: threads of the per-vertex and per-face loops
-  //! (null: the calling thread); every sum is taken in one order, so the result does not depend on
-  //! it.
-  //! \pre the system's arrays match this hierarchy's vertex and face counts; eps > 0.
+  //! volumes it is judged by are double). \p single_precision_cycle: the V-cycle's vectors in
+  //! single precision (faster; for the inexact steps, not for nearly singular systems). \p arena: threads of
+  //! the per-vertex and per-face loops (null: the calling thread); every sum is taken in one order, so the
+  //! result does not depend on it. \pre the system's arrays match this hierarchy's vertex and face counts;
+  //! eps > 0.
   VertexStepResult solve(const VertexStepSystem& system, double tolerance, int max_iterations,
-                         std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena) const;
+                         std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena,
+                         bool single_precision_cycle = false) const;
 
   //! Vertex counts per level, finest first.
   std::vector<int> level_sizes() const;
@@ -114,14 +116,26 @@ struct VertexMultigrid::Workspace {
     // peak memory of the 100k bends by 56-68 bytes per prism).
     std::vector<Eigen::Matrix3f> val;   // one per block of the level's pattern (coarse levels)
     std::vector<Eigen::Matrix3f> dinv;  // one per row: its diagonal block's inverse
-    std::vector<Vec3> x, b, r, d, t;
+    // The V-cycle's vectors: in single precision for the inexact cycle steps (as its operators; a
+    // preconditioner needs a few digits there, and the conjugate gradients around it run in
+    // double), in double for the polish, whose nearly singular systems (eps ~ 1e-8) need them.
+    template <class T>
+    struct Vectors {
+      std::vector<Eigen::Matrix<T, 3, 1>> x, b, r, d, t;
+    };
+    Vectors<float> single;
+    Vectors<double> twice;
+    Vectors<float>& vectors(float) { return single; }
+    Vectors<double>& vectors(double) { return twice; }
   };
   Level fine;                 // level 0 (matrix-free: no val)
   std::vector<Level> levels;  // levels 1..
   Eigen::LDLT<Eigen::MatrixXd> coarsest;
   std::vector<float> gf;            // J: 9 per face, the corners' gradients
   std::vector<Vec3> res, z, p, kp;  // the conjugate gradients' vectors
-  std::vector<double> rho, jp, jx;  // per face: r - J delta, J p, J x (threaded products)
+  std::vector<double> rho, jp;      // per face: r - J delta, J p
+  std::vector<float> jxf;           // per face: J x (the V-cycle's products, single precision)
+  std::vector<double> jx;           // per face: J x (the V-cycle's products, double)
 };
 
 }  // namespace strata::internal
