@@ -98,7 +98,7 @@ struct State {
   std::vector<Vec3> dT;             // prolongated change of the tangential displacement
   std::vector<double> rho;          // regularization scratch: d/f per level vertex
   std::vector<Vec3> tdev;           // regularization scratch: tangential deviation per level vertex
-  std::vector<Vec3> before;         // positions before a regularization round
+  std::vector<Vec3> before;         // the level's positions before a regularization round (level-local)
   std::vector<Vec3> pinned_at;      // where the pinned vertices stay (empty: none pinned)
   double amplitude = 1.0;           // scales every target and rest offset (ReconstructRequest)
   int volume_iterations = 0;        // volume steps per cycle on the level being solved
@@ -911,14 +911,17 @@ class VolumeReconstructor::Impl {
       if (c + 1 >= max_cycles || (&L == &levels_.back() ? opt_.regularization_iterations
                                                         : opt_.coarse_regularization_iterations) == 0)
         break;
-      s.before = s.P;
+      // The level's vertices only: a coarse level of a 1M-prism detail has a few thousand.
+      s.before.resize(L.verts.size());
+      for (std::size_t k = 0; k < L.verts.size(); ++k) s.before[k] = s.P[L.verts[k]];
       const int sweeps =
           &L == &levels_.back() ? opt_.regularization_iterations : opt_.coarse_regularization_iterations;
       for (int it = 0; it < sweeps; ++it) regularize(L, s, lambda);
       st.regularization_sweeps += sweeps;
       lambda *= opt_.regularization_decay;
       double moved = 0.0;
-      for (int i : L.verts) moved = std::max(moved, (s.P[i] - s.before[i]).norm());
+      for (std::size_t k = 0; k < L.verts.size(); ++k)
+        moved = std::max(moved, (s.P[L.verts[k]] - s.before[k]).norm());
       if (moved <= opt_.fixed_point_tolerance * mean_abs_f_) {
         project(L, s, h, tol, st, V);
         break;
