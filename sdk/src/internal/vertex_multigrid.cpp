@@ -402,6 +402,23 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     for (std::size_t i = 0; i < b.size(); ++i) x[i] += vc.x[agg[i]];
     smooth(l, b, x, false);
   };
+  // The other precision's vectors are released, so that the peak memory is one set's (the
+  // polish follows the cycles once per solve; reallocating then costs little).
+  auto release = [](auto& v) {
+    for (auto* a : {&v.x, &v.b, &v.r, &v.d, &v.t}) std::decay_t<decltype(*a)>().swap(*a);
+  };
+  auto release_other = [&](Workspace::Level& L) {
+    if (single_precision_cycle)
+      release(L.twice);
+    else
+      release(L.single);
+  };
+  release_other(ws.fine);
+  for (Workspace::Level& L : ws.levels) release_other(L);
+  if (single_precision_cycle)
+    std::vector<double>().swap(ws.jx);
+  else
+    std::vector<float>().swap(ws.jxf);
   // z = the V-cycle of the conjugate gradients' residual.
   auto precondition = [&](const std::vector<Vec3>& res, std::vector<Vec3>& z) {
     if (!single_precision_cycle) {
