@@ -195,13 +195,14 @@ struct ReconstructOptions {
 
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
-//! full scale), one volume step a cycle, and a tolerance of 5e-4 (half the acceptance's 1e-3). The
-//! other fields keep their defaults. On the 100k bends over scan-like (irregular) triangulations,
-//! 1.59-1.84 s on one thread and 924-931 bytes per prism (best of three; medians of three on a
-//! busier hour: 2.23-2.85 s), where the defaults take 6-7 s and 2 KB (README, Measured results).
-//! On regular triangulations its polish stalls and factorized steps finish it, no faster than the
-//! defaults (see Multigrid). Its fold outcomes are erratic: one of twelve perturbed 100k bends
-//! needed a retry, and the bear's arm bend folds where the defaults do not (README).
+//! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
+//! polish's local end (local_polish_max_fraction 0.005). The other fields keep their defaults. On
+//! the 100k bends over scan-like (irregular) triangulations, medians of three runs of 1.5-2.2 s on
+//! one thread (noisy machine) and about 950 bytes per prism, where the defaults take 6-9 s and
+//! 2 KB (README, Measured results). On regular triangulations its polish stalls and factorized
+//! steps finish it, no faster than the defaults (see Multigrid). Its fold outcomes are erratic:
+//! twelve perturbed 100k bends end without new pairs, one of them after four repair rounds, but
+//! the bear's arm bend folds where the defaults do not (README).
 ReconstructOptions multigrid_reconstruct_options();
 
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
