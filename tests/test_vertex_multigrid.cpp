@@ -230,32 +230,25 @@ TEST(VertexMultigrid, ASinglePrecisionCycleLowersTheResidualAsFar) {
   EXPECT_NE(single, twice);  // the two preconditioners do differ
 }
 
-// Threads change nothing: every sum is taken in one order.
+// Threads change nothing: every sum is taken in one order, with the V-cycle in double precision
+// (the polish's) as in single (the cycle steps').
 TEST(VertexMultigrid, TheSameStepOnOneThreadAndThree) {
   const StepSystem s = make_system(cases::DetailKind::Rings, 20000, 0.4);
   const internal::VertexMultigrid mg = s.hierarchy();
   const double d = s.diag();
-  std::vector<Vec3> one, three;
-  internal::VertexMultigrid::Workspace w1, w3;
-  const internal::VertexStepResult r1 = mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, one, w1, nullptr);
   tbb::task_arena arena(3);
-  const internal::VertexStepResult r3 = mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, three, w3, &arena);
-  EXPECT_EQ(r1.relative_residual, r3.relative_residual);
-  ASSERT_EQ(one.size(), three.size());
-  for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
-}
-
-TEST(VertexMultigrid, TheSameSinglePrecisionStepOnOneThreadAndThree) {
-  const StepSystem s = make_system(cases::DetailKind::Rings, 20000, 0.4);
-  const internal::VertexMultigrid mg = s.hierarchy();
-  const double d = s.diag();
-  std::vector<Vec3> one, three;
-  internal::VertexMultigrid::Workspace w1, w3;
-  mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, one, w1, nullptr, true);
-  tbb::task_arena arena(3);
-  mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, three, w3, &arena, true);
-  ASSERT_EQ(one.size(), three.size());
-  for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
+  for (bool single : {false, true}) {
+    SCOPED_TRACE(single ? "single precision" : "double precision");
+    std::vector<Vec3> one, three;
+    internal::VertexMultigrid::Workspace w1, w3;
+    const internal::VertexStepResult r1 =
+        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, one, w1, nullptr, single);
+    const internal::VertexStepResult r3 =
+        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, three, w3, &arena, single);
+    EXPECT_EQ(r1.relative_residual, r3.relative_residual);
+    ASSERT_EQ(one.size(), three.size());
+    for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
+  }
 }
 
 // The reconstruction on it (multigrid_reconstruct_options()): the paper's bend over a scan-like

@@ -55,6 +55,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"polish_solver", &o.polish_solver},
           {"threads", &o.threads},
           {"multigrid.iterations", &m.iterations},
+          {"multigrid.retry_iterations", &m.retry_iterations},
           {"multigrid.tolerance", &m.tolerance},
           {"multigrid.damping", &m.damping},
           {"multigrid.smoothness", &m.smoothness},

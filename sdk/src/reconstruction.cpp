@@ -77,6 +77,7 @@ enum class StepSolve {
 struct GnScratch {
   double damping = kMinDamping;  // of the exact steps, adapted step by step
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
+  int mg_iterations = 0;         // multigrid cycle steps' iterations; 0: MultigridStepOptions::iterations
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag;
@@ -224,21 +225,30 @@ class VolumeReconstructor::Impl {
       clean_start(s, a, opt_.volume_iterations, st, V);
       Outcome first = outcome(s, a, V);
       repair_folds(s, a, st, V, first);
-      if (opt_.retry_volume_iterations > 0 && opt_.retry_volume_iterations != opt_.volume_iterations &&
-          (!first.converged || first.new_pairs > 0)) {
-        // Not converged, or still folded: once more from the clean start with the other schedule,
-        // and the better of the two is kept (converged first, then fewer new pairs).
+      // Not converged, or still folded: once more from the clean start with another schedule, and
+      // the better of the two is kept (converged first, then fewer new pairs).
+      auto retry = [&](int volume_iterations, int mg_iterations) {
         std::vector<Vec3> kept = s.P;
         ++st.retries;
         s.gn.damping = kMinDamping;
-        clean_start(s, a, opt_.retry_volume_iterations, st, V);
+        s.gn.mg_iterations = mg_iterations;
+        clean_start(s, a, volume_iterations, st, V);
+        s.gn.mg_iterations = 0;
         Outcome second = outcome(s, a, V);
         repair_folds(s, a, st, V, second);
         if (second.better_than(first))
           first = std::move(second);
         else
           s.P.swap(kept);
-      }
+      };
+      auto failed = [&] { return !first.converged || first.new_pairs > 0; };
+      if (opt_.retry_volume_iterations > 0 && opt_.retry_volume_iterations != opt_.volume_iterations &&
+          failed())
+        retry(opt_.retry_volume_iterations, 0);
+      // Then with accurate multigrid steps (MultigridStepOptions::retry_iterations).
+      if (opt_.multigrid.retry_iterations > 0 && opt_.step_solver == VolumeStepSolver::Multigrid && failed())
+        retry(opt_.retry_volume_iterations > 0 ? opt_.retry_volume_iterations : opt_.volume_iterations,
+              opt_.multigrid.retry_iterations);
       st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
     } else {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
@@ -428,6 +438,7 @@ class VolumeReconstructor::Impl {
           "reconstruction option polish_solver = jacobi_cg is out of range (direct or multigrid)");
     check(mo.iterations >= 1, "multigrid.iterations", mo.iterations, "at least 1");
     check(mo.polish_iterations >= 1, "multigrid.polish_iterations", mo.polish_iterations, "at least 1");
+    check(mo.retry_iterations >= 0, "multigrid.retry_iterations", mo.retry_iterations, "at least 0");
     check(mo.tolerance >= 0, "multigrid.tolerance", mo.tolerance, "at least 0");
     check(mo.polish_tolerance >= 0, "multigrid.polish_tolerance", mo.polish_tolerance, "at least 0");
     check(mo.damping > 0, "multigrid.damping", mo.damping, "above 0");
@@ -1204,7 +1215,10 @@ class VolumeReconstructor::Impl {
     sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
     const internal::VertexStepResult res =
         L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
-                    exact ? mo.polish_iterations : mo.iterations, w.ldelta, w.mgw, arena_.get(),
+                    exact                 ? mo.polish_iterations
+                    : w.mg_iterations > 0 ? w.mg_iterations
+                                          : mo.iterations,
+                    w.ldelta, w.mgw, arena_.get(),
                     /*single_precision_cycle=*/!exact && mo.single_precision_cycles);
     st.cg_iterations += res.iterations;
   }
@@ -1358,6 +1372,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.volume_iterations = 1;
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.005;
+  o.multigrid.retry_iterations = 20;
   return o;
 }
 

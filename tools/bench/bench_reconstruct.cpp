@@ -520,6 +520,7 @@ int main(int argc, char** argv) {
             {"tolerance", ro.tolerance},
             {"multigrid",
              {{"iterations", ro.multigrid.iterations},
+              {"retry_iterations", ro.multigrid.retry_iterations},
               {"tolerance", ro.multigrid.tolerance},
               {"damping", ro.multigrid.damping},
               {"smoothness", ro.multigrid.smoothness},

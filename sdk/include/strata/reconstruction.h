@@ -41,6 +41,13 @@ struct MultigridStepOptions {
   //! scan-like triangulations 6 took 1.73-1.80 s against 10's 1.95-2.15 s (best of three, back to
   //! back), the polish taking one or two more steps.
   int iterations = 6;
+  //! > 0: if the solve, and the retry of ReconstructOptions::retry_volume_iterations, still end
+  //! unconverged or with new intersecting pairs, one more retry from the clean start with this many
+  //! iterations per cycle step (and retry_volume_iterations steps per cycle). More accurate steps
+  //! folded less on the bear's arm bend (1,433 prisms on one level: 0 new pairs with 20
+  //! iterations, 113-164 with 6), but more on the regular 100k rings (6 new pairs where the first
+  //! retry leaves 0), hence second. 0: no such retry.
+  int retry_iterations = 0;
   //! A cycle step's solve stops earlier once the linearized residual ||r - J delta|| falls to this
   //! fraction of ||r|| (0: never).
   double tolerance = 0.0;
@@ -196,13 +203,14 @@ struct ReconstructOptions {
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
 //! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
-//! polish's local end (local_polish_max_fraction 0.005). The other fields keep their defaults. On
+//! polish's local end (local_polish_max_fraction 0.005), and a last retry with accurate steps
+//! (MultigridStepOptions::retry_iterations 20). The other fields keep their defaults. On
 //! the 100k bends over scan-like (irregular) triangulations, medians of three runs of 1.5-2.2 s on
 //! one thread (noisy machine) and about 950 bytes per prism, where the defaults take 6-9 s and
 //! 2 KB (README, Measured results). On regular triangulations its polish stalls and factorized
 //! steps finish it, no faster than the defaults (see Multigrid). Its fold outcomes are erratic:
-//! twelve perturbed 100k bends end without new pairs, one of them after four repair rounds, but
-//! the bear's arm bend folds where the defaults do not (README).
+//! twelve perturbed 100k bends end without new pairs, one of them after four repair rounds; the
+//! bear's arm bend needs the last retry (README).
 ReconstructOptions multigrid_reconstruct_options();
 
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
