@@ -972,10 +972,10 @@ class VolumeReconstructor::Impl {
       // Whole-level steps until few prisms are off, then only their neighbourhoods move.
       compute_volumes(L, s, V);
       const double limit = opt_.local_polish_max_fraction * static_cast<double>(L.faces.size());
+      const double scale = std::abs(s.amplitude) * L.mean_abs_target;
       int steps = 0;
       for (std::vector<int> off;; ++steps) {
         off.clear();
-        const double scale = std::abs(s.amplitude) * L.mean_abs_target;
         for (std::size_t j = 0; j < V.size(); ++j)
           if (std::abs(s.amplitude * L.targets[j] - V[j]) > tol * scale) off.push_back(static_cast<int>(j));
         if (off.empty() || !(scale > 0)) break;

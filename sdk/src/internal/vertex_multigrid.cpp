@@ -261,15 +261,15 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   }
 
   // --- Products with the level operators.
-  // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into jx. Per vertex the terms
-  // are summed in one order, eps x and L x first, then the faces' J^T J terms in ascending face
-  // order, in the serial pass (faces scattered) as in the threaded one (faces gathered). T is
-  // double for the conjugate gradients' product, float for the V-cycle's.
-  auto fine_product = [&](const auto& x, auto& y, auto& jx) {
+  // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into *jx_out if given. Per
+  // vertex the terms are summed in one order, eps x and L x first, then the faces' J^T J terms in
+  // ascending face order, in the serial pass (faces scattered) as in the threaded one (faces
+  // gathered, J x kept in between). T is double for the conjugate gradients' product and the
+  // polish's V-cycle, float for the cycle steps' V-cycle.
+  auto fine_product = [&](const auto& x, auto& y, auto* jx_out) {
     using V3 = std::decay_t<decltype(x[0])>;
     using T = typename V3::Scalar;
     y.resize(n);
-    jx.resize(m);
     auto start = [&](std::size_t v) {
       V3 acc = static_cast<T>(eps) * x[v];
       if (eps_lap > 0)
@@ -288,7 +288,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       for (std::size_t v = 0; v < n; ++v) y[v] = start(v);
       for (std::size_t j = 0; j < m; ++j) {
         const T t = jdot(j);
-        jx[j] = t;
+        if (jx_out) (*jx_out)[j] = t;
         const Face& f = faces[j];
         const float* g = gf + 9 * j;
         for (int c = 0; c < 3; ++c) {
@@ -299,6 +299,8 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
         }
       }
     } else {
+      std::vector<T>& jx = jx_out ? *jx_out : ws.jx_scratch(T{});
+      jx.resize(m);
       parallel_for_each(arena, m, [&](std::size_t j) { jx[j] = jdot(j); });
       parallel_for_each(arena, n, [&](std::size_t v) {
         V3 acc = start(v);
@@ -331,10 +333,8 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     using T = typename std::decay_t<decltype(x[0])>::Scalar;
     if (l > 0)
       coarse_apply(l - 1, x, y);
-    else if constexpr (std::is_same_v<T, float>)
-      fine_product(x, y, ws.jxf);
     else
-      fine_product(x, y, ws.jx);
+      fine_product(x, y, static_cast<std::vector<T>*>(nullptr));
   };
   auto data = [&](int l) -> Workspace::Level& { return l == 0 ? ws.fine : ws.levels[l - 1]; };
 
@@ -409,23 +409,23 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
   auto release_other = [&](Workspace::Level& L) {
     if (single_precision_cycle)
-      release(L.twice);
+      release(L.f64);
     else
-      release(L.single);
+      release(L.f32);
   };
   release_other(ws.fine);
   for (Workspace::Level& L : ws.levels) release_other(L);
   if (single_precision_cycle)
-    std::vector<double>().swap(ws.jx);
+    std::vector<double>().swap(ws.jx64);
   else
-    std::vector<float>().swap(ws.jxf);
+    std::vector<float>().swap(ws.jx32);
   // z = the V-cycle of the conjugate gradients' residual.
   auto precondition = [&](const std::vector<Vec3>& res, std::vector<Vec3>& z) {
     if (!single_precision_cycle) {
       vcycle(0, res, z, vcycle);
       return;
     }
-    auto& v = ws.fine.single;
+    auto& v = ws.fine.f32;
     v.b.resize(n);
     for (std::size_t i = 0; i < n; ++i) v.b[i] = res[i].cast<float>();
     vcycle(0, v.b, v.x, vcycle);
@@ -463,7 +463,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   const double stop = tolerance * tolerance * rr0;
   ws.jp.resize(m);
   for (int it = 0; it < max_iterations; ++it) {
-    fine_product(ws.p, ws.kp, ws.jp);
+    fine_product(ws.p, ws.kp, &ws.jp);
     clear_fixed(ws.kp);
     const double pkp = dot(ws.p, ws.kp);
     if (!(pkp > 0)) break;

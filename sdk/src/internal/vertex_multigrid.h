@@ -79,11 +79,11 @@ class VertexMultigrid {
   //! ||J delta - r||^2 + eps ||delta||^2 + eps_lap delta^T L delta, with delta = 0 on fixed
   //! vertices, by preconditioned CG from delta = 0, stopping once ||r - J delta|| <= tolerance ||r||
   //! or after max_iterations. J is taken in single precision (the step needs a few digits; the
-  //! volumes it is judged by are double). \p single_precision_cycle: the V-cycle's vectors in
-  //! single precision (faster; for the inexact steps, not for nearly singular systems). \p arena: threads of
-  //! the per-vertex and per-face loops (null: the calling thread); every sum is taken in one order, so the
-  //! result does not depend on it. \pre the system's arrays match this hierarchy's vertex and face counts;
-  //! eps > 0.
+  //! volumes it is judged by are double). \p arena: threads of the per-vertex and per-face loops
+  //! (null: the calling thread); every sum is taken in one order, so the result does not depend on
+  //! it. \p single_precision_cycle: the V-cycle's vectors in single precision (faster; for the
+  //! inexact steps, not for nearly singular systems, whose solves then stall).
+  //! \pre the system's arrays match this hierarchy's vertex and face counts; eps > 0.
   VertexStepResult solve(const VertexStepSystem& system, double tolerance, int max_iterations,
                          std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena,
                          bool single_precision_cycle = false) const;
@@ -123,10 +123,10 @@ struct VertexMultigrid::Workspace {
     struct Vectors {
       std::vector<Eigen::Matrix<T, 3, 1>> x, b, r, d, t;
     };
-    Vectors<float> single;
-    Vectors<double> twice;
-    Vectors<float>& vectors(float) { return single; }
-    Vectors<double>& vectors(double) { return twice; }
+    Vectors<float> f32;
+    Vectors<double> f64;
+    Vectors<float>& vectors(float) { return f32; }
+    Vectors<double>& vectors(double) { return f64; }
   };
   Level fine;                 // level 0 (matrix-free: no val)
   std::vector<Level> levels;  // levels 1..
@@ -134,8 +134,11 @@ struct VertexMultigrid::Workspace {
   std::vector<float> gf;            // J: 9 per face, the corners' gradients
   std::vector<Vec3> res, z, p, kp;  // the conjugate gradients' vectors
   std::vector<double> rho, jp;      // per face: r - J delta, J p
-  std::vector<float> jxf;           // per face: J x (the V-cycle's products, single precision)
-  std::vector<double> jx;           // per face: J x (the V-cycle's products, double)
+  // Per face: J x between the two passes of a threaded V-cycle product, per precision.
+  std::vector<float> jx32;
+  std::vector<double> jx64;
+  std::vector<float>& jx_scratch(float) { return jx32; }
+  std::vector<double>& jx_scratch(double) { return jx64; }
 };
 
 }  // namespace strata::internal
