@@ -20,6 +20,9 @@ runs = r["seconds"]["reconstruct_runs"]
 assert len(runs) == 3 and all(t > 0 for t in runs), runs
 assert r["seconds"]["reconstruct"] == sorted(runs)[1], (runs, r["seconds"]["reconstruct"])
 assert len(r["cpu_seconds"]["reconstruct_runs"]) == 3
+# A first reconstruction: the solver's setup plus the first run.
+first = r["seconds"]["first_reconstruction"]
+assert abs(first - (r["seconds"]["setup"] + runs[0])) <= 1e-9 * first, (first, r["seconds"])
 assert r["targets"]["all"], r["targets"]
 PY
 grep -q "reconstruct run 3 in" "$TMP/err" || fail "no progress line for the third run"
