@@ -106,15 +106,16 @@ struct ReconstructOptions {
   bool retry_on_new_intersections = true;
   //! Local fold repair, before any retry: a converged clean-start solve with new intersecting
   //! pairs (counted as for retry_on_new_intersections, which must be on) gets up to this many
-  //! repair rounds. A round smooths the vertices of the new pairs' triangles and
-  //! fold_repair_rings + round rings around them by fold_repair_sweeps regularization sweeps at
-  //! full weight, then exact steps restore the volumes; the best result is kept (converged first,
-  //! then fewer new pairs). Folds after the solve are local (on the 100k bumps, one triangle
-  //! through three neighbours two rings away), so a round restores the volumes locally first (a
-  //! small system) and polishes the whole level only if folds remain, where a retry costs a whole
-  //! solve. Measured on the rings: at the paper's resolution 3 rounds left 10 new
-  //! pairs and 4 rounds none; at 100k prisms 3 rounds left 28 (after a retry) and 6 none, so the
-  //! retry did not run. 0: no repair.
+  //! repair rounds; so does the result kept when no schedule converged, whose rounds are kept only
+  //! if worse in neither the new pairs nor the max error (within 1% of `tolerance`).
+  //! A round smooths the vertices of the new pairs' triangles and fold_repair_rings + round rings
+  //! around them by fold_repair_sweeps regularization sweeps at full weight, then exact steps
+  //! restore the volumes; the best result is kept (converged first, then fewer new pairs). Folds
+  //! after the solve are local (on the 100k bumps, one triangle through three neighbours two
+  //! rings away), so a round restores the volumes locally first (a small system) and polishes the
+  //! whole level only if folds remain, where a retry costs a whole solve. Measured on the rings:
+  //! at the paper's resolution 3 rounds left 10 new pairs and 4 rounds none; at 100k prisms 3
+  //! rounds left 28 (after a retry) and 6 none, so the retry did not run. 0: no repair.
   int fold_repair_rounds = 6;
   //! No repair when the new pairs outnumber this fraction of the prisms: so many are a global
   //! self-contact (a limb bent into the body), not local folds. The repair also stops after two
@@ -252,8 +253,8 @@ struct ReconstructStats {
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
-  //! counted by the solver (retry_on_new_intersections, converged clean-start solves and exact
-  //! solves from a drag's state); -1 if not counted.
+  //! counted by the solver (retry_on_new_intersections: clean-start solves and exact solves from a
+  //! drag's state, converged or not); -1 if not counted.
   long long new_intersecting_pairs = -1;
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)

@@ -59,12 +59,14 @@ std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResul
   const double warm_seconds = seconds_since(t0);
   if (!r.stats.converged || r.stats.new_intersecting_pairs != 0) {
     // Not converged, folded, or not checked (the options count no pairs): the clean start. If
-    // neither converges, the smaller error is kept, as the reconstructor's own retry does.
+    // neither converges, the smaller error is kept, as the reconstructor's own retry does, but
+    // not at the price of more new pairs (both results are counted when the options count).
     res.drag_end_fallback = true;
     std::vector<Vec3> sub = solve(base, res);
     res.times.solve += warm_seconds;
     if (r.stats.converged || res.stats.converged ||
-        res.stats.max_relative_error <= r.stats.max_relative_error)
+        res.stats.max_relative_error <= r.stats.max_relative_error ||
+        r.stats.new_intersecting_pairs > res.stats.new_intersecting_pairs)
       return sub;
     res.stats = std::move(r.stats);
     res.volume = volume_metrics(enc_, rec_->base_frames(base), r.positions);
