@@ -46,6 +46,34 @@ cases::CylinderCase make_case(cases::DetailKind kind, int triangles) {
   return cases::make_cylinder_case(o);
 }
 
+IntersectionOptions collecting() {
+  IntersectionOptions all;
+  all.collect_pairs = true;
+  return all;
+}
+
+// The paper's rings at its resolution, solved without retry or fold repair (`none`) and with the
+// coarse levels as lightly regularized as the finest (2 sweeps; the default 8 leave no pairs to
+// repair there), which folds: the fold repair tests' case.
+struct FoldingRings {
+  cases::CylinderCase c = make_case(cases::DetailKind::Rings, 0);
+  DetailEncoding e = encode_detail(c.detail, c.base);
+  IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, collecting());
+  ReconstructOptions none;
+
+  FoldingRings() {
+    none.retry_volume_iterations = 0;
+    none.fold_repair_rounds = 0;
+    none.coarse_regularization_iterations = 2;
+  }
+  ReconstructResult solve(const ReconstructOptions& o) const {
+    return VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+  }
+  std::size_t new_pairs(const std::vector<Vec3>& p) const {
+    return count_new_intersections(rest, find_self_intersections(p, c.detail.faces, collecting()));
+  }
+};
+
 }  // namespace
 
 // The paper's Fig. 6 cases (section 6): a 90-degree bend whose inner radius (0.2) is smaller
@@ -212,26 +240,17 @@ TEST(Reconstruction, FoldedSolveKeepsTheBetterOfTwoSchedules) {
 // levels (the default 8 leave no pairs to repair there): 62 new pairs without repair, 10 after
 // three rounds, none after the default six.
 TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
-  const cases::CylinderCase c = make_case(cases::DetailKind::Rings, 0);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  IntersectionOptions all;
-  all.collect_pairs = true;
-  const IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, all);
-  auto new_pairs = [&](const std::vector<Vec3>& p) {
-    return count_new_intersections(rest, find_self_intersections(p, c.detail.faces, all));
-  };
-  ReconstructOptions none;
-  none.retry_volume_iterations = 0;
-  none.fold_repair_rounds = 0;
-  none.coarse_regularization_iterations = 2;  // the coarse levels as lightly regularized as the finest: folds
-  const ReconstructResult plain = VolumeReconstructor(e, none).reconstruct(c.edited_base.vertices);
+  const FoldingRings f;
+  auto new_pairs = [&](const std::vector<Vec3>& p) { return f.new_pairs(p); };
+  const ReconstructOptions& none = f.none;
+  const ReconstructResult plain = f.solve(none);
   ASSERT_TRUE(plain.stats.converged);
   EXPECT_EQ(plain.stats.fold_repairs, 0);
   const std::size_t p0 = new_pairs(plain.positions);
   ASSERT_GT(p0, 0u);  // the case this test is about: the solve folds before repair
   ReconstructOptions repair = none;
   repair.fold_repair_rounds = 3;
-  const ReconstructResult fixed = VolumeReconstructor(e, repair).reconstruct(c.edited_base.vertices);
+  const ReconstructResult fixed = f.solve(repair);
   EXPECT_GE(fixed.stats.fold_repairs, 1);
   EXPECT_LE(fixed.stats.fold_repairs, 3);
   EXPECT_TRUE(fixed.stats.converged);
@@ -240,13 +259,13 @@ TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
   // The default rounds (without the retry) remove them all.
   ReconstructOptions defaults = none;
   defaults.fold_repair_rounds = ReconstructOptions{}.fold_repair_rounds;
-  const ReconstructResult all_rounds = VolumeReconstructor(e, defaults).reconstruct(c.edited_base.vertices);
+  const ReconstructResult all_rounds = f.solve(defaults);
   EXPECT_TRUE(all_rounds.stats.converged);
   EXPECT_EQ(all_rounds.stats.new_intersecting_pairs, 0);
   EXPECT_EQ(new_pairs(all_rounds.positions), 0u);
   // Without counting the pairs there is nothing to repair.
   repair.retry_on_new_intersections = false;
-  const ReconstructResult blind = VolumeReconstructor(e, repair).reconstruct(c.edited_base.vertices);
+  const ReconstructResult blind = f.solve(repair);
   EXPECT_EQ(blind.stats.fold_repairs, 0);
   EXPECT_EQ(blind.positions, plain.positions);
 }
@@ -257,27 +276,18 @@ TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
 // the paper's rings with the coarse levels as lightly regularized as the finest, which folds
 // (measured: 56 new pairs at an error of 6.3e-14; repaired, 14 at 4.2e-14 after four rounds).
 TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
-  const cases::CylinderCase c = make_case(cases::DetailKind::Rings, 0);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  IntersectionOptions all;
-  all.collect_pairs = true;
-  const IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, all);
-  auto new_pairs = [&](const std::vector<Vec3>& p) {
-    return count_new_intersections(rest, find_self_intersections(p, c.detail.faces, all));
-  };
-  ReconstructOptions none;
-  none.retry_volume_iterations = 0;
-  none.fold_repair_rounds = 0;
-  none.coarse_regularization_iterations = 2;
+  const FoldingRings f;
+  auto new_pairs = [&](const std::vector<Vec3>& p) { return f.new_pairs(p); };
+  ReconstructOptions none = f.none;
   none.tolerance = 1e-15;  // below rounding: the polish ends near 6e-14
-  const ReconstructResult plain = VolumeReconstructor(e, none).reconstruct(c.edited_base.vertices);
+  const ReconstructResult plain = f.solve(none);
   ASSERT_FALSE(plain.stats.converged);
   const std::size_t p0 = new_pairs(plain.positions);
   ASSERT_GT(p0, 0u);  // the case this test is about: an unconverged result that folds
   EXPECT_EQ(plain.stats.new_intersecting_pairs, static_cast<long long>(p0));  // counted all the same
   ReconstructOptions repair = none;
   repair.fold_repair_rounds = ReconstructOptions{}.fold_repair_rounds;
-  const ReconstructResult fixed = VolumeReconstructor(e, repair).reconstruct(c.edited_base.vertices);
+  const ReconstructResult fixed = f.solve(repair);
   EXPECT_FALSE(fixed.stats.converged);
   EXPECT_GE(fixed.stats.fold_repairs, 1);
   const std::size_t p1 = new_pairs(fixed.positions);
@@ -286,8 +296,7 @@ TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
   EXPECT_LE(fixed.stats.max_relative_error, plain.stats.max_relative_error + 1e-2 * none.tolerance);
   // Not counted, nothing is checked.
   none.retry_on_new_intersections = false;
-  EXPECT_EQ(VolumeReconstructor(e, none).reconstruct(c.edited_base.vertices).stats.new_intersecting_pairs,
-            -1);
+  EXPECT_EQ(f.solve(none).stats.new_intersecting_pairs, -1);
 }
 
 // The solver's threads split independent per-prism and per-vertex work only (J^T x gathered per

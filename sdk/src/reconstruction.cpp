@@ -689,9 +689,10 @@ class VolumeReconstructor::Impl {
   // exact end did): its new pairs are counted and repaired too (retry_on_new_intersections), so
   // that a result short of the tolerance is not left folded unchecked. Measured: the armadillo's
   // arm bend (tests/data/edits/armadillo_arm.json, smoothing 0.7) ends both schedules near 2.4e-4
-  // of the mean volume, and with OpenBLAS's generic kernels (as the test binary gets them on an
-  // Intel VM) with 1 new pair, where the AVX-512 kernels' rounding left none. The repair rounds
-  // keep a result only if it is worse in neither pairs nor error (Outcome::better_than).
+  // of the mean volume, and with OpenBLAS's generic kernels (as the test binary got them on an
+  // Intel VM) with 1 new pair, where the Haswell, SkylakeX, Cooperlake and Zen kernels' rounding
+  // left none. The repair rounds keep a result only if it is worse in neither pairs nor error
+  // (Outcome::better_than).
   void fold_checked(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& o) const {
     if (o.converged || o.counted || !opt_.retry_on_new_intersections) return;
     o = outcome(s, a, V, /*count_unconverged=*/true);
