@@ -293,7 +293,9 @@ TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
   const std::size_t p1 = new_pairs(fixed.positions);
   EXPECT_EQ(fixed.stats.new_intersecting_pairs, static_cast<long long>(p1));
   EXPECT_LT(p1, p0);
-  EXPECT_LE(fixed.stats.max_relative_error, plain.stats.max_relative_error + 1e-2 * none.tolerance);
+  // Not worse in error, up to rounding (1e-12 of the mean volume, Outcome::better_than): at this
+  // tolerance the errors are rounding, 4.1e-14 to 6.3e-14 with different BLAS kernels.
+  EXPECT_LE(fixed.stats.max_relative_error, plain.stats.max_relative_error + 1e-12);
   // Not counted, nothing is checked.
   none.retry_on_new_intersections = false;
   EXPECT_EQ(f.solve(none).stats.new_intersecting_pairs, -1);
