@@ -652,7 +652,8 @@ class VolumeReconstructor::Impl {
       // to 6.3e-14 with 56 new pairs, repaired 4.2e-14 to 5.2e-14 with none, by OpenBLAS's kernel
       // set; with 1% of the tolerance alone the Zen and Haswell kernels' repairs were refused).
       if (counted && o.counted)
-        return (new_pairs < o.new_pairs && max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
+        return (new_pairs < o.new_pairs &&
+                max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
                (new_pairs <= o.new_pairs && max_error < o.max_error);
       return max_error < o.max_error;
     }
