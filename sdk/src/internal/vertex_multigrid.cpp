@@ -455,35 +455,35 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
   release_other(ws.fine);
   for (Workspace::Level& L : ws.levels) release_other(L);
-  if (single_precision_cycle)
+  if (single_precision_cycle) {
     std::vector<double>().swap(ws.jx64);
-  else
+    std::vector<Vec3>().swap(ws.z);  // z_at() reads the V-cycle's float solution instead
+  } else
     std::vector<float>().swap(ws.jx32);
   // Fixed vertices: their entries of the residual, the preconditioned residual and K p are held
   // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
   // free block of the V-cycle).
   const std::vector<char>* fixed = sys.fixed;
-  // z = the V-cycle of the conjugate gradients' residual, 0 on fixed vertices; returns res . z,
-  // summed in vertex order in the same pass (as a separate loop would).
-  auto precondition = [&](const std::vector<Vec3>& res, std::vector<Vec3>& z) {
+  // The preconditioned residual z = the V-cycle of the conjugate gradients' residual res, 0 on
+  // fixed vertices, read through z_at(): in double the V-cycle writes ws.z; in single precision z
+  // stays the V-cycle's float solution, converted where it is read (the same doubles, without a
+  // vector of them to write and read back), and the caller's pass over res writes the V-cycle's
+  // right-hand side (to_cycle). precondition() returns res . z, summed in vertex order.
+  auto& v32 = ws.fine.f32;
+  auto z_at = [&](std::size_t i) -> Vec3 {
+    if (fixed && (*fixed)[i]) return Vec3::Zero();
+    return single_precision_cycle ? Vec3(v32.x[i].cast<double>()) : ws.z[i];
+  };
+  auto to_cycle = [&](std::size_t i, const Vec3& res_i) {
+    if (single_precision_cycle) v32.b[i] = res_i.cast<float>();
+  };
+  auto precondition = [&](const std::vector<Vec3>& res) {
+    if (single_precision_cycle)
+      vcycle(0, v32.b, v32.x, vcycle);
+    else
+      vcycle(0, res, ws.z, vcycle);
     double rz = 0.0;
-    if (!single_precision_cycle) {
-      vcycle(0, res, z, vcycle);
-      for (std::size_t i = 0; i < n; ++i) {
-        if (fixed && (*fixed)[i]) z[i].setZero();
-        rz += res[i].dot(z[i]);
-      }
-      return rz;
-    }
-    auto& v = ws.fine.f32;
-    v.b.resize(n);
-    for (std::size_t i = 0; i < n; ++i) v.b[i] = res[i].cast<float>();
-    vcycle(0, v.b, v.x, vcycle);
-    z.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      z[i] = fixed && (*fixed)[i] ? Vec3(Vec3::Zero()) : Vec3(v.x[i].cast<double>());
-      rz += res[i].dot(z[i]);
-    }
+    for (std::size_t i = 0; i < n; ++i) rz += res[i].dot(z_at(i));
     return rz;
   };
   auto clear_fixed = [&](std::vector<Vec3>& v) {
@@ -506,8 +506,11 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     ws.res[v] = acc;
   });
   clear_fixed(ws.res);
-  double rz = precondition(ws.res, ws.z);
-  ws.p = ws.z;
+  v32.b.resize(single_precision_cycle ? n : 0);
+  for (std::size_t v = 0; v < n; ++v) to_cycle(v, ws.res[v]);
+  double rz = precondition(ws.res);
+  ws.p.resize(n);
+  for (std::size_t v = 0; v < n; ++v) ws.p[v] = z_at(v);
   const double stop = tolerance * tolerance * rr0;
   ws.jp.resize(m);
   for (int it = 0; it < max_iterations; ++it) {
@@ -519,6 +522,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     for (std::size_t v = 0; v < n; ++v) {
       delta[v] += alpha * ws.p[v];
       ws.res[v] -= alpha * ws.kp[v];
+      to_cycle(v, ws.res[v]);  // unused if this iteration is the last
     }
     double rr = 0.0;
     for (std::size_t j = 0; j < m; ++j) {
@@ -528,10 +532,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     result.iterations = it + 1;
     result.relative_residual = std::sqrt(rr / rr0);
     if (rr <= stop) break;
-    const double rz_new = precondition(ws.res, ws.z);
+    const double rz_new = precondition(ws.res);
     const double beta = rz_new / rz;
     rz = rz_new;
-    for (std::size_t v = 0; v < n; ++v) ws.p[v] = ws.z[v] + beta * ws.p[v];
+    for (std::size_t v = 0; v < n; ++v) ws.p[v] = z_at(v) + beta * ws.p[v];
   }
   return result;
 }
