@@ -46,6 +46,19 @@ cases::CylinderCase make_case(cases::DetailKind kind, int triangles) {
   return cases::make_cylinder_case(o);
 }
 
+// The solve's phase times: one per level, each one run, and together within the solve's time.
+void expect_phases_within_solve(const ReconstructStats& st) {
+  ASSERT_EQ(st.seconds_levels.size(), static_cast<std::size_t>(st.levels));
+  double sum = st.seconds_polish + st.seconds_folds;
+  for (double t : st.seconds_levels) {
+    EXPECT_GT(t, 0.0);
+    sum += t;
+  }
+  EXPECT_GT(st.seconds_polish, 0.0);
+  EXPECT_GT(st.seconds_folds, 0.0);  // the result's new pairs are counted (retry_on_new_intersections)
+  EXPECT_LE(sum, st.seconds_solve);
+}
+
 IntersectionOptions collecting() {
   IntersectionOptions all;
   all.collect_pairs = true;
@@ -88,6 +101,7 @@ TEST_P(PaperBend, VolumesAvoidTheFoldsThatVectorsMake) {
   EXPECT_EQ(o.volumes_pairs, 0u) << c.name;
   EXPECT_GT(o.vectors_pairs, 0u) << c.name;
   EXPECT_TRUE(o.stats.converged);
+  expect_phases_within_solve(o.stats);
   EXPECT_LE(o.volumes.max_relative_error, 1e-3);
   EXPECT_LE(o.volumes.rms_relative_error, 1e-4);
   EXPECT_LE(std::abs(o.volumes.total_volume_change), 1e-3);
@@ -430,6 +444,7 @@ TEST(DragState, PreviewsFollowTheDrag) {
   // The exact step from the drag's state: the finest level solved to the tolerance.
   const ReconstructResult x = rec.drag_step(b1, state, WarmStartOptions{false, 1e-4, 0, 0, 3});
   EXPECT_TRUE(x.stats.converged);
+  expect_phases_within_solve(x.stats);
   const BaseFrames fr = evaluate_base_frames(e, b1);
   EXPECT_LE(volume_metrics(e, fr, x.positions).max_relative_error, 1e-4);
   EXPECT_EQ(0u, find_self_intersections(x.positions, c.detail.faces).num_pairs);

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <sstream>
 
 #include "internal/hierarchy.h"
@@ -30,6 +31,19 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
+
+// Adds the seconds of its scope to one of ReconstructStats' phase times.
+class PhaseTimer {
+ public:
+  explicit PhaseTimer(double& total) : total_(total) {}
+  PhaseTimer(const PhaseTimer&) = delete;
+  PhaseTimer& operator=(const PhaseTimer&) = delete;
+  ~PhaseTimer() { total_ += seconds_since(t0_); }
+
+ private:
+  double& total_;
+  Clock::time_point t0_ = Clock::now();
+};
 
 // One multigrid level: its prisms (in original vertex ids, so all levels share the position
 // arrays), per-level targets, adjacency and regularization weights (in level-local ids).
@@ -223,8 +237,12 @@ class VolumeReconstructor::Impl {
     }
     if (!start) {
       clean_start(s, a, opt_.volume_iterations, st, V);
-      Outcome first = outcome(s, a, V);
-      repair_folds(s, a, st, V, first);
+      Outcome first;
+      {
+        PhaseTimer timer(st.seconds_folds);
+        first = outcome(s, a, V);
+        repair_folds(s, a, st, V, first);
+      }
       // Not converged, or still folded: once more from the clean start with another schedule, and
       // the better of the two is kept (converged first, then fewer new pairs).
       auto retry = [&](int volume_iterations, int mg_iterations) {
@@ -234,6 +252,7 @@ class VolumeReconstructor::Impl {
         s.gn.mg_iterations = mg_iterations;
         clean_start(s, a, volume_iterations, st, V);
         s.gn.mg_iterations = 0;
+        PhaseTimer timer(st.seconds_folds);
         Outcome second = outcome(s, a, V);
         repair_folds(s, a, st, V, second);
         if (second.better_than(first))
@@ -249,7 +268,10 @@ class VolumeReconstructor::Impl {
       if (opt_.multigrid.retry_iterations > 0 && opt_.step_solver == VolumeStepSolver::Multigrid && failed())
         retry(opt_.retry_volume_iterations > 0 ? opt_.retry_volume_iterations : opt_.volume_iterations,
               opt_.multigrid.retry_iterations);
-      fold_checked(s, a, st, V, first);
+      {
+        PhaseTimer timer(st.seconds_folds);
+        fold_checked(s, a, st, V, first);
+      }
       st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
     } else {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
@@ -264,9 +286,13 @@ class VolumeReconstructor::Impl {
         // already solves the problem stays put (coarse levels have their own targets).
         const Level& F = levels_.back();
         s.volume_iterations = opt_.volume_iterations;
-        st.finest_cycles_per_scale.push_back(
-            solve_level(F, s, a, warm->tolerance,
-                        warm->max_cycles > 0 ? warm->max_cycles : opt_.final_max_cycles, st, V));
+        {
+          PhaseTimer timer(st.seconds_levels.back());
+          st.finest_cycles_per_scale.push_back(
+              solve_level(F, s, a, warm->tolerance,
+                          warm->max_cycles > 0 ? warm->max_cycles : opt_.final_max_cycles, st, V));
+        }
+        PhaseTimer timer(st.seconds_polish);
         polish(F, s, warm->tolerance, st, V);
       }
     }
@@ -313,6 +339,7 @@ class VolumeReconstructor::Impl {
     for (int l = 0; l < nl; ++l) {
       const Level& L = levels_[l];
       const std::vector<Vec3>& start = ds.level[l];
+      std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
       if (l == 0) {
         for (int i : L.verts) s.P[i] = s.P0[i] = start[i];
       } else {
@@ -344,8 +371,13 @@ class VolumeReconstructor::Impl {
                                        finest ? final_cycles : opt_.max_cycles, st, V);
         if (finest) {
           st.finest_cycles_per_scale.push_back(cycles);
-          polish(L, s, warm.tolerance, st, V);
+          level_timer.reset();
+          {
+            PhaseTimer timer(st.seconds_polish);
+            polish(L, s, warm.tolerance, st, V);
+          }
           // The exact solve: its folds are counted and repaired as a clean start's.
+          PhaseTimer timer(st.seconds_folds);
           Outcome o = outcome(s, a, V);
           repair_folds(s, a, st, V, o);
           fold_checked(s, a, st, V, o);
@@ -877,6 +909,7 @@ class VolumeReconstructor::Impl {
   // The hierarchy's sizes, coarsest first.
   void level_stats(ReconstructStats& st) const {
     st.levels = static_cast<int>(levels_.size());
+    st.seconds_levels.assign(levels_.size(), 0.0);
     for (const Level& L : levels_) {
       st.level_vertices.push_back(static_cast<int>(L.verts.size()));
       st.level_faces.push_back(static_cast<int>(L.faces.size()));
@@ -932,6 +965,7 @@ class VolumeReconstructor::Impl {
     const int nl = static_cast<int>(levels_.size());
     for (int l = 0; l < nl; ++l) {
       const Level& L = levels_[l];
+      std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
       if (l > 0) prolongate(L, levels_[l - 1], s);
       const bool finest = l + 1 == nl;
       if (finest && coarse_only && nl > 1) {
@@ -942,9 +976,13 @@ class VolumeReconstructor::Impl {
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
       s.volume_iterations = finest && !full_scale ? opt_.finest_volume_iterations : s.cycle_volume_iterations;
       const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
+      level_timer.reset();
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
-        if (full_scale) polish(L, s, final_tol, st, V);
+        if (full_scale) {
+          PhaseTimer timer(st.seconds_polish);
+          polish(L, s, final_tol, st, V);
+        }
       }
     }
   }

@@ -32,6 +32,7 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -67,6 +68,11 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
+// A solve's phases (ReconstructStats::seconds_levels, _polish, _folds).
+json phases_json(const ReconstructStats& st) {
+  return json{{"levels", st.seconds_levels}, {"polish", st.seconds_polish}, {"folds", st.seconds_folds}};
 }
 
 long long max_rss_bytes() {
@@ -223,6 +229,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   // medians in place of the first run's.
   std::vector<double> wall{sec["reconstruct"].get<double>()}, cpus{cpu["reconstruct"].get<double>()},
       solves{st.seconds_solve}, frame_secs{st.seconds_frames};
+  std::vector<json> phases{phases_json(st)};
   for (int k = 1; k < args.repeat; ++k) {
     const auto t0 = Clock::now();
     const double c0 = cpu_seconds();
@@ -231,6 +238,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
     cpus.push_back(cpu_seconds() - c0);
     solves.push_back(again.stats.seconds_solve);
     frame_secs.push_back(again.stats.seconds_frames);
+    phases.push_back(phases_json(again.stats));
     if (again.positions != r.positions)
       throw std::runtime_error("run " + std::to_string(k + 1) +
                                " of --repeat gave other positions than the first");
@@ -245,6 +253,11 @@ json run_size(const Args& args, int size, long long parent_rss) {
   cpu["reconstruct"] = median(cpus);
   sec["frames"] = median(frame_secs);
   sec["solve"] = median(solves);
+  // The phases of the run whose solve took the median time.
+  std::vector<std::size_t> order(solves.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return solves[i] < solves[j]; });
+  sec["solve_phases"] = phases[order[(order.size() - 1) / 2]];
 
   const BaseFrames frames = evaluate_base_frames(e, edited);
   const VolumeMetrics vm = timed("volume_metrics", [&] { return volume_metrics(e, frames, r.positions); });

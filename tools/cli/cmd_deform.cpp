@@ -58,8 +58,10 @@ json edit_json(const EditFacts& editor, Method method, const EditResult& r, doub
            {"edit", t.edit},
            {"solve", t.solve},
            {"metrics", metrics_seconds}}}};
-  j["iterations"] =
-      method == Method::Volumes ? iterations_json(std::optional<ReconstructStats>(r.stats)) : json(nullptr);
+  const std::optional<ReconstructStats> stats =
+      method == Method::Volumes ? std::optional<ReconstructStats>(r.stats) : std::nullopt;
+  j["iterations"] = iterations_json(stats);
+  j["solve_phases_seconds"] = solve_phases_json(stats);
   return j;
 }
 

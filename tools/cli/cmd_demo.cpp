@@ -136,7 +136,8 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
         {"volume_metrics", volume_metrics_json(outcome.volume)},
         {"intersections", intersections_json(input.result.num_pairs, outcome, input.seconds)},
         {"iterations", iterations_json(outcome.stats)},
-        {"timing_seconds", timing_json(outcome.times)}};
+        {"timing_seconds", timing_json(outcome.times)},
+        {"solve_phases_seconds", solve_phases_json(outcome.stats)}};
     rows.push_back({src.name,
                     to_string(method),
                     outcome.volume.max_relative_error,

@@ -107,7 +107,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
               {"volume_metrics", volume_metrics_json(outcome.volume)},
               {"intersections", intersections_json(input.result.num_pairs, outcome, input.seconds)},
               {"iterations", iterations_json(outcome.stats)},
-              {"timing_seconds", timing_json(times)}};
+              {"timing_seconds", timing_json(times)},
+              {"solve_phases_seconds", solve_phases_json(outcome.stats)}};
   if (!o.report.empty()) {
     report["report"] = o.report;
     write_json_report(report, o.report);

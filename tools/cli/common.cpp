@@ -295,6 +295,12 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"converged", s.converged}};
 }
 
+json solve_phases_json(const std::optional<ReconstructStats>& stats) {
+  if (!stats) return nullptr;
+  return json{
+      {"levels", stats->seconds_levels}, {"polish", stats->seconds_polish}, {"folds", stats->seconds_folds}};
+}
+
 json timing_json(const PhaseTimes& t) {
   return json{{"read", t.read},
               {"encode", t.encode},

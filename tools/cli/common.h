@@ -192,6 +192,8 @@ json volume_metrics_json(const VolumeMetrics& metrics);
 json intersections_json(std::size_t input_pairs, const MethodOutcome& outcome, double input_seconds);
 //! ReconstructStats as JSON; null for the vectors method (no iterations).
 json iterations_json(const std::optional<ReconstructStats>& stats);
+// The volume solve's phases (ReconstructStats::seconds_levels, _polish, _folds), or null.
+json solve_phases_json(const std::optional<ReconstructStats>& stats);
 json timing_json(const PhaseTimes& times);
 
 //! Writes \p report (pretty-printed, newline-terminated) to \p path atomically.

@@ -242,9 +242,16 @@ struct ReconstructStats {
   std::vector<int> finest_cycles_per_scale;
   double max_relative_error = 0.0;  //!< on the finest level at the end
   double rms_relative_error = 0.0;
-  bool converged = false;        //!< max_relative_error <= tolerance
-  double seconds_frames = 0.0;   //!< evaluating the base points on the edited base
-  double seconds_solve = 0.0;    //!< the multigrid solve
+  bool converged = false;       //!< max_relative_error <= tolerance
+  double seconds_frames = 0.0;  //!< evaluating the base points on the edited base
+  double seconds_solve = 0.0;   //!< the multigrid solve
+  //! Phases of seconds_solve (the rest prepares the state and measures the result). Per level,
+  //! coarsest first: its cycles (prolongation, volume steps, regularization) over every volume
+  //! scale and retry.
+  std::vector<double> seconds_levels;
+  double seconds_polish = 0.0;  //!< the finest level's polish after its cycles
+  //! Counting the result's new intersecting pairs and repairing folds (the repair's polish included).
+  double seconds_folds = 0.0;
   long long step_halvings = 0;   //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
   //! Of these, the small ones of steps that move a neighbourhood only (the local end of the
