@@ -32,7 +32,8 @@ class ScratchDir {
   //! The names of the files in the directory.
   std::set<std::string> listing() const {
     std::set<std::string> names;
-    for (const auto& e : std::filesystem::directory_iterator(path_)) names.insert(e.path().filename().string());
+    for (const auto& e : std::filesystem::directory_iterator(path_))
+      names.insert(e.path().filename().string());
     return names;
   }
 

@@ -1,8 +1,3 @@
-#include "strata/intersections.h"
-
-#include "strata/exceptions.h"
-#include "test_meshes.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +8,10 @@
 #include <map>
 #include <random>
 #include <utility>
+
+#include "strata/exceptions.h"
+#include "strata/intersections.h"
+#include "test_meshes.h"
 
 namespace strata {
 namespace {
@@ -41,7 +40,9 @@ IntersectionResult find(const TriMesh& m, bool parallel = true, std::size_t max_
   return find_self_intersections(m.vertices, m.faces, o);
 }
 
-std::size_t count(const TriMesh& m) { return find_self_intersections(m.vertices, m.faces).num_pairs; }
+std::size_t count(const TriMesh& m) {
+  return find_self_intersections(m.vertices, m.faces).num_pairs;
+}
 
 // The O(n^2) reference: every pair of faces sharing no vertex index, through the same exact predicate.
 std::vector<Pair> brute_force_pairs(const TriMesh& m) {
@@ -66,7 +67,8 @@ TriMesh uv_sphere(int slices, int stacks) {
     const double theta = kPi * i / stacks;
     for (int j = 0; j < slices; ++j) {
       const double phi = 2.0 * kPi * j / slices;
-      m.vertices.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      m.vertices.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                              std::cos(theta));
     }
   }
   m.vertices.emplace_back(0, 0, -1);
@@ -132,7 +134,8 @@ TriMesh lattice_soup(int n, int extent, int size, std::mt19937& rng) {
     for (int k = 0; k < 3; ++k) {
       // Now and then reuse a recent vertex, so that adjacency also occurs.
       if (m.num_vertices() > 0 && coin(rng) == 0) {
-        f[k] = std::uniform_int_distribution<int>(std::max(0, m.num_vertices() - 6), m.num_vertices() - 1)(rng);
+        f[k] =
+            std::uniform_int_distribution<int>(std::max(0, m.num_vertices() - 6), m.num_vertices() - 1)(rng);
       } else {
         m.vertices.push_back(c + Vec3(step(rng), step(rng), step(rng)));
         f[k] = m.num_vertices() - 1;
@@ -311,8 +314,8 @@ TEST(IntersectReference, RandomSoupsMatchBruteForce) {
     std::mt19937 rng(seed);
     expect_matches_brute_force(small_triangle_soup(600, rng));
     expect_matches_brute_force(shared_vertex_soup(300, 120, rng));
-    expect_matches_brute_force(lattice_soup(400, 3, 3, rng));    // dense
-    expect_matches_brute_force(lattice_soup(800, 12, 2, rng));   // sparse, so the hierarchy prunes
+    expect_matches_brute_force(lattice_soup(400, 3, 3, rng));   // dense
+    expect_matches_brute_force(lattice_soup(800, 12, 2, rng));  // sparse, so the hierarchy prunes
   }
 }
 
@@ -349,9 +352,9 @@ TEST(IntersectLimit, MaxPairsStopsTheSearch) {
 TEST(IntersectNew, CountsPairsCreatedByAnEdit) {
   // Face 0 is the base triangle, face 1 crosses it, faces 2 and 3 are away from everything.
   TriMesh m;
-  m.vertices = {kBase[0],         kBase[1],          kBase[2],         Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1),
-                Vec3(2, 2, 0),    Vec3(5, 0, 0),     Vec3(6, 0, 0),    Vec3(5, 1, 0),        Vec3(5, 0, 3),
-                Vec3(6, 0, 3),    Vec3(5, 1, 3)};
+  m.vertices = {kBase[0],      kBase[1],      kBase[2],      Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1),
+                Vec3(2, 2, 0), Vec3(5, 0, 0), Vec3(6, 0, 0), Vec3(5, 1, 0),        Vec3(5, 0, 3),
+                Vec3(6, 0, 3), Vec3(5, 1, 3)};
   m.faces = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 10, 11}};
   const IntersectionResult before = find(m);
   ASSERT_EQ(before.pairs, (std::vector<Pair>{{0, 1}}));
@@ -424,8 +427,9 @@ void measure(const char* name, const TriMesh& m) {
   std::size_t serial_pairs = 0, parallel_pairs = 0;
   const double serial = seconds_for(m, false, serial_pairs);
   const double parallel = seconds_for(m, true, parallel_pairs);
-  std::printf("[ MEASURE  ] %s, %d triangles: %.3f s single thread, %.3f s TBB parallel (best of 3), %zu pairs\n",
-              name, m.num_faces(), serial, parallel, parallel_pairs);
+  std::printf(
+      "[ MEASURE  ] %s, %d triangles: %.3f s single thread, %.3f s TBB parallel (best of 3), %zu pairs\n",
+      name, m.num_faces(), serial, parallel, parallel_pairs);
   EXPECT_EQ(serial_pairs, parallel_pairs);
 }
 

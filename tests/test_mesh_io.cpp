@@ -1,13 +1,7 @@
 // Tests for mesh_io.h and atomic_file.h. All fixture files are generated here, into a fresh
 // temporary directory per test, by small writers that are independent of the code under test.
 
-#include "strata/atomic_file.h"
-#include "strata/exceptions.h"
-#include "strata/mesh_io.h"
-#include "test_files.h"
-
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -27,6 +21,11 @@
 #include <string>
 #include <vector>
 
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
+#include "strata/mesh_io.h"
+#include "test_files.h"
+
 namespace fs = std::filesystem;
 using namespace strata;
 
@@ -36,7 +35,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
-
 
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -68,11 +66,14 @@ template <class E, class F>
   return ::testing::AssertionFailure() << "no exception thrown";
 }
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 ::testing::AssertionResult identical(const TriMesh& a, const TriMesh& b) {
   if (a.vertices.size() != b.vertices.size())
-    return ::testing::AssertionFailure() << "vertex counts " << a.vertices.size() << " vs " << b.vertices.size();
+    return ::testing::AssertionFailure()
+           << "vertex counts " << a.vertices.size() << " vs " << b.vertices.size();
   if (a.faces != b.faces) return ::testing::AssertionFailure() << "faces differ";
   for (size_t v = 0; v < a.vertices.size(); ++v)
     for (int c = 0; c < 3; ++c)
@@ -84,7 +85,8 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 
 double total_area(const TriMesh& m) {
   double a = 0.0;
-  for (const Face& f : m.faces) a += 0.5 * triangle_area_normal(m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]).norm();
+  for (const Face& f : m.faces)
+    a += 0.5 * triangle_area_normal(m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]).norm();
   return a;
 }
 
@@ -129,30 +131,44 @@ struct Soup {
 };
 
 enum class Fmt { Obj, Off, PlyAscii, PlyBinLE, PlyBinBE, StlAscii, StlBinary };
-const Fmt kAllFormats[] = {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::PlyBinBE, Fmt::StlAscii, Fmt::StlBinary};
+const Fmt kAllFormats[] = {Fmt::Obj,      Fmt::Off,      Fmt::PlyAscii, Fmt::PlyBinLE,
+                           Fmt::PlyBinBE, Fmt::StlAscii, Fmt::StlBinary};
 
 const char* fmt_name(Fmt f) {
   switch (f) {
-    case Fmt::Obj: return "obj";
-    case Fmt::Off: return "off";
-    case Fmt::PlyAscii: return "ply-ascii";
-    case Fmt::PlyBinLE: return "ply-le";
-    case Fmt::PlyBinBE: return "ply-be";
-    case Fmt::StlAscii: return "stl-ascii";
-    case Fmt::StlBinary: return "stl-binary";
+    case Fmt::Obj:
+      return "obj";
+    case Fmt::Off:
+      return "off";
+    case Fmt::PlyAscii:
+      return "ply-ascii";
+    case Fmt::PlyBinLE:
+      return "ply-le";
+    case Fmt::PlyBinBE:
+      return "ply-be";
+    case Fmt::StlAscii:
+      return "stl-ascii";
+    case Fmt::StlBinary:
+      return "stl-binary";
   }
   return "?";
 }
 std::string fmt_ext(Fmt f) {
   switch (f) {
-    case Fmt::Obj: return ".obj";
-    case Fmt::Off: return ".off";
+    case Fmt::Obj:
+      return ".obj";
+    case Fmt::Off:
+      return ".off";
     case Fmt::StlAscii:
-    case Fmt::StlBinary: return ".stl";
-    default: return ".ply";
+    case Fmt::StlBinary:
+      return ".stl";
+    default:
+      return ".ply";
   }
 }
-bool is_stl(Fmt f) { return f == Fmt::StlAscii || f == Fmt::StlBinary; }
+bool is_stl(Fmt f) {
+  return f == Fmt::StlAscii || f == Fmt::StlBinary;
+}
 
 std::string num(double x) {
   char buf[64];
@@ -194,10 +210,14 @@ std::string encode(const Soup& s, Fmt fmt) {
     case Fmt::PlyBinLE:
     case Fmt::PlyBinBE: {
       const bool ascii = fmt == Fmt::PlyAscii, be = fmt == Fmt::PlyBinBE;
-      o = std::string("ply\nformat ") + (ascii ? "ascii" : be ? "binary_big_endian" : "binary_little_endian") +
+      o = std::string("ply\nformat ") +
+          (ascii ? "ascii"
+           : be  ? "binary_big_endian"
+                 : "binary_little_endian") +
           " 1.0\ncomment fixture\nelement vertex " + std::to_string(s.v.size()) +
           "\nproperty double x\nproperty double y\nproperty double z\nproperty uchar red\nelement face " +
-          std::to_string(s.f.size()) + "\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n";
+          std::to_string(s.f.size()) +
+          "\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n";
       for (const auto& p : s.v) {
         if (ascii) {
           o += num(p[0]) + " " + num(p[1]) + " " + num(p[2]) + " 255\n";
@@ -223,7 +243,8 @@ std::string encode(const Soup& s, Fmt fmt) {
       o = "solid fixture\n";
       for (const auto& f : s.f) {
         o += " facet normal 0 0 0\n  outer loop\n";
-        for (long long i : f) o += "   vertex " + num(s.v[i][0]) + " " + num(s.v[i][1]) + " " + num(s.v[i][2]) + "\n";
+        for (long long i : f)
+          o += "   vertex " + num(s.v[i][0]) + " " + num(s.v[i][1]) + " " + num(s.v[i][2]) + "\n";
         o += "  endloop\n endfacet\n";
       }
       return o + "endsolid fixture\n";
@@ -242,7 +263,9 @@ std::string encode(const Soup& s, Fmt fmt) {
 }
 
 //! A closed tetrahedron, consistently oriented outwards.
-Soup tetra() { return {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}}; }
+Soup tetra() {
+  return {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}};
+}
 
 struct Fixture {
   test::ScratchDir dir{"strata_mesh_io"};
@@ -349,7 +372,8 @@ TEST(MeshIoRoundTrip, EveryFixtureFormatReadsTheSameTetrahedron) {
     ASSERT_EQ(r.num_faces(), 4) << fmt_name(fmt);
     for (int f = 0; f < 4; ++f)
       for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) EXPECT_EQ(r.vertices[r.faces[f][c]][k], s.v[s.f[f][c]][k]) << fmt_name(fmt);
+        for (int k = 0; k < 3; ++k)
+          EXPECT_EQ(r.vertices[r.faces[f][c]][k], s.v[s.f[f][c]][k]) << fmt_name(fmt);
     EXPECT_NEAR(signed_volume(r), 1.0 / 6.0, 1e-15) << fmt_name(fmt);
     if (!is_stl(fmt)) {
       for (int f = 0; f < 4; ++f)
@@ -450,7 +474,8 @@ TEST(MeshIoTriangulate, QuadAndPentagonInEveryPolygonFormat) {
       const bool in_quad = f < 2;
       for (int i : r.faces[f]) EXPECT_EQ(r.vertices[i][0] < 2.0, in_quad) << fmt_name(fmt) << " face " << f;
       // Orientation is kept: every triangle faces +z like its polygon.
-      EXPECT_GT(triangle_area_normal(r.vertices[r.faces[f][0]], r.vertices[r.faces[f][1]], r.vertices[r.faces[f][2]])[2],
+      EXPECT_GT(triangle_area_normal(r.vertices[r.faces[f][0]], r.vertices[r.faces[f][1]],
+                                     r.vertices[r.faces[f][2]])[2],
                 0.0)
           << fmt_name(fmt) << " face " << f;
     }
@@ -466,7 +491,8 @@ TEST(MeshIoTriangulate, NonConvexQuadGetsNoFlippedTriangle) {
     const TriMesh r = read_mesh(fx.put(s, fmt));
     ASSERT_EQ(r.num_faces(), 2);
     for (const Face& f : r.faces)
-      EXPECT_GT(triangle_area_normal(r.vertices[f[0]], r.vertices[f[1]], r.vertices[f[2]])[2], 0.0) << fmt_name(fmt);
+      EXPECT_GT(triangle_area_normal(r.vertices[f[0]], r.vertices[f[1]], r.vertices[f[2]])[2], 0.0)
+          << fmt_name(fmt);
     EXPECT_NEAR(total_area(r), 1.5, 1e-15);
   }
 }
@@ -489,17 +515,17 @@ TEST(MeshIoPolygons, ReadKeepsPolygonsAsListedInEveryFormat) {
   std::vector<std::vector<int>> polygons;
   const TriMesh r = read_mesh(fx.put(tetra(), Fmt::StlBinary), &polygons);
   ASSERT_EQ(polygons.size(), 4u);
-  for (int f = 0; f < 4; ++f)
-    EXPECT_EQ(polygons[f], std::vector<int>(r.faces[f].begin(), r.faces[f].end()));
+  for (int f = 0; f < 4; ++f) EXPECT_EQ(polygons[f], std::vector<int>(r.faces[f].begin(), r.faces[f].end()));
 }
 
 TEST(MeshIoPolygons, WriteReadRoundTripIsExact) {
   test::ScratchDir dir{"strata_mesh_io"};
   // A cube of quads with one face split into a triangle pair, at awkward coordinates.
   std::vector<Vec3> v;
-  for (int k = 0; k < 8; ++k) v.push_back(Vec3(k & 1 ? 1.0 / 3 : -0.1, k & 2 ? 2.0 / 7 : 1e-17, k & 4 ? 1e5 + 0.1 : 0.3));
-  const std::vector<std::vector<int>> faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                               {2, 6, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7, 5}};
+  for (int k = 0; k < 8; ++k)
+    v.push_back(Vec3(k & 1 ? 1.0 / 3 : -0.1, k & 2 ? 2.0 / 7 : 1e-17, k & 4 ? 1e5 + 0.1 : 0.3));
+  const std::vector<std::vector<int>> faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3},
+                                               {0, 4, 6},    {0, 6, 2},    {1, 3, 7, 5}};
   for (const char* name : {"cube.obj", "cube.off", "cube.ply"}) {
     for (MeshEncoding enc : {MeshEncoding::Default, MeshEncoding::Ascii}) {
       if (enc == MeshEncoding::Ascii && std::string(name) != "cube.ply") continue;
@@ -521,15 +547,30 @@ TEST(MeshIoPolygons, WriteRefusesWhatReadWouldReject) {
   test::ScratchDir dir{"strata_mesh_io"};
   const std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
   const std::string path = dir.file("bad.obj");
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1}}, path); }, {"bad.obj", "face 0", "2 corners"}));
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 4}}, path); }, {"bad.obj", "out of range"}));
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 1}}, path); }, {"bad.obj", "repeats"}));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] {
+        write_polygon_mesh(v, {{0, 1}}, path);
+      },
+      {"bad.obj", "face 0", "2 corners"}));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] {
+        write_polygon_mesh(v, {{0, 1, 2, 4}}, path);
+      },
+      {"bad.obj", "out of range"}));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] {
+        write_polygon_mesh(v, {{0, 1, 2, 1}}, path);
+      },
+      {"bad.obj", "repeats"}));
   EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {}, path); }, {"bad.obj"}));
   std::vector<Vec3> nan = v;
   nan[2][1] = std::nan("");
   EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(nan, {{0, 1, 2, 3}}, path); }, {"bad.obj"}));
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_polygon_mesh(v, {{0, 1, 2, 3}}, dir.file("q.obj"), MeshEncoding::Binary); },
-                                        {"q.obj", "no binary"}));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] {
+        write_polygon_mesh(v, {{0, 1, 2, 3}}, dir.file("q.obj"), MeshEncoding::Binary);
+      },
+      {"q.obj", "no binary"}));
   EXPECT_FALSE(fs::exists(path));
 }
 
@@ -543,8 +584,8 @@ TEST(MeshIoErrors, OutOfRangeIndex) {
   for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinLE, Fmt::PlyBinBE}) {
     const std::string path = fx.put(s, fmt);
     const std::string shown = fmt == Fmt::Obj ? "8" : "7";  // as written in the file
-    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
-                                          {path + ": ", "vertex index " + shown + " out of range", "4 vertices"}))
+    EXPECT_TRUE(throws_with<InvalidInput>(
+        [&] { read_mesh(path); }, {path + ": ", "vertex index " + shown + " out of range", "4 vertices"}))
         << fmt_name(fmt);
   }
   s.f[2] = {0, 3, -1};
@@ -557,15 +598,18 @@ TEST(MeshIoErrors, OutOfRangeIndex) {
   write_bytes(fx.dir.file("zero.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
   EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("zero.obj")); }, {"line 4", "index 0"}));
   write_bytes(fx.dir.file("rel.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("rel.obj")); }, {"line 4", "-4", "3 vertices"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("rel.obj")); }, {"line 4", "-4", "3 vertices"}));
   // A uint index beyond the int range in binary PLY.
-  std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                    "property float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
   for (float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(ply, c);
   put(ply, static_cast<uint8_t>(3));
   for (uint32_t i : {0u, 1u, 4000000000u}) put(ply, i);
   write_bytes(fx.dir.file("big.ply"), ply);
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("big.ply")); }, {"4000000000 out of range"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("big.ply")); }, {"4000000000 out of range"}));
 }
 
 TEST(MeshIoErrors, NonFiniteCoordinate) {
@@ -576,19 +620,23 @@ TEST(MeshIoErrors, NonFiniteCoordinate) {
     for (Fmt fmt : kAllFormats) {
       const std::string path = fx.put(s, fmt);
       // STL numbers vertices by first use; vertex 3 of the tetrahedron is also its 4th to appear.
-      EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": vertex 3 has a non-finite coordinate"}))
+      EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
+                                            {path + ": vertex 3 has a non-finite coordinate"}))
           << fmt_name(fmt) << " " << bad;
     }
   }
   // Text spellings other than our own.
   test::ScratchDir dir{"strata_mesh_io"};
   write_bytes(dir.file("n.obj"), "v 0 0 0\nv 1 0 NaN\nv 0 1 0\nf 1 2 3\n");
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("n.obj")); }, {"vertex 1 has a non-finite"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { read_mesh(dir.file("n.obj")); }, {"vertex 1 has a non-finite"}));
   write_bytes(dir.file("n.off"), "OFF\n3 1 0\n0 0 0\n-inf 0 0\n0 1 0\n3 0 1 2\n");
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("n.off")); }, {"vertex 1 has a non-finite"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { read_mesh(dir.file("n.off")); }, {"vertex 1 has a non-finite"}));
   // A number beyond the double range is a parse error, not a silent infinity.
   write_bytes(dir.file("r.obj"), "v 0 0 0\nv 1 0 1e400\nv 0 1 0\nf 1 2 3\n");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("r.obj")); }, {"line 2", "1e400", "out of the range"}));
+  EXPECT_TRUE(
+      throws_with<IoError>([&] { read_mesh(dir.file("r.obj")); }, {"line 2", "1e400", "out of the range"}));
 }
 
 TEST(MeshIoErrors, NoFaces) {
@@ -600,9 +648,10 @@ TEST(MeshIoErrors, NoFaces) {
     EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": no faces"})) << fmt_name(fmt);
   }
   // A PLY point cloud without a face element.
-  write_bytes(fx.dir.file("cloud.ply"),
-              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-              "end_header\n1 2 3\n");
+  write_bytes(
+      fx.dir.file("cloud.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+      "end_header\n1 2 3\n");
   EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("cloud.ply")); }, {"no faces"}));
 }
 
@@ -613,7 +662,8 @@ TEST(MeshIoErrors, ZeroAreaFace) {
   s.f.push_back({1, 4, 2});
   for (Fmt fmt : kAllFormats) {
     const std::string path = fx.put(s, fmt);
-    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": face 4 has zero area"})) << fmt_name(fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": face 4 has zero area"}))
+        << fmt_name(fmt);
   }
   // STL: a facet with two corners at the same position collapses to a repeated vertex.
   s = tetra();
@@ -621,7 +671,8 @@ TEST(MeshIoErrors, ZeroAreaFace) {
   for (Fmt fmt : {Fmt::StlAscii, Fmt::StlBinary}) {
     const std::string path = fx.put(s, fmt, "collapsed");
     // The facet's corners are welded vertex indices, numbered by first use.
-    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "facet 4", "repeats vertex index 1"}))
+    EXPECT_TRUE(
+        throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "facet 4", "repeats vertex index 1"}))
         << fmt_name(fmt);
   }
 }
@@ -639,12 +690,14 @@ TEST(MeshIoErrors, RepeatedIndexIsNotSilentlyRemoved) {
   s.f[3] = {1, 1, 3};
   for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::PlyBinBE}) {
     const std::string path = fx.put(s, fmt, "tri");
-    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "repeats vertex index"})) << fmt_name(fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "repeats vertex index"}))
+        << fmt_name(fmt);
   }
   s.f[3] = {1, 2};
   for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
     const std::string path = fx.put(s, fmt, "two");
-    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "face has 2 corners"})) << fmt_name(fmt);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path, "face has 2 corners"}))
+        << fmt_name(fmt);
   }
 }
 
@@ -652,7 +705,8 @@ TEST(MeshIoErrors, NonManifoldEdge) {
   Fixture fx;
   // Three triangles on edge (0,1), consistently oriented as far as possible: OpenMesh would
   // report a "complex edge" and duplicate vertices instead of failing.
-  const Soup s{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}}, {{0, 1, 2}, {1, 0, 3}, {1, 0, 4}}};
+  const Soup s{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}},
+               {{0, 1, 2}, {1, 0, 3}, {1, 0, 4}}};
   for (Fmt fmt : kAllFormats) {
     const std::string path = fx.put(s, fmt);
     EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
@@ -678,7 +732,9 @@ TEST(MeshIoErrors, TruncatedFiles) {
   const TriMesh m = without_unreferenced(awkward_octahedron());
   // Text formats losing their last line: a cut at a line boundary, no partial line to give it away.
   const std::pair<std::string, std::string> cases[] = {
-      {"t.obj", "truncated: header comment (line 1) declares 6 vertices and 8 faces, file holds 6 vertices and 7 faces"},
+      {"t.obj",
+       "truncated: header comment (line 1) declares 6 vertices and 8 faces, file holds 6 vertices and 7 "
+       "faces"},
       {"t.off", "truncated: header declares 8 faces, file holds 7"},
       {"t.ply", "truncated: header declares 8 faces, file holds 7"},
       {"t.stl", "truncated: no 'endsolid' line"},
@@ -697,51 +753,65 @@ TEST(MeshIoErrors, TruncatedFiles) {
   size_t end = 0;
   for (int line = 0; line < 5; ++line) end = off.find('\n', end) + 1;
   write_bytes(dir.file("v.off"), off.substr(0, end));
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("v.off")); }, {"truncated: header declares 6 vertices, file holds 3"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("v.off")); },
+                                   {"truncated: header declares 6 vertices, file holds 3"}));
   // OBJ without a count comment, cut inside its last vertex line.
   write_bytes(dir.file("p.obj"), "v 0 0 0\nv 1 0 0\nv 0 1");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("p.obj")); }, {"line 3: vertex has 2 coordinates, needs 3 (file truncated?)"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("p.obj")); },
+                                   {"line 3: vertex has 2 coordinates, needs 3 (file truncated?)"}));
   // OFF cut inside the last face line.
   write_bytes(dir.file("f.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("f.off")); }, {"face declares 3 corners but lists 2 (file truncated?)"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("f.off")); },
+                                   {"face declares 3 corners but lists 2 (file truncated?)"}));
   // Binary formats.
   write_mesh(m, dir.file("b.ply"), MeshEncoding::Binary);
   std::string ply = read_bytes(dir.file("b.ply"));
   write_bytes(dir.file("b.ply"), ply.substr(0, ply.size() - 13 * 2 - 5));
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.ply")); }, {"truncated: header declares 8 faces, file holds 5"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.ply")); },
+                                   {"truncated: header declares 8 faces, file holds 5"}));
   write_bytes(dir.file("h.ply"), ply.substr(0, ply.find("end_header")));
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("h.ply")); }, {"truncated: PLY header has no 'end_header' line"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("h.ply")); },
+                                   {"truncated: PLY header has no 'end_header' line"}));
   write_mesh(m, dir.file("b.stl"), MeshEncoding::Binary);
   std::string stl = read_bytes(dir.file("b.stl"));
   write_bytes(dir.file("b.stl"), stl.substr(0, stl.size() - 60));
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.stl")); }, {"truncated: header declares 8 triangles, file holds 6"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("b.stl")); },
+                                   {"truncated: header declares 8 triangles, file holds 6"}));
   // Too much data is as suspicious as too little.
   write_bytes(dir.file("x.stl"), stl + "junk");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.stl")); }, {"declares 8 triangles", "the file has 488 bytes"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.stl")); },
+                                   {"declares 8 triangles", "the file has 488 bytes"}));
   write_bytes(dir.file("x.ply"), ply + "j");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.ply")); }, {"1 bytes of data after the last declared element"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.ply")); },
+                                   {"1 bytes of data after the last declared element"}));
   write_bytes(dir.file("x.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.off")); }, {"line 7: unexpected data after the 1 faces"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.off")); },
+                                   {"line 7: unexpected data after the 1 faces"}));
 }
 
 TEST(MeshIoErrors, MissingFileAndUnknownExtension) {
   test::ScratchDir dir{"strata_mesh_io"};
   for (const char* name : {"none.obj", "none.off", "none.ply", "none.stl"}) {
     const std::string path = dir.file(name);
-    EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(path); }, {path + ": cannot open: No such file or directory"}));
+    EXPECT_TRUE(
+        throws_with<IoError>([&] { read_mesh(path); }, {path + ": cannot open: No such file or directory"}));
   }
   write_bytes(dir.file("m.xyz"), "v 0 0 0\n");
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("m.xyz")); },
-                                   {dir.file("m.xyz") + ": unsupported mesh file extension '.xyz'", ".obj, .off, .ply, .stl"}));
+  EXPECT_TRUE(throws_with<IoError>(
+      [&] { read_mesh(dir.file("m.xyz")); },
+      {dir.file("m.xyz") + ": unsupported mesh file extension '.xyz'", ".obj, .off, .ply, .stl"}));
   EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("noext")); }, {"no file extension"}));
   fs::create_directory(dir.file("dir.obj"));
-  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("dir.obj")); }, {"dir.obj: cannot read: not a regular file"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("dir.obj")); },
+                                   {"dir.obj: cannot read: not a regular file"}));
 
   const TriMesh m = awkward_octahedron();
   EXPECT_TRUE(throws_with<IoError>([&] { write_mesh(m, dir.file("out.xyz")); }, {"out.xyz", "unsupported"}));
   EXPECT_FALSE(fs::exists(dir.file("out.xyz")));
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, dir.file("out.obj"), MeshEncoding::Binary); }, {"no binary"}));
-  EXPECT_TRUE(throws_with<IoError>([&] { write_mesh(m, dir.file("missing_dir/out.obj")); }, {"cannot create a temporary file"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, dir.file("out.obj"), MeshEncoding::Binary); },
+                                        {"no binary"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_mesh(m, dir.file("missing_dir/out.obj")); },
+                                   {"cannot create a temporary file"}));
 }
 
 TEST(MeshIoErrors, UnparsableContent) {
@@ -755,20 +825,25 @@ TEST(MeshIoErrors, UnparsableContent) {
       {"f.off", {"OFF BINARY\n", "binary OFF is not supported"}},
       {"g.ply", {"plyx\n", "not a PLY file"}},
       {"h.ply", {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"}},
-      {"i.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "no property y"}},
-      {"j.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n300 0 0 0\n",
-                 "line 11", "'300' does not fit its declared type"}},
-      {"k.ply", {"ply\nformat ascii 1.0\nelement vertex 1\nproperty blob x\nend_header\n", "unknown type 'blob'"}},
-      {"l.stl", {"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\nendloop\n", "line 6",
-                 "cannot parse 'endloop' as a number"}},
+      {"i.ply",
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "no property y"}},
+      {"j.ply",
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n300 0 0 0\n",
+        "line 11", "'300' does not fit its declared type"}},
+      {"k.ply",
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty blob x\nend_header\n", "unknown type 'blob'"}},
+      {"l.stl",
+       {"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\nendloop\n", "line 6",
+        "cannot parse 'endloop' as a number"}},
       {"m.stl", {"solid x\nfacet normal 0 0 1\nouter ring\n", "line 3: expected 'loop', found 'ring'"}},
       {"n.stl", {"short", "not an STL file"}},
   };
   for (const auto& [name, spec] : cases) {
     write_bytes(dir.file(name), spec[0]);
     for (size_t i = 1; i < spec.size(); ++i)
-      EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file(name)); }, {dir.file(name) + ": ", spec[i]})) << name;
+      EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file(name)); }, {dir.file(name) + ": ", spec[i]}))
+          << name;
   }
 }
 
@@ -794,12 +869,19 @@ TEST(MeshIoErrors, UnparsableContent) {
 TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
   test::ScratchDir dir{"strata_mesh_io"};
   std::mt19937 rng(12345);
-  const std::string prefixes[] = {"", "v ", "f 1 2 3\n", "OFF\n", "OFF\n3 1 0\n", "ply\n",
-                                  "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
-                                  "property float y\nproperty float z\nelement face 1\n"
-                                  "property list uint int vertex_indices\nend_header\n",
-                                  "ply\nformat ascii 1.0\nelement face 99999999\nproperty list int int vertex_indices\nend_header\n",
-                                  "solid ", std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4)};
+  const std::string prefixes[] = {
+      "",
+      "v ",
+      "f 1 2 3\n",
+      "OFF\n",
+      "OFF\n3 1 0\n",
+      "ply\n",
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 1\n"
+      "property list uint int vertex_indices\nend_header\n",
+      "ply\nformat ascii 1.0\nelement face 99999999\nproperty list int int vertex_indices\nend_header\n",
+      "solid ",
+      std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4)};
   const char alphabet[] = "vf0123456789 -+./\n#eE\r";
   int files = 0;
   for (const std::string ext : {".obj", ".off", ".ply", ".stl"})
@@ -825,9 +907,9 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
     MeshEncoding enc;
     bool binary;
   };
-  const Case cases[] = {{"p.obj", MeshEncoding::Ascii, false},     {"p.off", MeshEncoding::Ascii, false},
-                        {"a.ply", MeshEncoding::Ascii, false},     {"b.ply", MeshEncoding::Binary, true},
-                        {"a.stl", MeshEncoding::Ascii, false},     {"b.stl", MeshEncoding::Binary, true}};
+  const Case cases[] = {{"p.obj", MeshEncoding::Ascii, false}, {"p.off", MeshEncoding::Ascii, false},
+                        {"a.ply", MeshEncoding::Ascii, false}, {"b.ply", MeshEncoding::Binary, true},
+                        {"a.stl", MeshEncoding::Ascii, false}, {"b.stl", MeshEncoding::Binary, true}};
   for (const Case& c : cases) {
     write_mesh(m, dir.file(c.name), c.enc);
     const TriMesh whole = read_mesh(dir.file(c.name));
@@ -838,7 +920,8 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
       write_bytes(cut, full.substr(0, len));
       if (c.binary) {
         // Binary files carry counts for everything: every strict prefix is detected.
-        EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(cut); }, {cut + ": "})) << c.name << " length " << len;
+        EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(cut); }, {cut + ": "}))
+            << c.name << " length " << len;
         continue;
       }
       TriMesh r;
@@ -905,7 +988,8 @@ TEST(MeshIoValidate, ExactMessages) {
   t.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   EXPECT_EQ(message(t, "w.obj"), "w.obj: no faces");
   t.faces = {{0, 1, 2}, {0, 2, 99}};
-  EXPECT_EQ(message(t, "bunny.obj"), "bunny.obj: face 1 has vertex index 99 out of range (mesh has 3 vertices)");
+  EXPECT_EQ(message(t, "bunny.obj"),
+            "bunny.obj: face 1 has vertex index 99 out of range (mesh has 3 vertices)");
   t.faces = {{0, 1, -1}};
   EXPECT_EQ(message(t, "m"), "m: face 0 has vertex index -1 out of range (mesh has 3 vertices)");
   t.faces = {{0, 1, 0}};
@@ -932,10 +1016,13 @@ TEST(MeshIoValidate, ExactMessages) {
   fan.faces = {{4, 7, 0}, {7, 4, 1}, {7, 4, 2}, {4, 7, 3}};
   EXPECT_EQ(message(fan, "z.ply"), "z.ply: edge (4,7) is non-manifold: shared by 4 faces (0, 1, 2, 3)");
   fan.faces = {{4, 7, 0}, {4, 7, 1}};
-  EXPECT_EQ(message(fan, "o"), "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 4 to 7");
+  EXPECT_EQ(message(fan, "o"),
+            "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 4 to 7");
   fan.faces = {{7, 4, 0}, {7, 4, 1}};
-  EXPECT_EQ(message(fan, "o"), "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
-  EXPECT_EQ(message(fan, ""), "mesh: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
+  EXPECT_EQ(message(fan, "o"),
+            "o: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
+  EXPECT_EQ(message(fan, ""),
+            "mesh: edge (4,7) has inconsistently oriented faces: faces 0 and 1 both traverse it from 7 to 4");
 }
 
 TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
@@ -943,7 +1030,8 @@ TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
   TriMesh bad = awkward_octahedron();
   bad.faces.push_back(bad.faces.front());  // every edge of face 0 now used three times
   write_text_file_atomically(dir.file("keep.obj"), "old");
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(bad, dir.file("keep.obj")); }, {"keep.obj: edge", "non-manifold"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(bad, dir.file("keep.obj")); },
+                                        {"keep.obj: edge", "non-manifold"}));
   EXPECT_EQ(read_bytes(dir.file("keep.obj")), "old");
   EXPECT_EQ(dir.listing(), (std::set<std::string>{"keep.obj"}));
 
@@ -957,7 +1045,8 @@ TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
   EXPECT_FALSE(fs::exists(dir.file("seam.stl")));
   TriMesh huge = without_unreferenced(awkward_octahedron());
   for (Vec3& p : huge.vertices) p *= 1e39;
-  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(huge, dir.file("huge.stl")); }, {"vertex 0", "float32"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { write_mesh(huge, dir.file("huge.stl")); }, {"vertex 0", "float32"}));
   EXPECT_NO_THROW(write_mesh(huge, dir.file("huge.stl"), MeshEncoding::Ascii));
 }
 
@@ -1023,7 +1112,8 @@ TEST(MeshIoAtomicFile, FailedRenameIsIoErrorWithoutLeftovers) {
   EXPECT_TRUE(fs::is_directory(dir.file("occupied/child")));
   EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("no/such/dir/f.txt"), "x"); },
                                    {"cannot create a temporary file in directory"}));
-  EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("trailing/"), "x"); }, {"not a file path"}));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("trailing/"), "x"); },
+                                   {"not a file path"}));
 }
 
 TEST(MeshIoAtomicFile, WriteMeshIsAtomic) {

@@ -12,7 +12,9 @@ struct Prism {
   Vec3 p[3], q[3];
 };
 
-double volume(const Prism& s) { return strata::prism_volume(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]); }
+double volume(const Prism& s) {
+  return strata::prism_volume(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]);
+}
 
 Vec3 random_vec(std::mt19937& rng, double scale) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -36,7 +36,6 @@ using OJson = nlohmann::ordered_json;
 // ---------------------------------------------------------------------------------------------
 // Helpers independent of the code under test
 
-
 Bytes slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

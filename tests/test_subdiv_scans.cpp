@@ -54,5 +54,6 @@ TEST_P(ScanProjection, FootPointsOnTheLimitOfAFittedCage) {
   EXPECT_GE(checked, m.num_vertices() / 8);
 }
 
-INSTANTIATE_TEST_SUITE_P(RealScans, ScanProjection, ::testing::Values("camel", "man", "armadillo", "bear", "diplodocus",
-                                                                       "refined_elephant"));
+INSTANTIATE_TEST_SUITE_P(RealScans, ScanProjection,
+                         ::testing::Values("camel", "man", "armadillo", "bear", "diplodocus",
+                                           "refined_elephant"));

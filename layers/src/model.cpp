@@ -19,9 +19,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using json = nlohmann::json;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
-bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+bool same_bits(const Vec3& a, const Vec3& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;
+}
 
 // Mean length of the face edges (each edge once per face it bounds); faces of any corner count.
 template <class Faces>
@@ -100,10 +104,10 @@ void check_band_index(int k, int n, bool allow_cage) {
 // band's encoding, the other vertices of those faces pinned at their current positions.
 struct PartSolve {
   DetailEncoding part;
-  std::vector<int> vertices;     // part vertex -> band vertex
+  std::vector<int> vertices;  // part vertex -> band vertex
   std::unique_ptr<VolumeReconstructor> reconstructor;
-  std::vector<Vec3> current;     // part positions (pinned ones fixed), warm start of drag steps
-  DragState drag;                // every multigrid level's last drag solution
+  std::vector<Vec3> current;  // part positions (pinned ones fixed), warm start of drag steps
+  DragState drag;             // every multigrid level's last drag solution
 
   PartSolve(const Band& band, const std::vector<char>& solve, const ModelOptions& o) {
     std::vector<int> faces;
@@ -188,8 +192,8 @@ class LayeredModel::Impl {
     int band = 0;
     EditStep step;
     std::vector<Band> saved;
-    std::vector<double> cage_blend;               // band 0
-    std::unique_ptr<RegionEditor> editor;         // band k >= 1
+    std::vector<double> cage_blend;                 // band 0
+    std::unique_ptr<RegionEditor> editor;           // band k >= 1
     std::vector<std::unique_ptr<PartSolve>> finer;  // index j - band - 1
     std::vector<std::vector<Vec3>> finer_base_rest;
   };
@@ -200,7 +204,9 @@ class LayeredModel::Impl {
 
   int n() const { return static_cast<int>(bands.size()); }
 
-  const std::vector<Vec3>& points(int k) const { return k == 0 ? bands[0].cage.vertices : bands[k].mesh.vertices; }
+  const std::vector<Vec3>& points(int k) const {
+    return k == 0 ? bands[0].cage.vertices : bands[k].mesh.vertices;
+  }
 
   const Dependencies& deps_of(int k) const {
     if (deps.size() != bands.size()) deps.assign(bands.size(), std::nullopt);
@@ -358,7 +364,9 @@ LayeredModel& LayeredModel::operator=(const LayeredModel& o) {
 LayeredModel::LayeredModel(LayeredModel&&) noexcept = default;
 LayeredModel& LayeredModel::operator=(LayeredModel&&) noexcept = default;
 
-int LayeredModel::num_bands() const { return impl_->n(); }
+int LayeredModel::num_bands() const {
+  return impl_->n();
+}
 const Band& LayeredModel::band(int k) const {
   check_band_index(k, impl_->n(), true);
   return impl_->bands[k];
@@ -367,13 +375,17 @@ const std::vector<Vec3>& LayeredModel::band_points(int k) const {
   check_band_index(k, impl_->n(), true);
   return impl_->points(k);
 }
-const ModelOptions& LayeredModel::options() const { return impl_->options; }
+const ModelOptions& LayeredModel::options() const {
+  return impl_->options;
+}
 void LayeredModel::set_options(const ModelOptions& options) {
   if (impl_->drag) throw InvalidInput("set_options() during a drag");
   impl_->options = options;
   impl_->options.reconstruct.progress = nullptr;
 }
-const std::vector<std::string>& LayeredModel::history() const { return impl_->history; }
+const std::vector<std::string>& LayeredModel::history() const {
+  return impl_->history;
+}
 
 TriMesh LayeredModel::band_mesh(int k, int resolution) const {
   check_band_index(k, impl_->n(), true);
@@ -405,7 +417,8 @@ DetailMagnitude LayeredModel::detail_magnitude(int k) const {
 LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   const auto t0 = Clock::now();
   validate_mesh(scan, "scan");
-  if (o.bands < 2 || o.bands > 8) throw InvalidInput("build: bands must be 2 to 8, not " + std::to_string(o.bands));
+  if (o.bands < 2 || o.bands > 8)
+    throw InvalidInput("build: bands must be 2 to 8, not " + std::to_string(o.bands));
   if (o.band_smoothing_steps < 0) throw InvalidInput("build: band_smoothing_steps must be >= 0");
   auto progress = [&](const std::string& phase, double f) {
     if (o.progress) o.progress(phase, f);
@@ -413,11 +426,12 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   const int nb = o.bands;
   const int scan_faces = scan.num_faces();
   const int cage_faces =
-      o.cage.faces > 0 ? o.cage.faces
-                       : std::max(o.cage.min_faces, static_cast<int>(std::lround(o.cage.face_fraction * scan_faces)));
+      o.cage.faces > 0
+          ? o.cage.faces
+          : std::max(o.cage.min_faces, static_cast<int>(std::lround(o.cage.face_fraction * scan_faces)));
   if (cage_faces >= scan_faces)
-    throw InvalidInput("build: the scan has " + std::to_string(scan_faces) + " faces, not more than the cage's " +
-                       std::to_string(cage_faces));
+    throw InvalidInput("build: the scan has " + std::to_string(scan_faces) +
+                       " faces, not more than the cage's " + std::to_string(cage_faces));
   LayeredModel model;
   Impl& m = *model.impl_;
   m.options = o.model;
@@ -429,8 +443,9 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   for (int k = nb - 2; k >= 1; --k) {
     progress("bands", static_cast<double>(nb - 1 - k) / nb);
     const double t = static_cast<double>(k) / (nb - 1);
-    const int faces = std::max(
-        cage_faces + 1, static_cast<int>(std::lround(cage_faces * std::pow(static_cast<double>(scan_faces) / cage_faces, t))));
+    const int faces = std::max(cage_faces + 1,
+                               static_cast<int>(std::lround(
+                                   cage_faces * std::pow(static_cast<double>(scan_faces) / cage_faces, t))));
     TriMesh smoothed{taubin_smooth(finer, o.band_smoothing_steps), finer.faces};
     TriMesh band = decimate_mesh(smoothed, std::min(faces, finer.num_faces()));
     band.vertices = taubin_smooth(band, o.band_smoothing_steps);
@@ -468,7 +483,8 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   return model;
 }
 
-LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options, std::vector<std::string> history) {
+LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options,
+                                    std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
   if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
   for (int k = 1; k < nb; ++k) {
@@ -623,6 +639,8 @@ void LayeredModel::cancel_drag() {
   m.drag.reset();
 }
 
-bool LayeredModel::dragging() const { return impl_->drag != nullptr; }
+bool LayeredModel::dragging() const {
+  return impl_->drag != nullptr;
+}
 
 }  // namespace strata::layers

@@ -1,24 +1,27 @@
 #include "strata/atomic_file.h"
 
-#include "internal/read_file.h"
-#include "strata/exceptions.h"
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
-#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <sys/stat.h>
-#include <unistd.h>
+
+#include "internal/read_file.h"
+#include "strata/exceptions.h"
 
 namespace strata {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string errno_text(int err) { return std::strerror(err); }
+std::string errno_text(int err) {
+  return std::strerror(err);
+}
 
 //! Closes a POSIX file descriptor on scope exit.
 class FdGuard {
@@ -80,8 +83,10 @@ void sync_file(const std::string& target, const std::string& tmp) {
   FdGuard fd(::open(tmp.c_str(), O_RDONLY | O_CLOEXEC));
   if (fd.get() < 0)
     throw IoError(target + ": cannot reopen temporary file " + tmp + ": " + errno_text(errno));
-  if (::fsync(fd.get()) != 0) throw IoError(target + ": cannot sync temporary file " + tmp + ": " + errno_text(errno));
-  if (fd.close_now() != 0) throw IoError(target + ": cannot close temporary file " + tmp + ": " + errno_text(errno));
+  if (::fsync(fd.get()) != 0)
+    throw IoError(target + ": cannot sync temporary file " + tmp + ": " + errno_text(errno));
+  if (fd.close_now() != 0)
+    throw IoError(target + ": cannot close temporary file " + tmp + ": " + errno_text(errno));
 }
 
 //! Best effort: makes the rename itself durable. Failure here does not undo a completed rename.
@@ -122,6 +127,8 @@ void write_text_file_atomically(const std::string& path, const std::string& cont
   });
 }
 
-std::string read_file_bytes(const std::string& path) { return internal::read_whole_file(path); }
+std::string read_file_bytes(const std::string& path) {
+  return internal::read_whole_file(path);
+}
 
 }  // namespace strata

@@ -82,7 +82,8 @@ Selection selection(const Ctx& c, const std::string& where, const json& j) {
 EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
   check_keys(c, where, j, {"rotate", "scale", "matrix", "translate", "pivot"});
   EditTransform t;
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(), M = Eigen::Matrix3d::Identity(), S = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(), M = Eigen::Matrix3d::Identity(),
+                  S = Eigen::Matrix3d::Identity();
   if (j.contains("pivot")) t.pivot = vec3(c, where + ".pivot", j["pivot"]);
   if (j.contains("rotate")) {
     const std::string w = where + ".rotate";
@@ -109,7 +110,8 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
     const std::string w = where + ".matrix";
     if (!m.is_array() || m.size() != 3) c.fail(w, "expected three rows of three numbers");
     for (int r = 0; r < 3; ++r) M.row(r) = vec3(c, w + "[" + std::to_string(r) + "]", m[r]).transpose();
-    if (!(M.determinant() > 1e-12)) c.fail(w, "must have a positive determinant (no reflection, not singular)");
+    if (!(M.determinant() > 1e-12))
+      c.fail(w, "must have a positive determinant (no reflection, not singular)");
   }
   if (j.contains("translate")) t.translation = vec3(c, where + ".translate", j["translate"]);
   t.linear = R * M * S;

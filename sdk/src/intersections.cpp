@@ -1,7 +1,5 @@
 #include "strata/intersections.h"
 
-#include "strata/exceptions.h"
-
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Intersections_3/Triangle_3_Triangle_3.h>
 #include <tbb/blocked_range.h>
@@ -19,6 +17,8 @@
 #include <map>
 #include <string>
 
+#include "strata/exceptions.h"
+
 namespace strata {
 namespace {
 
@@ -34,9 +34,13 @@ constexpr std::size_t kLeafSize = 4;
 // task overhead outweighs the work.
 constexpr std::size_t kParallelGrain = 4096;
 
-Point to_point(const Vec3& p) { return Point(p.x(), p.y(), p.z()); }
+Point to_point(const Vec3& p) {
+  return Point(p.x(), p.y(), p.z());
+}
 
-bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
+bool is_finite(const Vec3& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+}
 
 // Boxes are stored in float to halve the memory traffic of the traversal. They only prune (the
 // exact predicate decides), so they must never be smaller than the triangle: round outward.
@@ -182,7 +186,10 @@ class SelfIntersectionSearch {
  public:
   SelfIntersectionSearch(const std::vector<Vec3>& vertices, const std::vector<Node>& nodes,
                          const std::vector<Prim>& prims, const IntersectionOptions& options)
-      : vertices_(vertices), nodes_(nodes), prims_(prims), collect_(options.collect_pairs),
+      : vertices_(vertices),
+        nodes_(nodes),
+        prims_(prims),
+        collect_(options.collect_pairs),
         max_pairs_(options.max_pairs) {}
 
   void run() {
@@ -250,10 +257,12 @@ class SelfIntersectionSearch {
     // Descend into the bigger subtree, so both sides shrink at the same pace.
     if (nb.count > 0 || (na.count == 0 && ma >= mb)) {
       const std::size_t m1 = ma / 2, m2 = ma - ma / 2;
-      fork(parallel, [&] { cross(a + 1, m1, b, mb); }, [&] { cross(na.index, m2, b, mb); });
+      fork(
+          parallel, [&] { cross(a + 1, m1, b, mb); }, [&] { cross(na.index, m2, b, mb); });
     } else {
       const std::size_t m1 = mb / 2, m2 = mb - mb / 2;
-      fork(parallel, [&] { cross(a, ma, b + 1, m1); }, [&] { cross(a, ma, nb.index, m2); });
+      fork(
+          parallel, [&] { cross(a, ma, b + 1, m1); }, [&] { cross(a, ma, nb.index, m2); });
     }
   }
 
@@ -330,7 +339,8 @@ std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vecto
       for (int k = 0; k < 3; ++k) item.c[k] = static_cast<float>(centroid[k]);
     }
   });
-  items.erase(std::remove_if(items.begin(), items.end(), [](const Item& i) { return i.face < 0; }), items.end());
+  items.erase(std::remove_if(items.begin(), items.end(), [](const Item& i) { return i.face < 0; }),
+              items.end());
   return items;
 }
 
@@ -355,7 +365,9 @@ std::vector<Prim> make_prims(const std::vector<Vec3>& vertices, const std::vecto
   return prims;
 }
 
-bool lists_all_pairs(const IntersectionResult& r) { return r.pairs.size() == r.num_pairs; }
+bool lists_all_pairs(const IntersectionResult& r) {
+  return r.pairs.size() == r.num_pairs;
+}
 
 }  // namespace
 

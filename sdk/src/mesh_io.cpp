@@ -11,10 +11,6 @@
 
 #include "strata/mesh_io.h"
 
-#include "strata/atomic_file.h"
-#include "strata/exceptions.h"
-#include "internal/read_file.h"
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -30,6 +26,10 @@
 #include <string_view>
 #include <system_error>
 #include <unordered_map>
+
+#include "internal/read_file.h"
+#include "strata/atomic_file.h"
+#include "strata/exceptions.h"
 
 namespace strata {
 namespace {
@@ -58,7 +58,9 @@ T load_le(const char* p) {
   return x;
 }
 
-[[noreturn]] void fail_io(const std::string& name, const std::string& what) { throw IoError(name + ": " + what); }
+[[noreturn]] void fail_io(const std::string& name, const std::string& what) {
+  throw IoError(name + ": " + what);
+}
 [[noreturn]] void fail_input(const std::string& name, const std::string& what) {
   throw InvalidInput(name + ": " + what);
 }
@@ -71,7 +73,8 @@ std::string to_lower(std::string s) {
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
-    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i])))
+      return false;
   return true;
 }
 
@@ -95,10 +98,10 @@ Format format_of(const std::string& path) {
   if (ext == ".off") return Format::Off;
   if (ext == ".ply") return Format::Ply;
   if (ext == ".stl") return Format::Stl;
-  if (ext.empty()) fail_io(path, "no file extension to tell the mesh format (supported: " + supported_list() + ")");
+  if (ext.empty())
+    fail_io(path, "no file extension to tell the mesh format (supported: " + supported_list() + ")");
   fail_io(path, "unsupported mesh file extension '" + ext + "' (supported: " + supported_list() + ")");
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // Numbers. std::from_chars is locale-independent and exact (the double nearest to the text).
@@ -130,9 +133,12 @@ Parsed parse_int(std::string_view s, long long& v) {
 double need_double(std::string_view tok, const std::string& name, const std::string& where) {
   double v = 0.0;
   switch (parse_double(tok, v)) {
-    case Parsed::Ok: return v;
-    case Parsed::OutOfRange: fail_io(name, where + ": number " + quote_token(tok) + " is out of the range of a double");
-    case Parsed::Malformed: break;
+    case Parsed::Ok:
+      return v;
+    case Parsed::OutOfRange:
+      fail_io(name, where + ": number " + quote_token(tok) + " is out of the range of a double");
+    case Parsed::Malformed:
+      break;
   }
   fail_io(name, where + ": cannot parse " + quote_token(tok) + " as a number");
 }
@@ -140,9 +146,12 @@ double need_double(std::string_view tok, const std::string& name, const std::str
 long long need_int(std::string_view tok, const std::string& name, const std::string& where) {
   long long v = 0;
   switch (parse_int(tok, v)) {
-    case Parsed::Ok: return v;
-    case Parsed::OutOfRange: fail_io(name, where + ": integer " + quote_token(tok) + " is out of range");
-    case Parsed::Malformed: break;
+    case Parsed::Ok:
+      return v;
+    case Parsed::OutOfRange:
+      fail_io(name, where + ": integer " + quote_token(tok) + " is out of range");
+    case Parsed::Malformed:
+      break;
   }
   fail_io(name, where + ": cannot parse " + quote_token(tok) + " as an integer");
 }
@@ -150,7 +159,9 @@ long long need_int(std::string_view tok, const std::string& name, const std::str
 // ---------------------------------------------------------------------------------------------
 // Text scanning.
 
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 //! Rejects binary data in a text format: a NUL byte never occurs in a valid text mesh file.
 void reject_nul_bytes(std::string_view text, const std::string& name, const char* format) {
@@ -351,7 +362,8 @@ std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
 }
 
 void check_vertex_count(long long n, const std::string& name) {
-  if (n > kMaxIndexCount) fail_io(name, "too many vertices (more than " + std::to_string(kMaxIndexCount) + ")");
+  if (n > kMaxIndexCount)
+    fail_io(name, "too many vertices (more than " + std::to_string(kMaxIndexCount) + ")");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -389,7 +401,8 @@ TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polyg
     LineReader lines(text);
     std::string_view raw;
     while (lines.next(raw)) {
-      if (!seen_data && !declared.present && parse_obj_count_comment(raw, declared)) declared.line = lines.line_no();
+      if (!seen_data && !declared.present && parse_obj_count_comment(raw, declared))
+        declared.line = lines.line_no();
       LineTokens tok(strip_comment(raw));
       std::string_view key;
       if (!tok.next(key)) continue;
@@ -412,11 +425,11 @@ TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polyg
   }
   if (declared.present && (declared.vertices != mesh.num_vertices() || declared.faces != face_lines)) {
     const bool fewer = declared.vertices >= mesh.num_vertices() && declared.faces >= face_lines;
-    fail_io(name, std::string(fewer ? "truncated: " : "") + "header comment (line " + std::to_string(declared.line) +
-                      ") declares " + std::to_string(declared.vertices) + " vertices and " +
-                      std::to_string(declared.faces) + " faces, file holds " + std::to_string(mesh.num_vertices()) +
-                      " vertices and " + std::to_string(face_lines) + " faces" +
-                      (fewer ? "" : " (stale comment? remove it if the file is intended)"));
+    fail_io(name, std::string(fewer ? "truncated: " : "") + "header comment (line " +
+                      std::to_string(declared.line) + ") declares " + std::to_string(declared.vertices) +
+                      " vertices and " + std::to_string(declared.faces) + " faces, file holds " +
+                      std::to_string(mesh.num_vertices()) + " vertices and " + std::to_string(face_lines) +
+                      " faces" + (fewer ? "" : " (stale comment? remove it if the file is intended)"));
   }
 
   // Pass 2: faces. Negative indices count back from the last vertex defined before the line.
@@ -440,7 +453,8 @@ TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polyg
       const std::string_view index_text = corner.substr(0, corner.find('/'));  // "i", "i/t", "i//n", "i/t/n"
       long long i = 0;
       if (parse_int(index_text, i) != Parsed::Ok)
-        fail_io(name, lines.where() + ": cannot parse face corner " + quote_token(corner) + " (expected a vertex index)");
+        fail_io(name, lines.where() + ": cannot parse face corner " + quote_token(corner) +
+                          " (expected a vertex index)");
       if (i == 0) fail_input(name, lines.where() + ": face has vertex index 0 (OBJ indices start at 1)");
       if (i < 0) {
         if (-i > vertices_so_far)
@@ -486,7 +500,8 @@ TriMesh read_off(const std::string& name, std::string_view text, Polygons* polyg
     if (!m.empty() && m[0] == 'N') m.remove_prefix(1);
     if (!m.empty() && (m[0] == '4' || m[0] == 'n'))
       fail_io(name, "OFF variant " + quote_token(magic) + " (not 3-dimensional) is not supported");
-    if (m != "OFF") fail_io(name, "not an OFF file: first line starts with " + quote_token(magic) + ", expected 'OFF'");
+    if (m != "OFF")
+      fail_io(name, "not an OFF file: first line starts with " + quote_token(magic) + ", expected 'OFF'");
   }
   std::array<long long, 3> counts{0, 0, 0};
   int num_counts = 0;
@@ -511,10 +526,12 @@ TriMesh read_off(const std::string& name, std::string_view text, Polygons* polyg
 
   TriMesh mesh;
   // Each vertex needs at least 6 bytes of text; never trust a header count for allocation.
-  mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(nv, static_cast<long long>(text.size() / 6))));
+  mesh.vertices.reserve(
+      static_cast<size_t>(std::min<long long>(nv, static_cast<long long>(text.size() / 6))));
   for (long long v = 0; v < nv; ++v) {
     if (!next_data_line(line))
-      fail_io(name, "truncated: header declares " + std::to_string(nv) + " vertices, file holds " + std::to_string(v));
+      fail_io(name, "truncated: header declares " + std::to_string(nv) + " vertices, file holds " +
+                        std::to_string(v));
     LineTokens t(line);
     Vec3 p;
     for (int k = 0; k < 3; ++k) {
@@ -530,7 +547,8 @@ TriMesh read_off(const std::string& name, std::string_view text, Polygons* polyg
   std::vector<long long> corners;
   for (long long f = 0; f < nf; ++f) {
     if (!next_data_line(line))
-      fail_io(name, "truncated: header declares " + std::to_string(nf) + " faces, file holds " + std::to_string(f));
+      fail_io(name,
+              "truncated: header declares " + std::to_string(nf) + " faces, file holds " + std::to_string(f));
     LineTokens t(line);
     t.next(tok);
     const long long k = need_int(tok, name, lines.where());
@@ -539,8 +557,8 @@ TriMesh read_off(const std::string& name, std::string_view text, Polygons* polyg
     corners.clear();
     for (long long c = 0; c < k; ++c) {
       if (!t.next(tok))
-        fail_io(name, where() + ": face declares " + std::to_string(k) + " corners but lists " + std::to_string(c) +
-                          (lines.last_line_unterminated() ? " (file truncated?)" : ""));
+        fail_io(name, where() + ": face declares " + std::to_string(k) + " corners but lists " +
+                          std::to_string(c) + (lines.last_line_unterminated() ? " (file truncated?)" : ""));
       corners.push_back(need_int(tok, name, lines.where()));
     }
     faces.add_checked(corners, where);  // numbers after the corners (a face color) are ignored
@@ -561,11 +579,11 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 
 bool ply_type_from_name(std::string_view s, PlyType& t) {
   static const std::pair<const char*, PlyType> names[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},      {"uchar", PlyType::UInt8},
-      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},    {"int16", PlyType::Int16},
-      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},  {"int", PlyType::Int32},
-      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},    {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
       {"float64", PlyType::Float64}};
   for (const auto& [n, type] : names)
     if (s == n) {
@@ -578,28 +596,41 @@ bool ply_type_from_name(std::string_view s, PlyType& t) {
 size_t ply_size(PlyType t) {
   switch (t) {
     case PlyType::Int8:
-    case PlyType::UInt8: return 1;
+    case PlyType::UInt8:
+      return 1;
     case PlyType::Int16:
-    case PlyType::UInt16: return 2;
+    case PlyType::UInt16:
+      return 2;
     case PlyType::Int32:
     case PlyType::UInt32:
-    case PlyType::Float32: return 4;
-    case PlyType::Float64: return 8;
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
   }
   return 8;
 }
 
-bool ply_is_integer(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
+bool ply_is_integer(PlyType t) {
+  return t != PlyType::Float32 && t != PlyType::Float64;
+}
 
 bool fits_ply_type(long long v, PlyType t) {
   switch (t) {
-    case PlyType::Int8: return v >= -128 && v <= 127;
-    case PlyType::UInt8: return v >= 0 && v <= 255;
-    case PlyType::Int16: return v >= -32768 && v <= 32767;
-    case PlyType::UInt16: return v >= 0 && v <= 65535;
-    case PlyType::Int32: return v >= std::numeric_limits<int32_t>::min() && v <= std::numeric_limits<int32_t>::max();
-    case PlyType::UInt32: return v >= 0 && v <= std::numeric_limits<uint32_t>::max();
-    default: return true;
+    case PlyType::Int8:
+      return v >= -128 && v <= 127;
+    case PlyType::UInt8:
+      return v >= 0 && v <= 255;
+    case PlyType::Int16:
+      return v >= -32768 && v <= 32767;
+    case PlyType::UInt16:
+      return v >= 0 && v <= 65535;
+    case PlyType::Int32:
+      return v >= std::numeric_limits<int32_t>::min() && v <= std::numeric_limits<int32_t>::max();
+    case PlyType::UInt32:
+      return v >= 0 && v <= std::numeric_limits<uint32_t>::max();
+    default:
+      return true;
   }
 }
 
@@ -634,7 +665,8 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
   bool have_format = false, ended = false;
   while (lines.next(line)) {
     const std::string where = "header " + lines.where();
-    if (line.find('\0') != std::string_view::npos) fail_io(name, where + ": contains a NUL byte (corrupt header)");
+    if (line.find('\0') != std::string_view::npos)
+      fail_io(name, where + ": contains a NUL byte (corrupt header)");
     LineTokens t(line);
     std::string_view key, a, b, c, d;
     if (!t.next(key)) continue;
@@ -645,10 +677,14 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
     }
     if (key == "format") {
       if (!t.next(a) || !t.next(b)) fail_io(name, where + ": incomplete format line");
-      if (a == "ascii") h.encoding = PlyEncoding::Ascii;
-      else if (a == "binary_little_endian") h.encoding = PlyEncoding::BinaryLE;
-      else if (a == "binary_big_endian") h.encoding = PlyEncoding::BinaryBE;
-      else fail_io(name, where + ": unknown PLY format " + quote_token(a));
+      if (a == "ascii")
+        h.encoding = PlyEncoding::Ascii;
+      else if (a == "binary_little_endian")
+        h.encoding = PlyEncoding::BinaryLE;
+      else if (a == "binary_big_endian")
+        h.encoding = PlyEncoding::BinaryBE;
+      else
+        fail_io(name, where + ": unknown PLY format " + quote_token(a));
       if (b != "1.0") fail_io(name, where + ": unsupported PLY version " + quote_token(b));
       have_format = true;
     } else if (key == "element") {
@@ -703,7 +739,8 @@ class PlyAsciiSource {
     if (!cursor_.next(tok)) return false;
     if (ply_is_integer(t)) {
       v.i = need_int(tok, name_, cursor_.where());
-      if (!fits_ply_type(v.i, t)) fail_io(name_, cursor_.where() + ": value " + quote_token(tok) + " does not fit its declared type");
+      if (!fits_ply_type(v.i, t))
+        fail_io(name_, cursor_.where() + ": value " + quote_token(tok) + " does not fit its declared type");
       v.d = static_cast<double>(v.i);
     } else {
       v.d = need_double(tok, name_, cursor_.where());
@@ -711,7 +748,9 @@ class PlyAsciiSource {
     return true;
   }
   //! Describes leftover data after the last element, or returns "".
-  std::string leftover() { return cursor_.at_end() ? "" : cursor_.where() + ": data after the last declared element"; }
+  std::string leftover() {
+    return cursor_.at_end() ? "" : cursor_.where() + ": data after the last declared element";
+  }
 
  private:
   const std::string& name_;
@@ -731,14 +770,30 @@ class PlyBinarySource {
     p_ += n;
     if (swap_) std::reverse(b, b + n);
     switch (t) {
-      case PlyType::Int8: v.i = static_cast<int8_t>(b[0]); break;
-      case PlyType::UInt8: v.i = b[0]; break;
-      case PlyType::Int16: v.i = load<int16_t>(b); break;
-      case PlyType::UInt16: v.i = load<uint16_t>(b); break;
-      case PlyType::Int32: v.i = load<int32_t>(b); break;
-      case PlyType::UInt32: v.i = load<uint32_t>(b); break;
-      case PlyType::Float32: v.d = load<float>(b); return true;
-      case PlyType::Float64: v.d = load<double>(b); return true;
+      case PlyType::Int8:
+        v.i = static_cast<int8_t>(b[0]);
+        break;
+      case PlyType::UInt8:
+        v.i = b[0];
+        break;
+      case PlyType::Int16:
+        v.i = load<int16_t>(b);
+        break;
+      case PlyType::UInt16:
+        v.i = load<uint16_t>(b);
+        break;
+      case PlyType::Int32:
+        v.i = load<int32_t>(b);
+        break;
+      case PlyType::UInt32:
+        v.i = load<uint32_t>(b);
+        break;
+      case PlyType::Float32:
+        v.d = load<float>(b);
+        return true;
+      case PlyType::Float64:
+        v.d = load<double>(b);
+        return true;
     }
     v.d = static_cast<double>(v.i);
     return true;
@@ -795,7 +850,8 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
     }
     if (is_vertex)
       for (int c = 0; c < 3; ++c)
-        if (xyz[c] < 0) fail_io(name, std::string("vertex element has no property ") + static_cast<char>('x' + c));
+        if (xyz[c] < 0)
+          fail_io(name, std::string("vertex element has no property ") + static_cast<char>('x' + c));
     if (is_face && index_prop < 0) fail_io(name, "face element has no list property vertex_indices");
     if (is_vertex) mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
 
@@ -892,7 +948,8 @@ TriMesh read_stl_binary(const std::string& name, std::string_view data, uint32_t
       const char* p = rec + 12 + 12 * c;  // after the 12-byte normal
       corners[c] = welder.index_of(Vec3(load_le<float>(p), load_le<float>(p + 4), load_le<float>(p + 8)));
     }
-    faces.add_checked(corners, [&] { return "facet " + std::to_string(t) + " (corners weld to equal positions)"; });
+    faces.add_checked(corners,
+                      [&] { return "facet " + std::to_string(t) + " (corners weld to equal positions)"; });
   }
   TriMesh mesh;
   mesh.vertices = std::move(welder.vertices);
@@ -905,7 +962,8 @@ TriMesh read_stl_ascii(const std::string& name, std::string_view text) {
   std::string_view tok;
   auto expect = [&](const char* word) {
     if (!cur.next(tok)) fail_io(name, std::string("truncated: file ends where '") + word + "' was expected");
-    if (!iequals(tok, word)) fail_io(name, cur.where() + ": expected '" + word + "', found " + quote_token(tok));
+    if (!iequals(tok, word))
+      fail_io(name, cur.where() + ": expected '" + word + "', found " + quote_token(tok));
   };
   auto number = [&]() {
     if (!cur.next(tok)) fail_io(name, "truncated: file ends inside a facet");
@@ -927,7 +985,8 @@ TriMesh read_stl_ascii(const std::string& name, std::string_view text) {
       cur.skip_rest_of_line();
       continue;
     }
-    if (!iequals(tok, "facet")) fail_io(name, cur.where() + ": expected 'facet' or 'endsolid', found " + quote_token(tok));
+    if (!iequals(tok, "facet"))
+      fail_io(name, cur.where() + ": expected 'facet' or 'endsolid', found " + quote_token(tok));
     const std::string where = cur.where() + " (facet " + std::to_string(facet) + ")";
     expect("normal");
     for (int k = 0; k < 3; ++k) number();  // the normal is redundant: orientation comes from the corner order
@@ -937,7 +996,8 @@ TriMesh read_stl_ascii(const std::string& name, std::string_view text) {
     for (;;) {
       if (!cur.next(tok)) fail_io(name, "truncated: file ends inside a facet");
       if (iequals(tok, "endloop")) break;
-      if (!iequals(tok, "vertex")) fail_io(name, cur.where() + ": expected 'vertex' or 'endloop', found " + quote_token(tok));
+      if (!iequals(tok, "vertex"))
+        fail_io(name, cur.where() + ": expected 'vertex' or 'endloop', found " + quote_token(tok));
       Vec3 p;
       for (int k = 0; k < 3; ++k) p[k] = number();
       corners.push_back(welder.index_of(p));
@@ -971,8 +1031,9 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
   if (data.size() < expected)
     fail_io(name, "truncated: header declares " + std::to_string(count) + " triangles, file holds " +
                       std::to_string((data.size() - 84) / 50));
-  fail_io(name, "binary STL header declares " + std::to_string(count) + " triangles (" + std::to_string(expected) +
-                    " bytes) but the file has " + std::to_string(data.size()) + " bytes");
+  fail_io(name, "binary STL header declares " + std::to_string(count) + " triangles (" +
+                    std::to_string(expected) + " bytes) but the file has " + std::to_string(data.size()) +
+                    " bytes");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -989,10 +1050,11 @@ std::string find_mesh_problem(const TriMesh& mesh) {
     const Face& t = mesh.faces[f];
     for (int i : t)
       if (i < 0 || i >= nv)
-        return "face " + std::to_string(f) + " has vertex index " + std::to_string(i) + " out of range (mesh has " +
-               std::to_string(nv) + " vertices)";
+        return "face " + std::to_string(f) + " has vertex index " + std::to_string(i) +
+               " out of range (mesh has " + std::to_string(nv) + " vertices)";
     if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2])
-      return "face " + std::to_string(f) + " has repeated vertex index " + std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]);
+      return "face " + std::to_string(f) + " has repeated vertex index " +
+             std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]);
   }
   // Zero area relative to the model's size, so the test does not depend on units. Coordinates
   // are scaled by a power of two (exact) so squares neither overflow nor underflow at 1e+-200.
@@ -1010,15 +1072,17 @@ std::string find_mesh_problem(const TriMesh& mesh) {
   const double min_double_area = 2e-14 * diag * diag;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& t = mesh.faces[f];
-    const Vec3 a = mesh.vertices[t[0]] * scale, b = mesh.vertices[t[1]] * scale, c = mesh.vertices[t[2]] * scale;
+    const Vec3 a = mesh.vertices[t[0]] * scale, b = mesh.vertices[t[1]] * scale,
+               c = mesh.vertices[t[2]] * scale;
     const double double_area = triangle_area_normal(a, b, c).norm();
-    if (double_area == 0.0 || double_area <= min_double_area) return "face " + std::to_string(f) + " has zero area";
+    if (double_area == 0.0 || double_area <= min_double_area)
+      return "face " + std::to_string(f) + " has zero area";
   }
 
   // Edge uses bucketed by their smaller vertex (a counting sort): linear time, 8 bytes per use.
   struct Use {
-    int other;       // larger vertex of the edge
-    uint32_t code;   // face * 2 + (1 if the face traverses it from smaller to larger)
+    int other;      // larger vertex of the edge
+    uint32_t code;  // face * 2 + (1 if the face traverses it from smaller to larger)
   };
   const size_t nf = mesh.faces.size();
   std::vector<size_t> start(static_cast<size_t>(nv) + 1, 0);
@@ -1030,7 +1094,8 @@ std::string find_mesh_problem(const TriMesh& mesh) {
   for (size_t f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = mesh.faces[f][c], b = mesh.faces[f][(c + 1) % 3];
-      uses[fill[static_cast<size_t>(std::min(a, b))]++] = {std::max(a, b), static_cast<uint32_t>(f * 2 + (a < b ? 1 : 0))};
+      uses[fill[static_cast<size_t>(std::min(a, b))]++] = {std::max(a, b),
+                                                           static_cast<uint32_t>(f * 2 + (a < b ? 1 : 0))};
     }
   // Report the offending edge whose first face comes first, so messages are deterministic.
   size_t best_face = nf;
@@ -1038,7 +1103,9 @@ std::string find_mesh_problem(const TriMesh& mesh) {
   for (size_t v = 0; v < static_cast<size_t>(nv); ++v) {
     Use* b = uses.data() + start[v];
     Use* e = uses.data() + start[v + 1];
-    std::sort(b, e, [](const Use& x, const Use& y) { return x.other != y.other ? x.other < y.other : x.code < y.code; });
+    std::sort(b, e, [](const Use& x, const Use& y) {
+      return x.other != y.other ? x.other < y.other : x.code < y.code;
+    });
     for (Use* g = b; g != e;) {
       Use* h = g;
       while (h != e && h->other == g->other) ++h;
@@ -1048,13 +1115,14 @@ std::string find_mesh_problem(const TriMesh& mesh) {
       if (n > 2 && first_face < best_face) {
         best_face = first_face;
         problem = edge + " is non-manifold: shared by " + std::to_string(n) + " faces (";
-        for (size_t i = 0; i < std::min<size_t>(n, 6); ++i) problem += (i ? ", " : "") + std::to_string(g[i].code / 2);
+        for (size_t i = 0; i < std::min<size_t>(n, 6); ++i)
+          problem += (i ? ", " : "") + std::to_string(g[i].code / 2);
         problem += n > 6 ? ", ...)" : ")";
       } else if (n == 2 && (g[0].code & 1) == (g[1].code & 1) && first_face < best_face) {
         best_face = first_face;
         const bool fwd = g[0].code & 1;
-        problem = edge + " has inconsistently oriented faces: faces " + std::to_string(g[0].code / 2) + " and " +
-                  std::to_string(g[1].code / 2) + " both traverse it from " +
+        problem = edge + " has inconsistently oriented faces: faces " + std::to_string(g[0].code / 2) +
+                  " and " + std::to_string(g[1].code / 2) + " both traverse it from " +
                   std::to_string(fwd ? v : static_cast<size_t>(g->other)) + " to " +
                   std::to_string(fwd ? static_cast<size_t>(g->other) : v);
       }
@@ -1171,11 +1239,12 @@ void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
 }
 
 template <class F>
-void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w, bool binary) {
+void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
+               bool binary) {
   w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
          " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(vertices.size()) +
-         "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(faces.size()) +
-         "\nproperty list uchar int vertex_indices\nend_header\n");
+         "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+         std::to_string(faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n");
   for (const Vec3& p : vertices) {
     if (binary) {
       w.binary_le(p[0]);
@@ -1266,7 +1335,9 @@ TriMesh stl_image(const TriMesh& mesh, const std::string& name, bool binary) {
 
 }  // namespace
 
-std::vector<std::string> supported_mesh_extensions() { return {".obj", ".off", ".ply", ".stl"}; }
+std::vector<std::string> supported_mesh_extensions() {
+  return {".obj", ".off", ".ply", ".stl"};
+}
 
 void validate_mesh(const TriMesh& mesh, const std::string& name) {
   const std::string problem = find_mesh_problem(mesh);
@@ -1283,9 +1354,15 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
   TriMesh mesh;
   if (polygons) polygons->clear();
   switch (format) {
-    case Format::Obj: mesh = read_obj(path, data, polygons); break;
-    case Format::Off: mesh = read_off(path, data, polygons); break;
-    case Format::Ply: mesh = read_ply(path, data, polygons); break;
+    case Format::Obj:
+      mesh = read_obj(path, data, polygons);
+      break;
+    case Format::Off:
+      mesh = read_off(path, data, polygons);
+      break;
+    case Format::Ply:
+      mesh = read_ply(path, data, polygons);
+      break;
     case Format::Stl:
       mesh = read_stl(path, data);
       if (polygons)
@@ -1308,19 +1385,29 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
       for (const Face& f : mesh.faces)  // unreferenced vertices are not written
         for (int v : f)
           if (mesh.vertices[v].cwiseAbs().maxCoeff() > static_cast<double>(std::numeric_limits<float>::max()))
-            fail_input(path, "vertex " + std::to_string(v) + " has a coordinate too large for binary STL (float32)");
+            fail_input(
+                path, "vertex " + std::to_string(v) + " has a coordinate too large for binary STL (float32)");
     const std::string problem = find_mesh_problem(stl_image(mesh, path, binary));
     if (!problem.empty())
-      fail_input(path, "cannot be stored as STL without changing it: once corners at equal positions are merged" +
-                           std::string(binary ? " (after rounding to float32)" : "") + ", " + problem);
+      fail_input(path,
+                 "cannot be stored as STL without changing it: once corners at equal positions are merged" +
+                     std::string(binary ? " (after rounding to float32)" : "") + ", " + problem);
   }
   write_file_atomically(path, [&](const std::string& tmp) {
     ChunkedWriter w(path, tmp);
     switch (format) {
-      case Format::Obj: write_obj(mesh.vertices, mesh.faces, w); break;
-      case Format::Off: write_off(mesh.vertices, mesh.faces, w); break;
-      case Format::Ply: write_ply(mesh.vertices, mesh.faces, w, binary); break;
-      case Format::Stl: write_stl(mesh, w, binary); break;
+      case Format::Obj:
+        write_obj(mesh.vertices, mesh.faces, w);
+        break;
+      case Format::Off:
+        write_off(mesh.vertices, mesh.faces, w);
+        break;
+      case Format::Ply:
+        write_ply(mesh.vertices, mesh.faces, w, binary);
+        break;
+      case Format::Stl:
+        write_stl(mesh, w, binary);
+        break;
     }
     w.close();
   });
@@ -1358,10 +1445,17 @@ void write_polygon_mesh(const std::vector<Vec3>& vertices, const std::vector<std
   write_file_atomically(path, [&](const std::string& tmp) {
     ChunkedWriter w(path, tmp);
     switch (format) {
-      case Format::Obj: write_obj(vertices, polygons, w); break;
-      case Format::Off: write_off(vertices, polygons, w); break;
-      case Format::Ply: write_ply(vertices, polygons, w, binary); break;
-      case Format::Stl: break;  // handled above
+      case Format::Obj:
+        write_obj(vertices, polygons, w);
+        break;
+      case Format::Off:
+        write_off(vertices, polygons, w);
+        break;
+      case Format::Ply:
+        write_ply(vertices, polygons, w, binary);
+        break;
+      case Format::Stl:
+        break;  // handled above
     }
     w.close();
   });

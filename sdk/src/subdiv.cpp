@@ -627,8 +627,8 @@ void LimitPointSet::check(const SubdivSurface& surface) const {
                        " patch points, this one has " + vtx(static_cast<int>(surface.impl_->points_.size())));
 }
 
-void LimitPointSet::evaluate_unchecked(const std::vector<Vec3>& P, int begin, int end, Vec3* positions, Vec3* du,
-                                       Vec3* dv) const {
+void LimitPointSet::evaluate_unchecked(const std::vector<Vec3>& P, int begin, int end, Vec3* positions,
+                                       Vec3* du, Vec3* dv) const {
   for (int i = begin; i < end; ++i) {
     const int b = offsets_[i], e = offsets_[i + 1];
     const Vec3 o = P[index_[b]];
@@ -666,7 +666,8 @@ void LimitPointSet::evaluate(const SubdivSurface& surface, int begin, int end, V
                              Vec3* dv) const {
   check(surface);
   if (begin < 0 || end > size() || begin > end)
-    throw InvalidInput("limit point range [" + vtx(begin) + ", " + vtx(end) + ") out of [0, " + vtx(size()) + ")");
+    throw InvalidInput("limit point range [" + vtx(begin) + ", " + vtx(end) + ") out of [0, " + vtx(size()) +
+                       ")");
   evaluate_unchecked(surface.impl_->points_, begin, end, positions, du, dv);
 }
 

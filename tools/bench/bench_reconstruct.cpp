@@ -32,8 +32,8 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
-#include <numeric>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <string>

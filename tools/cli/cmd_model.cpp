@@ -98,7 +98,8 @@ int run_build(const BuildCmdOptions& o) {
   for (std::size_t i = 0; i < o.scans.size(); ++i) {
     const std::string& scan_path = o.scans[i];
     const std::string out =
-        o.output.empty() ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string() : o.output;
+        o.output.empty() ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string()
+                         : o.output;
     bar.show(static_cast<int>(i), scan_path);
     json r{{"scan", scan_path}, {"model", out}};
     Stopwatch sw;
@@ -130,7 +131,8 @@ int run_build(const BuildCmdOptions& o) {
       r["ok"] = false;
       r["error"] = e.what();
       r["seconds"] = sw.seconds();
-      if (!o.quiet) std::cerr << (isatty(STDERR_FILENO) ? "\n" : "") << "strata: error: " << e.what() << std::endl;
+      if (!o.quiet)
+        std::cerr << (isatty(STDERR_FILENO) ? "\n" : "") << "strata: error: " << e.what() << std::endl;
     }
     results.push_back(r);
   }
@@ -177,14 +179,16 @@ int run_info(const InfoCmdOptions& o) {
               << std::endl;
     return 0;
   }
-  std::cout << o.model << ": " << model.num_bands() << " bands, " << fs::file_size(o.model) << " bytes\n"
-            << "band  kind       vertices     faces  amplitude  edge length  detail rms  detail max  fallbacks\n";
+  std::cout
+      << o.model << ": " << model.num_bands() << " bands, " << fs::file_size(o.model) << " bytes\n"
+      << "band  kind       vertices     faces  amplitude  edge length  detail rms  detail max  fallbacks\n";
   for (const json& b : bands) {
     const bool cage = b["kind"] == "cage";
     char line[256];
-    std::snprintf(line, sizeof line, "%4d  %-9s %9d %9d  %9s  %11.3e  %10s  %10s  %9s\n", b["band"].get<int>(),
-                  cage ? "cage" : "triangles", b["vertices"].get<int>(), b["faces"].get<int>(),
-                  cage ? "-" : fixed(b["amplitude"].get<double>(), 3).c_str(), b["mean_edge_length"].get<double>(),
+    std::snprintf(line, sizeof line, "%4d  %-9s %9d %9d  %9s  %11.3e  %10s  %10s  %9s\n",
+                  b["band"].get<int>(), cage ? "cage" : "triangles", b["vertices"].get<int>(),
+                  b["faces"].get<int>(), cage ? "-" : fixed(b["amplitude"].get<double>(), 3).c_str(),
+                  b["mean_edge_length"].get<double>(),
                   cage ? "-" : sci(b["detail_rms"].get<double>()).c_str(),
                   cage ? "-" : sci(b["detail_max"].get<double>()).c_str(),
                   cage ? "-" : std::to_string(b["encoding"]["fallback"].get<int>()).c_str());
@@ -237,9 +241,8 @@ void print_cascade(const layers::CascadeReport& r) {
   for (const layers::BandRebuild& b : r.rebuilt)
     std::cout << "band " << b.band << ": " << b.solved_vertices << " vertices solved (" << b.solved_prisms
               << " prisms), " << b.rest_vertices << " back at rest, " << b.rigid_vertices
-              << " moved rigidly; volume error max "
-              << sci(b.volume.max_relative_error) << ", rms " << sci(b.volume.rms_relative_error) << "; "
-              << fixed(b.seconds, 2) << " s\n";
+              << " moved rigidly; volume error max " << sci(b.volume.max_relative_error) << ", rms "
+              << sci(b.volume.rms_relative_error) << "; " << fixed(b.seconds, 2) << " s\n";
 }
 
 // Runs \p change on the model read from o.model, then writes it to o.output, with an optional
@@ -259,14 +262,15 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   if (o.intersections) {
     log.phase("counting self-intersections of the finest band");
     const TimedIntersections in = find_intersections(before, model.band(finest).mesh.faces);
-    const TimedIntersections out = find_intersections(model.band(finest).mesh.vertices, model.band(finest).mesh.faces);
+    const TimedIntersections out =
+        find_intersections(model.band(finest).mesh.vertices, model.band(finest).mesh.faces);
     const std::size_t fresh = count_new_intersections(in.result, out.result);
     r["finest_band_intersections"] = {{"input_pairs", in.result.num_pairs},
                                       {"output_pairs", out.result.num_pairs},
                                       {"new_pairs", fresh},
                                       {"seconds", in.seconds + out.seconds}};
-    std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, " << out.result.num_pairs
-              << " after, " << fresh << " new\n";
+    std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, "
+              << out.result.num_pairs << " after, " << fresh << " new\n";
   }
   sw.restart();
   log.phase("writing " + o.output);
@@ -333,14 +337,14 @@ int run_export(const ExportCmdOptions& o) {
     // Polygons as they are (a Catmull-Clark cage keeps its quads); STL takes triangles only.
     const PolyMesh& c = model.band(0).cage;
     write_cage(c, o.output);
-    std::cout << "wrote " << o.output << " (control cage, " << c.num_vertices() << " vertices, " << c.num_faces()
-              << " faces)" << std::endl;
+    std::cout << "wrote " << o.output << " (control cage, " << c.num_vertices() << " vertices, "
+              << c.num_faces() << " faces)" << std::endl;
     return 0;
   }
   const TriMesh mesh = model.band_mesh(k, o.resolution);
   write_mesh(mesh, o.output);
-  std::cout << "wrote " << o.output << " (band " << k << ", "
-            << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces)" << std::endl;
+  std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
+            << mesh.num_faces() << " faces)" << std::endl;
   return 0;
 }
 
@@ -348,7 +352,8 @@ int run_export(const ExportCmdOptions& o) {
 void add_change_options(CLI::App& app, EditCmdOptions& o) {
   app.add_option("-o,--output", o.output, "Model to write")->required();
   app.add_option("--report", o.report, "Write a JSON report");
-  app.add_flag("--intersections", o.intersections, "Count the finest band's self-intersections before and after");
+  app.add_flag("--intersections", o.intersections,
+               "Count the finest band's self-intersections before and after");
   app.add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
 }
 
@@ -378,8 +383,9 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
   }
   {
     auto o = std::make_shared<InfoCmdOptions>();
-    CLI::App* app = parent.add_subcommand(
-        "info", "Describe a layered model: its bands, their sizes, amplitudes and detail magnitudes, and its history.");
+    CLI::App* app = parent.add_subcommand("info",
+                                          "Describe a layered model: its bands, their sizes, amplitudes and "
+                                          "detail magnitudes, and its history.");
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_flag("--json", o->as_json, "Print JSON");
     out.push_back({app, [o] { return run_info(*o); }});

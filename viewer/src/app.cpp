@@ -533,16 +533,14 @@ Selection indices_of(const std::vector<char>& flags) {
 }  // namespace
 
 Selection App::region_selection() const {
-  if (!(brushed_band() && brush_region_any_))
-    return Selection::sphere(region_center_, region_radius_);
+  if (!(brushed_band() && brush_region_any_)) return Selection::sphere(region_center_, region_radius_);
   std::vector<char> region, handle;
   selection_flags(region, handle);
   return indices_of(region);
 }
 
 Selection App::handle_selection() const {
-  if (!(brushed_band() && brush_handle_any_))
-    return Selection::sphere(handle_center_, handle_radius_);
+  if (!(brushed_band() && brush_handle_any_)) return Selection::sphere(handle_center_, handle_radius_);
   std::vector<char> region, handle;
   selection_flags(region, handle);
   return indices_of(handle);
@@ -660,9 +658,11 @@ std::vector<std::pair<int, std::vector<Vec3>>> App::gizmo_parts() const {
 bool App::to_screen(const Vec3& world, double& x, double& y) const {
   int w = 0, h = 0;
   glfwGetWindowSize(window_, &w, &h);
-  const Mat4 m = camera_.projection(static_cast<float>(w) / static_cast<float>(std::max(h, 1))) * camera_.view();
-  const Eigen::Vector4f clip = m * Eigen::Vector4f(static_cast<float>(world.x()), static_cast<float>(world.y()),
-                                                   static_cast<float>(world.z()), 1.0f);
+  const Mat4 m =
+      camera_.projection(static_cast<float>(w) / static_cast<float>(std::max(h, 1))) * camera_.view();
+  const Eigen::Vector4f clip =
+      m * Eigen::Vector4f(static_cast<float>(world.x()), static_cast<float>(world.y()),
+                          static_cast<float>(world.z()), 1.0f);
   if (clip.w() <= 1e-6f) return false;
   x = 0.5 * (clip.x() / clip.w() + 1.0) * w;
   y = 0.5 * (1.0 - clip.y() / clip.w()) * h;

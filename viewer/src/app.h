@@ -1,10 +1,10 @@
 //! \file app.h
 //! The interactive window (GLFW, OpenGL 3.3 core, Dear ImGui): bands side by side, the band
 //! panel (visibility, live amplitude, mute, the band to edit), sphere selections of region and
-//! handle on the edited band's points and a brush (P) that paints them point by point, a translate/rotate gizmo (axis arrows and rings at the pivot, Ctrl/Shift + drag, or sliders)
-//! whose drags run on the Worker thread, undo/redo, open/save/export, drag and drop, help (F1).
-//! With --script-drag it drives a drag over --frames frames and (--benchmark) prints the frame
-//! times as JSON.
+//! handle on the edited band's points and a brush (P) that paints them point by point, a translate/rotate
+//! gizmo (axis arrows and rings at the pivot, Ctrl/Shift + drag, or sliders) whose drags run on the Worker
+//! thread, undo/redo, open/save/export, drag and drop, help (F1). With --script-drag it drives a drag over
+//! --frames frames and (--benchmark) prints the frame times as JSON.
 #pragma once
 
 #include <array>
@@ -123,7 +123,7 @@ class App {
   GpuLines selection_points_;
   // Brush selection (P): left drag paints the region, Shift paints the handle, Ctrl erases.
   bool brush_ = false;
-  float brush_radius_ = 0.0f;  // world units (0: 4% of the scene radius when first used)
+  float brush_radius_ = 0.0f;                      // world units (0: 4% of the scene radius when first used)
   std::vector<char> brush_region_, brush_handle_;  // per point of band brush_band_
   int brush_band_ = -1;
   bool brush_region_any_ = false, brush_handle_any_ = false;
@@ -132,7 +132,7 @@ class App {
   int axis_ = 0;  // 0 x, 1 y, 2 z, 3 view direction
   float angle_ = 0.0f;
   Vec3 view_axis_ = Vec3::UnitZ();
-  Vec3 pivot_ = Vec3::Zero();  // of the running drag
+  Vec3 pivot_ = Vec3::Zero();        // of the running drag
   Vec3 gizmo_pivot_ = Vec3::Zero();  // handle_pivot(), updated with the selection points
   int gizmo_part_ = -1, gizmo_hover_ = -1;
   GpuLines gizmo_lines_;

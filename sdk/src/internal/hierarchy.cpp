@@ -14,7 +14,6 @@ struct DoubleTraits : public OpenMesh::DefaultTraits {
 };
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
-
 // Working state of build_hierarchy(): the mesh under decimation and the collapse queue.
 class Decimator {
  public:
@@ -120,7 +119,8 @@ class Decimator {
 
 }  // namespace
 
-Hierarchy build_hierarchy(const std::vector<Vec3>& x, const std::vector<Face>& faces, const HierarchyOptions& o) {
+Hierarchy build_hierarchy(const std::vector<Vec3>& x, const std::vector<Face>& faces,
+                          const HierarchyOptions& o) {
   Hierarchy h;
   // Fine to coarse; reversed at the end.
   std::vector<Hierarchy::Level> fine_to_coarse;
@@ -153,7 +153,8 @@ Hierarchy build_hierarchy(const std::vector<Vec3>& x, const std::vector<Face>& f
       fine_to_coarse.push_back(std::move(coarse));
     }
   }
-  h.levels.assign(std::make_move_iterator(fine_to_coarse.rbegin()), std::make_move_iterator(fine_to_coarse.rend()));
+  h.levels.assign(std::make_move_iterator(fine_to_coarse.rbegin()),
+                  std::make_move_iterator(fine_to_coarse.rend()));
   return h;
 }
 

@@ -11,11 +11,11 @@ namespace strata::internal {
 //! Vertex -> incident faces (with the vertex's corner in the face) and vertex -> neighbours,
 //! both in compressed sparse row form.
 struct Adjacency {
-  std::vector<int> face_offsets;     //!< size nv+1
-  std::vector<int> faces;            //!< incident face ids
-  std::vector<std::uint8_t> corners; //!< corner (0..2) of the vertex in that face
-  std::vector<int> neighbor_offsets; //!< size nv+1
-  std::vector<int> neighbors;        //!< distinct neighbour vertices, sorted
+  std::vector<int> face_offsets;      //!< size nv+1
+  std::vector<int> faces;             //!< incident face ids
+  std::vector<std::uint8_t> corners;  //!< corner (0..2) of the vertex in that face
+  std::vector<int> neighbor_offsets;  //!< size nv+1
+  std::vector<int> neighbors;         //!< distinct neighbour vertices, sorted
 
   int num_vertices() const { return static_cast<int>(face_offsets.size()) - 1; }
 };
@@ -40,7 +40,7 @@ std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& positions, co
 //! Cotangent weights of each vertex's neighbours on the mesh (positions, faces), clamped to be
 //! non-negative and normalized to sum to 1 per vertex (uniform where all clamp to zero). Aligned
 //! with Adjacency::neighbors.
-std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
-                                             const Adjacency& adj);
+std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& positions,
+                                             const std::vector<Face>& faces, const Adjacency& adj);
 
 }  // namespace strata::internal

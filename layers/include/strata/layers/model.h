@@ -74,13 +74,13 @@ struct BuildOptions {
 
 //! One band of a model. Band 0 uses cage, tags and subdiv; bands >= 1 the rest.
 struct Band {
-  PolyMesh cage;                      //!< band 0: the control cage, current control points
-  SubdivTags tags;                    //!< band 0: crease and corner tags
-  SubdivOptions subdiv;               //!< band 0: scheme and boundary rule
-  TriMesh mesh;                       //!< band k >= 1: connectivity and current positions
-  DetailEncoding encoding;            //!< band k >= 1: over band k-1 at rest (detail_rest: rest positions)
-  std::vector<Vec3> base_rest;        //!< band k >= 1: band k-1's vertices (cage points for k = 1) at encoding
-  double amplitude = 1.0;             //!< band k >= 1: scales the target volumes
+  PolyMesh cage;                //!< band 0: the control cage, current control points
+  SubdivTags tags;              //!< band 0: crease and corner tags
+  SubdivOptions subdiv;         //!< band 0: scheme and boundary rule
+  TriMesh mesh;                 //!< band k >= 1: connectivity and current positions
+  DetailEncoding encoding;      //!< band k >= 1: over band k-1 at rest (detail_rest: rest positions)
+  std::vector<Vec3> base_rest;  //!< band k >= 1: band k-1's vertices (cage points for k = 1) at encoding
+  double amplitude = 1.0;       //!< band k >= 1: scales the target volumes
 };
 
 //! Detail magnitude of a band at rest: |p_i - q_i| over its vertices (q_i on band k-1).
@@ -92,20 +92,20 @@ struct DetailMagnitude {
 //! What one band's rebuild did in a cascade.
 struct BandRebuild {
   int band = 0;
-  int solved_vertices = 0;   //!< vertices solved (their base moved)
-  int rest_vertices = 0;     //!< vertices put back at rest (base and amplitude at rest)
-  int rigid_vertices = 0;    //!< vertices moved by the edit's rigid map (their whole base did)
+  int solved_vertices = 0;  //!< vertices solved (their base moved)
+  int rest_vertices = 0;    //!< vertices put back at rest (base and amplitude at rest)
+  int rigid_vertices = 0;   //!< vertices moved by the edit's rigid map (their whole base did)
   int solved_prisms = 0;
-  VolumeMetrics volume;      //!< over the solved prisms (zero when none)
-  ReconstructStats stats;    //!< volumes only
+  VolumeMetrics volume;    //!< over the solved prisms (zero when none)
+  ReconstructStats stats;  //!< volumes only
   double seconds = 0.0;
 };
 
 //! What an edit or an amplitude change did.
 struct CascadeReport {
   int edited_band = 0;
-  double edit_seconds = 0.0;      //!< the edit of the band itself (and its re-encoding)
-  VolumeMetrics edit_volume;      //!< the edited band's region prisms (triangle bands, volumes)
+  double edit_seconds = 0.0;  //!< the edit of the band itself (and its re-encoding)
+  VolumeMetrics edit_volume;  //!< the edited band's region prisms (triangle bands, volumes)
   std::vector<BandRebuild> rebuilt;
   double total_seconds = 0.0;
 };
@@ -125,7 +125,8 @@ class LayeredModel {
   //! Assembles a model from its parts (the file reader): checks that every band's encoding fits
   //! its mesh and its base.
   //! \throw InvalidInput naming the band and the problem.
-  static LayeredModel assemble(std::vector<Band> bands, ModelOptions options, std::vector<std::string> history);
+  static LayeredModel assemble(std::vector<Band> bands, ModelOptions options,
+                               std::vector<std::string> history);
 
   LayeredModel();
   ~LayeredModel();

@@ -58,6 +58,7 @@ StrataContainer read_strata_container(const std::string& path);
 std::vector<std::uint8_t> pack_f64(const std::vector<double>& values);
 std::vector<std::uint8_t> pack_i32(const std::vector<std::int32_t>& values);
 std::vector<double> unpack_f64(const Section& section, long long expected_count, const std::string& what);
-std::vector<std::int32_t> unpack_i32(const Section& section, long long expected_count, const std::string& what);
+std::vector<std::int32_t> unpack_i32(const Section& section, long long expected_count,
+                                     const std::string& what);
 
 }  // namespace strata::layers
