@@ -312,6 +312,18 @@ TEST(MultigridBend, ThePolishsLocalEndMeetsTheToleranceWithFewerIterations) {
   EXPECT_TRUE(rl.stats.converged);
   EXPECT_LE(volume_metrics(e, fr, rl.positions).max_relative_error, local.tolerance * (1 + 1e-9));
   EXPECT_EQ(find_self_intersections(rl.positions, c.detail.faces).num_pairs, 0u);
+  // With no limit the whole polish is local from its start: its first system spans most of the
+  // level (over kSupernodalMinPrisms, so CHOLMOD's supernodal factorization), the later rounds
+  // only the prisms still above the tolerance.
+  ReconstructOptions all_local = whole;
+  all_local.local_polish_max_fraction = 1.0;
+  const ReconstructResult ra = VolumeReconstructor(e, all_local).reconstruct(c.edited_base.vertices);
+  EXPECT_GT(ra.stats.local_factorizations, 0);
+  EXPECT_EQ(ra.stats.factorizations, ra.stats.local_factorizations);
+  EXPECT_LT(ra.stats.cg_iterations, rl.stats.cg_iterations);
+  EXPECT_TRUE(ra.stats.converged);
+  EXPECT_LE(volume_metrics(e, fr, ra.positions).max_relative_error, local.tolerance * (1 + 1e-9));
+  EXPECT_EQ(find_self_intersections(ra.positions, c.detail.faces).num_pairs, 0u);
 }
 
 // On a regular grid the multigrid polish stalls on the checkerboard modes; factorized steps finish

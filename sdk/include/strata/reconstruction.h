@@ -160,15 +160,21 @@ struct ReconstructOptions {
   //! Exact Gauss-Newton steps (a sparse Cholesky factorization each) at most on the finest level
   //! at full scale after the cycles, to reach `tolerance`.
   int max_final_steps = 10;
-  //! Once at most this fraction of the finest level's prisms is above the tolerance during the
-  //! polish, the remaining steps move only those prisms' vertices and local_polish_rings rings
-  //! around them (a small factorized system each step); if that does not reach the tolerance, the
-  //! whole-level steps go on from where they were. 0: whole-level steps only (the default: with
-  //! factorized whole-level steps the gain is small, 8.8 -> 8.5 s on the 100k bumps). The
-  //! multigrid preset takes 0.005: on its 100k bends (scan-like triangulations) a whole-level step
-  //! left 20-80 prisms above the tolerance, and the local end saved 24-64 of 224-250
-  //! conjugate-gradient iterations. The fold repair's whole-level polish never ends locally: its
-  //! wide correction is what unfolds (a local end there left 6 new pairs on the regular 100k rings).
+  //! The polish's local end. Once the prisms above the tolerance and local_polish_rings rings of
+  //! vertices around them make a system of at most this fraction of the finest level's prisms
+  //! (the prisms with a moving vertex), the polish ends in rounds of one factorized step that
+  //! moves only those vertices, each round grown again from the prisms still above the tolerance
+  //! (so the later rounds are small). If max_final_steps rounds do not reach the tolerance, the
+  //! positions go back and the whole-level steps go on. 0: whole-level steps only (the default:
+  //! with factorized whole-level steps the gain is small, 8.8 -> 8.5 s on the 100k bumps). The
+  //! multigrid preset takes 0.2, where one local factorization costs about what a whole-level
+  //! multigrid step does: on the 1M bumps bend the first whole-level step left 23,600 prisms
+  //! above the tolerance, whose local system (129k prisms) took three rounds, 0.55 s, in place of
+  //! a second whole-level step (the polish 3.05-3.15 -> 2.24-2.29 s); on the 100k bends the first
+  //! step leaves more than the limit (8,104 prisms on the bumps), so a second whole-level step
+  //! runs as before (0.09 s there) and the local end follows it (46 prisms). The fold repair's
+  //! whole-level polish never ends locally: its wide correction is what unfolds (a local end there
+  //! left 6 new pairs on the regular 100k rings).
   double local_polish_max_fraction = 0.0;
   //! Rings of vertices around the off prisms that a local polish step moves.
   int local_polish_rings = 2;
@@ -204,7 +210,7 @@ struct ReconstructOptions {
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
 //! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
-//! polish's local end (local_polish_max_fraction 0.005), and a last retry with accurate steps
+//! polish's local end (local_polish_max_fraction 0.2), and a last retry with accurate steps
 //! (MultigridStepOptions::retry_iterations 20). The other fields keep their defaults. On
 //! the 100k bends over scan-like (irregular) triangulations, medians of three runs of 1.5-2.2 s on
 //! one thread (noisy machine) and about 950 bytes per prism, where the defaults take 6-9 s and
