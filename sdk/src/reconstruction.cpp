@@ -87,9 +87,6 @@ constexpr double kMaxDamping = 1e-2;
 // that end cost more than the whole-level step it replaces.
 constexpr int kSupernodalMinPrisms = 10000;
 
-// How local_polish() ended.
-enum class LocalEnd { Converged, Unconverged, TooLarge };
-
 // How a Gauss-Newton step's linear system is solved.
 enum class StepSolve {
   Cycle,      // during the cycles: ReconstructOptions::step_solver (inexact unless Direct)
@@ -110,6 +107,16 @@ struct GnScratch {
   std::vector<Vec3> ldelta;  // the multigrid step per level vertex
   internal::VertexMultigrid::Workspace mgw;
 };
+
+// Frees \p g's arrays (the small dense factor of the multigrid's coarsest level stays), keeping
+// its settings (the exact steps' damping and the iteration budgets).
+void release_step_scratch(GnScratch& g) {
+  auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
+  release(g.grad, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
+  internal::VertexMultigrid::Workspace& w = g.mgw;
+  release(w.levels, w.gf, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64);
+  w.fine = {};
+}
 
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
 // the sweeps (one State per call, so calls share nothing but the levels' factorizations).
@@ -780,8 +787,7 @@ class VolumeReconstructor::Impl {
       // (it unfolds more on the rings, at a factorization a step), and the better of the two.
       smoothed = s.P;
       Outcome o;
-      const bool local_done =
-          local_polish(subset, s, a, opt_.tolerance, st, opt_.max_final_steps) == LocalEnd::Converged;
+      const bool local_done = local_polish(subset, s, a, opt_.tolerance, st, opt_.max_final_steps);
       if (local_done || count) o = outcome(s, a, V, count);
       if (!o.converged || o.new_pairs > 0) {
         local_result.swap(s.P);
@@ -829,28 +835,37 @@ class VolumeReconstructor::Impl {
     }
   }
 
-  // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
-  // those vertices moving (pinned ones excepted), until these prisms meet the tolerance, at most
-  // \p max_steps of them. Prisms without a free vertex do not change. Returns whether the
-  // tolerance was reached; if not, the positions are as the last step left them. If more than
-  // \p max_prisms prisms have a moving vertex, nothing moves and the result is TooLarge.
-  LocalEnd local_polish(const std::vector<int>& free, State& s, double a, double tol, ReconstructStats& st,
-                        int max_steps,
-                        std::size_t max_prisms = std::numeric_limits<std::size_t>::max()) const {
+  // The finest level's prisms that a local step over \p free (finest vertex ids) changes: those
+  // with a vertex of \p free that is not pinned, ascending. \p moves: per finest vertex, whether it
+  // moves; \p local: per prism, its index in the result (-1: not in it).
+  std::vector<int> moved_prisms(const std::vector<int>& free, std::vector<char>& moves,
+                                std::vector<int>& local) const {
     const Level& F = levels_.back();
-    std::vector<char> moves(F.verts.size(), 0);
+    moves.assign(F.verts.size(), 0);
     for (int v : free)
       if (!pinned(v)) moves[v] = 1;
-    std::vector<int> faces;  // the prisms with a moving vertex, ascending
-    std::vector<int> local(F.faces.size(), -1);
+    std::vector<int> faces;
+    local.assign(F.faces.size(), -1);
     for (int v : free)
       if (moves[v])
         for (int t = F.vf_offsets[v]; t < F.vf_offsets[v + 1]; ++t)
           if (local[F.vf[t] / 3] < 0) local[F.vf[t] / 3] = 0, faces.push_back(F.vf[t] / 3);
-    if (faces.size() > max_prisms) return LocalEnd::TooLarge;
     std::sort(faces.begin(), faces.end());
+    for (std::size_t j = 0; j < faces.size(); ++j) local[faces[j]] = static_cast<int>(j);
+    return faces;
+  }
+
+  // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
+  // those vertices moving (pinned ones excepted), until these prisms meet the tolerance, at most
+  // \p max_steps of them. Prisms without a free vertex do not change. Returns whether the
+  // tolerance was reached; if not, the positions are as the last step left them.
+  bool local_polish(const std::vector<int>& free, State& s, double a, double tol, ReconstructStats& st,
+                    int max_steps) const {
+    const Level& F = levels_.back();
+    std::vector<char> moves;
+    std::vector<int> local;
+    const std::vector<int> faces = moved_prisms(free, moves, local);
     const int k = static_cast<int>(faces.size());
-    for (int j = 0; j < k; ++j) local[faces[j]] = j;
     const double scale = std::abs(a) * F.mean_abs_target;
     std::vector<std::array<Vec3, 3>> g(k);
     Eigen::VectorXd r(k);
@@ -871,7 +886,7 @@ class VolumeReconstructor::Impl {
     double damping = kMinDamping;
     for (int step = 0; step <= max_steps; ++step) {
       const auto [rr0, err] = residual(true);
-      if (err <= tol) return LocalEnd::Converged;
+      if (err <= tol) return true;
       if (step == max_steps) break;
       // (J J^T + eps I) y = r over the local prisms: J J^T couples prisms sharing a moving vertex.
       std::vector<Eigen::Triplet<double>> trip;
@@ -893,11 +908,11 @@ class VolumeReconstructor::Impl {
       if (k >= kSupernodalMinPrisms) {
         const internal::SerialOpenMp serial;
         const Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt(A);
-        if (llt.info() != Eigen::Success) return LocalEnd::Unconverged;
+        if (llt.info() != Eigen::Success) return false;
         y = llt.solve(r);
       } else {
         const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(A);
-        if (ldlt.info() != Eigen::Success) return LocalEnd::Unconverged;
+        if (ldlt.info() != Eigen::Success) return false;
         y = ldlt.solve(r);
       }
       ++st.factorizations;
@@ -925,7 +940,7 @@ class VolumeReconstructor::Impl {
       }
       if (halvings == 0) damping = std::max(0.1 * damping, kMinDamping);
     }
-    return LocalEnd::Unconverged;
+    return false;
   }
 
   // The hierarchy's sizes, coarsest first.
@@ -1124,13 +1139,20 @@ class VolumeReconstructor::Impl {
     std::vector<std::pair<int, Vec3>> kept;  // each moved vertex's position on entry
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
+      if (round == 0) {
+        std::vector<char> moves;
+        std::vector<int> local;
+        if (moved_prisms(subset, moves, local).size() > max_prisms) return false;
+        // The whole-level steps' arrays (a few hundred bytes per prism, the multigrid's included)
+        // go before the local factorization, which would otherwise raise the solve's peak memory
+        // (measured at 1M prisms: 899 -> 952 bytes per prism). A fallback allocates them again.
+        release_step_scratch(s.gn);
+      }
       for (int v : subset)
         if (!saved[v]) saved[v] = 1, kept.emplace_back(v, s.P[v]);
-      const LocalEnd end = local_polish(subset, s, s.amplitude, tol, st, 1,
-                                        round == 0 ? max_prisms : std::numeric_limits<std::size_t>::max());
-      if (end == LocalEnd::TooLarge) return false;
+      const bool converged = local_polish(subset, s, s.amplitude, tol, st, 1);
       compute_volumes(F, s, V);
-      if (end == LocalEnd::Converged) return true;
+      if (converged) return true;
       above_tolerance(F, s.amplitude, V, tol, off);
       if (off.empty()) return true;
     }
