@@ -212,11 +212,11 @@ struct ReconstructOptions {
 //! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
 //! polish's local end (local_polish_max_fraction 0.2), and a last retry with accurate steps
 //! (MultigridStepOptions::retry_iterations 20). The other fields keep their defaults. On
-//! the 100k bends over scan-like (irregular) triangulations, medians of three runs of 1.5-2.2 s on
-//! one thread (noisy machine) and about 950 bytes per prism, where the defaults take 6-9 s and
-//! 2 KB (README, Measured results). On regular triangulations its polish stalls and factorized
-//! steps finish it, no faster than the defaults (see Multigrid). Its fold outcomes are erratic:
-//! twelve perturbed 100k bends end without new pairs, one of them after four repair rounds; the
+//! the 100k bends over scan-like (irregular) triangulations, 1.0-1.4 s on one thread (one of
+//! twelve 3.9 s, with repair rounds), 860 bytes per prism on the bumps (2026-11-26, Intel VM), where the
+//! defaults take 5-7 s and 2 KB (README, Measured results). On regular triangulations its polish stalls and
+//! factorized steps finish it, no faster than the defaults (see Multigrid). Its fold outcomes are erratic:
+//! twelve perturbed 100k bends end without new pairs, one of them after five repair rounds; the
 //! bear's arm bend needs the last retry (README).
 ReconstructOptions multigrid_reconstruct_options();
 
