@@ -787,7 +787,8 @@ class VolumeReconstructor::Impl {
       // (it unfolds more on the rings, at a factorization a step), and the better of the two.
       smoothed = s.P;
       Outcome o;
-      const bool local_done = local_polish(subset, s, a, opt_.tolerance, st, opt_.max_final_steps);
+      double damping = kMinDamping;
+      const bool local_done = local_polish(subset, s, a, opt_.tolerance, st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
       if (!o.converged || o.new_pairs > 0) {
         local_result.swap(s.P);
@@ -858,9 +859,10 @@ class VolumeReconstructor::Impl {
   // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
   // those vertices moving (pinned ones excepted), until these prisms meet the tolerance, at most
   // \p max_steps of them. Prisms without a free vertex do not change. Returns whether the
-  // tolerance was reached; if not, the positions are as the last step left them.
+  // tolerance was reached; if not, the positions are as the last step left them. \p damping: the
+  // Levenberg-Marquardt shift to start from, and on return the one the next step would take.
   bool local_polish(const std::vector<int>& free, State& s, double a, double tol, ReconstructStats& st,
-                    int max_steps) const {
+                    int max_steps, double& damping) const {
     const Level& F = levels_.back();
     std::vector<char> moves;
     std::vector<int> local;
@@ -883,7 +885,6 @@ class VolumeReconstructor::Impl {
       }
       return std::make_pair(rr, scale > 0 ? mx / scale : 0.0);
     };
-    double damping = kMinDamping;
     for (int step = 0; step <= max_steps; ++step) {
       const auto [rr0, err] = residual(true);
       if (err <= tol) return true;
@@ -1137,6 +1138,7 @@ class VolumeReconstructor::Impl {
     std::vector<char> in, saved(F.verts.size(), 0);
     std::vector<int> subset, next;
     std::vector<std::pair<int, Vec3>> kept;  // each moved vertex's position on entry
+    double damping = kMinDamping;            // carried over the rounds, as over a fixed set's steps
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
       if (round == 0) {
@@ -1145,12 +1147,13 @@ class VolumeReconstructor::Impl {
         if (moved_prisms(subset, moves, local).size() > max_prisms) return false;
         // The whole-level steps' arrays (a few hundred bytes per prism, the multigrid's included)
         // go before the local factorization, which would otherwise raise the solve's peak memory
-        // (measured at 1M prisms: 899 -> 952 bytes per prism). A fallback allocates them again.
+        // (measured at 1M prisms: 952 bytes per prism without this, 829 with it). A fallback to
+        // whole-level steps allocates them again.
         release_step_scratch(s.gn);
       }
       for (int v : subset)
         if (!saved[v]) saved[v] = 1, kept.emplace_back(v, s.P[v]);
-      const bool converged = local_polish(subset, s, s.amplitude, tol, st, 1);
+      const bool converged = local_polish(subset, s, s.amplitude, tol, st, 1, damping);
       compute_volumes(F, s, V);
       if (converged) return true;
       above_tolerance(F, s.amplitude, V, tol, off);
