@@ -75,11 +75,14 @@ class Decimator {
   }
 
  private:
-  struct Entry {
+  // Packed to 12 bytes (from 16): the queue holds millions of entries at 1M prisms (5.9M at its
+  // largest), most of them stale, and its sifts are cache misses. The order is the same.
+  struct __attribute__((packed)) Entry {
     double length2;
     int halfedge;
     bool operator<(const Entry& o) const { return length2 > o.length2; }  // min-heap
   };
+  static_assert(sizeof(Entry) == 12, "Entry is packed");
 
   double length2(OMesh::HalfedgeHandle h) const {
     return (x_[mesh_.from_vertex_handle(h).idx()] - x_[mesh_.to_vertex_handle(h).idx()]).squaredNorm();
