@@ -788,7 +788,8 @@ class VolumeReconstructor::Impl {
       smoothed = s.P;
       Outcome o;
       double damping = kMinDamping;
-      const bool local_done = local_polish(subset, s, a, opt_.tolerance, st, opt_.max_final_steps, damping);
+      const bool local_done =
+          local_polish(local_set(subset), s, a, opt_.tolerance, st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
       if (!o.converged || o.new_pairs > 0) {
         local_result.swap(s.P);
@@ -836,37 +837,43 @@ class VolumeReconstructor::Impl {
     }
   }
 
-  // The finest level's prisms that a local step over \p free (finest vertex ids) changes: those
-  // with a vertex of \p free that is not pinned, ascending. \p moves: per finest vertex, whether it
-  // moves; \p local: per prism, its index in the result (-1: not in it).
-  std::vector<int> moved_prisms(const std::vector<int>& free, std::vector<char>& moves,
-                                std::vector<int>& local) const {
+  // What a local step over the finest vertices \p free changes: the vertices that move (those of
+  // \p free that are not pinned) and the prisms with a moving vertex.
+  struct LocalSet {
+    const std::vector<int>* free = nullptr;
+    std::vector<char> moves;  // per finest vertex: whether it moves
+    std::vector<int> faces;   // the prisms with a moving vertex, ascending
+    std::vector<int> local;   // per finest prism: its index in faces (-1: not in it)
+  };
+  LocalSet local_set(const std::vector<int>& free) const {
     const Level& F = levels_.back();
-    moves.assign(F.verts.size(), 0);
+    LocalSet ls;
+    ls.free = &free;
+    ls.moves.assign(F.verts.size(), 0);
     for (int v : free)
-      if (!pinned(v)) moves[v] = 1;
-    std::vector<int> faces;
-    local.assign(F.faces.size(), -1);
+      if (!pinned(v)) ls.moves[v] = 1;
+    ls.local.assign(F.faces.size(), -1);
     for (int v : free)
-      if (moves[v])
+      if (ls.moves[v])
         for (int t = F.vf_offsets[v]; t < F.vf_offsets[v + 1]; ++t)
-          if (local[F.vf[t] / 3] < 0) local[F.vf[t] / 3] = 0, faces.push_back(F.vf[t] / 3);
-    std::sort(faces.begin(), faces.end());
-    for (std::size_t j = 0; j < faces.size(); ++j) local[faces[j]] = static_cast<int>(j);
-    return faces;
+          if (ls.local[F.vf[t] / 3] < 0) ls.local[F.vf[t] / 3] = 0, ls.faces.push_back(F.vf[t] / 3);
+    std::sort(ls.faces.begin(), ls.faces.end());
+    for (std::size_t j = 0; j < ls.faces.size(); ++j) ls.local[ls.faces[j]] = static_cast<int>(j);
+    return ls;
   }
 
-  // Exact Gauss-Newton steps on the finest level's prisms around \p free (finest vertex ids), only
-  // those vertices moving (pinned ones excepted), until these prisms meet the tolerance, at most
-  // \p max_steps of them. Prisms without a free vertex do not change. Returns whether the
-  // tolerance was reached; if not, the positions are as the last step left them. \p damping: the
-  // Levenberg-Marquardt shift to start from, and on return the one the next step would take.
-  bool local_polish(const std::vector<int>& free, State& s, double a, double tol, ReconstructStats& st,
-                    int max_steps, double& damping) const {
+  // Exact Gauss-Newton steps on the prisms of \p set (local_set()), only its moving vertices
+  // moving, until these prisms meet the tolerance, at most \p max_steps of them. Other prisms do
+  // not change. Returns whether the tolerance was reached; if not, the positions are as the last
+  // step left them. \p damping: the Levenberg-Marquardt shift to start from, and on return the
+  // one the next step would take.
+  bool local_polish(const LocalSet& set, State& s, double a, double tol, ReconstructStats& st, int max_steps,
+                    double& damping) const {
     const Level& F = levels_.back();
-    std::vector<char> moves;
-    std::vector<int> local;
-    const std::vector<int> faces = moved_prisms(free, moves, local);
+    const std::vector<int>& free = *set.free;
+    const std::vector<char>& moves = set.moves;
+    const std::vector<int>& faces = set.faces;
+    const std::vector<int>& local = set.local;
     const int k = static_cast<int>(faces.size());
     const double scale = std::abs(a) * F.mean_abs_target;
     std::vector<std::array<Vec3, 3>> g(k);
@@ -1141,10 +1148,9 @@ class VolumeReconstructor::Impl {
     double damping = kMinDamping;            // carried over the rounds, as over a fixed set's steps
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
+      const LocalSet set = local_set(subset);
       if (round == 0) {
-        std::vector<char> moves;
-        std::vector<int> local;
-        if (moved_prisms(subset, moves, local).size() > max_prisms) return false;
+        if (set.faces.size() > max_prisms) return false;
         // The whole-level steps' arrays (a few hundred bytes per prism, the multigrid's included)
         // go before the local factorization, which would otherwise raise the solve's peak memory
         // (measured at 1M prisms: 952 bytes per prism without this, 829 with it). A fallback to
@@ -1153,7 +1159,7 @@ class VolumeReconstructor::Impl {
       }
       for (int v : subset)
         if (!saved[v]) saved[v] = 1, kept.emplace_back(v, s.P[v]);
-      const bool converged = local_polish(subset, s, s.amplitude, tol, st, 1, damping);
+      const bool converged = local_polish(set, s, s.amplitude, tol, st, 1, damping);
       compute_volumes(F, s, V);
       if (converged) return true;
       above_tolerance(F, s.amplitude, V, tol, off);
