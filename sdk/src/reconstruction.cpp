@@ -12,7 +12,6 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
-#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -916,11 +915,11 @@ class VolumeReconstructor::Impl {
       if (k >= kSupernodalMinPrisms) {
         const internal::SerialOpenMp serial;
         const Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt(A);
-        if (llt.info() != Eigen::Success) return false;
+        if (llt.info() != Eigen::Success) return factorization_failed(damping);
         y = llt.solve(r);
       } else {
         const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(A);
-        if (ldlt.info() != Eigen::Success) return false;
+        if (ldlt.info() != Eigen::Success) return factorization_failed(damping);
         y = ldlt.solve(r);
       }
       ++st.factorizations;
@@ -948,6 +947,13 @@ class VolumeReconstructor::Impl {
       }
       if (halvings == 0) damping = std::max(0.1 * damping, kMinDamping);
     }
+    return false;
+  }
+
+  // A local step whose factorization failed: the next one (the caller's next round) is damped
+  // more, rather than the same system failing again.
+  static bool factorization_failed(double& damping) {
+    damping = std::min(100 * damping, kMaxDamping);
     return false;
   }
 
@@ -1098,10 +1104,16 @@ class VolumeReconstructor::Impl {
       const double limit = opt_.local_polish_max_fraction * static_cast<double>(L.faces.size());
       const double scale = std::abs(s.amplitude) * L.mean_abs_target;
       int steps = 0;
+      // After a local end that failed (its rounds undone), the next is tried only once the off
+      // prisms are at most half as many: each attempt costs up to max_final_steps factorizations.
+      double retry_below = limit;
       for (std::vector<int> off;; ++steps) {
         above_tolerance(L, s.amplitude, V, tol, off);
         if (off.empty() || !(scale > 0)) break;
-        if (static_cast<double>(off.size()) <= limit && finish_locally(off, s, tol, st, V)) break;
+        if (static_cast<double>(off.size()) <= retry_below) {
+          if (finish_locally(off, s, tol, st, V)) break;
+          retry_below = 0.5 * static_cast<double>(off.size());
+        }
         if (steps == opt_.max_final_steps) break;
         gauss_newton_step(L, s, s.amplitude, StepSolve::Exact, st, V);
       }
@@ -1135,8 +1147,9 @@ class VolumeReconstructor::Impl {
   // and local_polish_rings rings around them, each round grown again from the prisms still above
   // it, so that the later rounds' systems are small. A factorized system over a neighbourhood
   // where a whole-level step costs a multigrid solve of the whole level. Returns whether the
-  // tolerance holds on every prism; if not, or if the first round's system would have more than
-  // local_polish_max_fraction of the level's prisms, the positions are as on entry. V: the
+  // tolerance holds on every prism that has a free vertex (prisms whose three vertices are pinned
+  // cannot move, here or in a whole-level step); if not, or if a round's system would have more
+  // than local_polish_max_fraction of the level's prisms, the positions are as on entry. V: the
   // volumes of the positions left.
   bool finish_locally(std::vector<int> off, State& s, double tol, ReconstructStats& st,
                       std::vector<double>& V) const {
@@ -1149,8 +1162,12 @@ class VolumeReconstructor::Impl {
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
       const LocalSet set = local_set(subset);
+      // Every round's system is bounded, not only the first: the off prisms need not shrink.
+      if (set.faces.size() > max_prisms) {
+        if (round == 0) return false;
+        break;
+      }
       if (round == 0) {
-        if (set.faces.size() > max_prisms) return false;
         // The whole-level steps' arrays (a few hundred bytes per prism, the multigrid's included)
         // go before the local factorization, which would otherwise raise the solve's peak memory
         // (measured at 1M prisms: 952 bytes per prism without this, 829 with it). A fallback to

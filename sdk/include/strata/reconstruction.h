@@ -157,15 +157,20 @@ struct ReconstructOptions {
   double level_tolerance = 1e-2;
   //! Max relative volume error required on the finest level at full scale.
   double tolerance = 1e-4;
-  //! Exact Gauss-Newton steps (a sparse Cholesky factorization each) at most on the finest level
-  //! at full scale after the cycles, to reach `tolerance`.
+  //! Whole-level exact Gauss-Newton steps (the polish) at most on the finest level at full scale
+  //! after the cycles, to reach `tolerance`: a sparse Cholesky factorization each with the Direct
+  //! polish solver, a multigrid solve with the Multigrid one (which, if that stalls, then takes up
+  //! to this many factorized steps). Also the rounds of each local end at most
+  //! (local_polish_max_fraction) and the steps of each fold-repair round's local polish.
   int max_final_steps = 10;
   //! The polish's local end. Once the prisms above the tolerance and local_polish_rings rings of
   //! vertices around them make a system of at most this fraction of the finest level's prisms
   //! (the prisms with a moving vertex), the polish ends in rounds of one factorized step that
   //! moves only those vertices, each round grown again from the prisms still above the tolerance
-  //! (so the later rounds are small). If max_final_steps rounds do not reach the tolerance, the
-  //! positions go back and the whole-level steps go on. 0: whole-level steps only (the default:
+  //! (so the later rounds are small). If max_final_steps rounds do not reach the tolerance, or a
+  //! later round's system exceeds the limit, the positions go back and the whole-level steps go
+  //! on; the local end is then tried again only once the prisms above the tolerance are at most
+  //! half as many as at the failed attempt. 0: whole-level steps only (the default:
   //! with factorized whole-level steps the gain is small, 8.8 -> 8.5 s on the 100k bumps). The
   //! multigrid preset takes 0.2, where one local factorization costs about what a whole-level
   //! multigrid step does: on the 1M bumps bend the first whole-level step left 23,600 prisms
@@ -260,8 +265,8 @@ struct ReconstructStats {
   double seconds_folds = 0.0;
   long long step_halvings = 0;   //!< Gauss-Newton steps halved by the backtracking line search
   long long factorizations = 0;  //!< numeric Cholesky factorizations (direct step solver)
-  //! Of these, the small ones of steps that move a neighbourhood only (the local end of the
-  //! polish, local_polish_max_fraction, and the fold repair's local steps).
+  //! Of these, those of steps that move a neighbourhood only (the local end of the polish, up to
+  //! local_polish_max_fraction of the level, and the fold repair's local steps).
   long long local_factorizations = 0;
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
