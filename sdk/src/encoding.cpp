@@ -11,81 +11,13 @@
 #include <string>
 
 #include "internal/closest_point.h"
+#include "internal/offset_roots.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
 #include "strata/prism.h"
 
 namespace strata {
 namespace {
-
-double det3(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return a.dot(b.cross(c));
-}
-
-// Real roots of c0 + c1 t + c2 t^2 + c3 t^3 in [-T, T], found by splitting the interval at the
-// critical points (so each piece is monotone) and bisecting the pieces with a sign change. Robust
-// against vanishing leading coefficients, which are common (parallel normals make the cubic a
-// line).
-int cubic_roots_in(const double c[4], double T, double roots[3]) {
-  auto f = [&](double t) { return c[0] + t * (c[1] + t * (c[2] + t * c[3])); };
-  double cuts[4];
-  int nc = 0;
-  cuts[nc++] = -T;
-  // f'(t) = c1 + 2 c2 t + 3 c3 t^2.
-  const double A = 3 * c[3], B = 2 * c[2], C = c[1];
-  double crit[2];
-  int ncrit = 0;
-  if (std::abs(A) > 1e-300) {
-    const double disc = B * B - 4 * A * C;
-    if (disc > 0) {
-      const double s = std::sqrt(disc);
-      const double q = -0.5 * (B + (B >= 0 ? s : -s));
-      crit[ncrit++] = q / A;
-      if (q != 0) crit[ncrit++] = C / q;
-    }
-  } else if (std::abs(B) > 1e-300) {
-    crit[ncrit++] = -C / B;
-  }
-  std::sort(crit, crit + ncrit);
-  for (int i = 0; i < ncrit; ++i)
-    if (crit[i] > -T && crit[i] < T) cuts[nc++] = crit[i];
-  cuts[nc++] = T;
-  int nr = 0;
-  for (int i = 0; i + 1 < nc; ++i) {
-    double lo = cuts[i], hi = cuts[i + 1];
-    double flo = f(lo), fhi = f(hi);
-    if (flo == 0.0) {
-      if (nr == 0 || roots[nr - 1] != lo) roots[nr++] = lo;
-      continue;
-    }
-    if (fhi == 0.0) {
-      if (i + 2 == nc) roots[nr++] = hi;
-      continue;
-    }
-    if ((flo < 0) == (fhi < 0)) continue;
-    for (int it = 0; it < 200 && hi - lo > 1e-15 * T; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      const double fm = f(mid);
-      if (fm == 0.0)
-        lo = hi = mid;
-      else if ((fm < 0) == (flo < 0))
-        lo = mid, flo = fm;
-      else
-        hi = mid;
-    }
-    roots[nr++] = 0.5 * (lo + hi);
-  }
-  return nr;
-}
-
-Vec3 barycentric(const Vec3& p, const Vec3& y0, const Vec3& y1, const Vec3& y2) {
-  const Vec3 v0 = y1 - y0, v1 = y2 - y0, v2 = p - y0;
-  const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0), d21 = v2.dot(v1);
-  const double den = d00 * d11 - d01 * d01;
-  if (!(std::abs(den) > 0.0)) return Vec3(-1, -1, -1);  // degenerate: never inside
-  const double b1 = (d11 * d20 - d01 * d21) / den, b2 = (d00 * d21 - d01 * d20) / den;
-  return Vec3(1.0 - b1 - b2, b1, b2);
-}
 
 void check_mesh(const TriMesh& m, const char* what) {
   if (m.faces.empty()) throw InvalidInput(std::string(what) + " mesh has no faces");
@@ -171,23 +103,22 @@ class Encoder {
   void test_face(int f, const Vec3& p, double T, int& found, double& best, Vec3& best_q,
                  BasePoint& bp) const {
     const Face& F = base_.faces[f];
-    const Vec3 &x0 = base_.vertices[F[0]], &n0 = normals_[F[0]];
-    const Vec3 a1 = base_.vertices[F[1]] - x0, b1 = normals_[F[1]] - n0;
-    const Vec3 a2 = base_.vertices[F[2]] - x0, b2 = normals_[F[2]] - n0;
-    const Vec3 a3 = p - x0, b3 = -n0;
-    const double c[4] = {det3(a1, a2, a3), det3(b1, a2, a3) + det3(a1, b2, a3) + det3(a1, a2, b3),
-                         det3(b1, b2, a3) + det3(b1, a2, b3) + det3(a1, b2, b3), det3(b1, b2, b3)};
-    double roots[3];
-    const int nr = cubic_roots_in(c, T, roots);
+    const internal::OffsetTriangle tri{{base_.vertices[F[0]], base_.vertices[F[1]], base_.vertices[F[2]]},
+                                       {normals_[F[0]], normals_[F[1]], normals_[F[2]]}};
+    double c[4];
+    internal::offset_cubic(tri, p, c);
+    internal::RootBracket brackets[3];
+    const int nr = internal::cubic_root_brackets(c, T, brackets);
     for (int r = 0; r < nr; ++r) {
-      const double t = roots[r];
-      const Vec3 y0 = x0 + t * n0, y1 = base_.vertices[F[1]] + t * normals_[F[1]],
-                 y2 = base_.vertices[F[2]] + t * normals_[F[2]];
-      Vec3 b = barycentric(p, y0, y1, y2);
+      // Most faces of the rings are far from holding the projection: their roots are dropped from
+      // the coarse brackets, and only the others refined.
+      if (internal::root_outside(tri, p, brackets[r], opt_.barycentric_tolerance)) continue;
+      const double t = internal::refine_root(c, T, brackets[r]);
+      Vec3 b = internal::offset_barycentric(tri, p, t);
       if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
       b = b.cwiseMax(0.0);
       b /= b.sum();
-      const Vec3 q = b[0] * x0 + b[1] * base_.vertices[F[1]] + b[2] * base_.vertices[F[2]];
+      const Vec3 q = b[0] * tri.x[0] + b[1] * tri.x[1] + b[2] * tri.x[2];
       const double d = (p - q).norm();
       if (d > T) continue;
       // The same point found through two faces sharing an edge is not an ambiguity.

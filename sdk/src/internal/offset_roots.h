@@ -1,0 +1,60 @@
+// Internal: where a base triangle's normal offset passes through a point, for the encoding's
+// projection (paper, section 3: p - q parallel to the interpolated normal at q). Not part of the
+// API.
+//
+// The triangle offset along its vertex normals, y_k(t) = x_k + t n_k, contains p where
+// det[y1 - y0, y2 - y0, p - y0] = 0, a cubic in t. Its roots in [-T, T] are bracketed and bisected
+// in two stages, so that the encoder can drop a root that a coarse bracket already shows to lie
+// outside the triangle (most of the faces it searches) and refine only the others.
+#pragma once
+
+#include "strata/mesh.h"
+
+namespace strata::internal {
+
+//! A triangle (x0, x1, x2) with vertex normals (n0, n1, n2), offset by t: y_k = x_k + t n_k.
+struct OffsetTriangle {
+  Vec3 x[3];
+  Vec3 n[3];
+};
+
+//! A bracket of one root of a cubic; lo == hi for a root found exactly.
+struct RootBracket {
+  double lo = 0.0, hi = 0.0;
+  double flo = 0.0;    //!< the cubic at lo
+  int iterations = 0;  //!< bisection steps taken so far
+};
+
+//! Width of the coarse brackets, relative to T (about 15 bisection steps from [-T, T]).
+constexpr double kCoarseRootWidth = 1e-4;
+//! Width at which refine_root() stops, relative to T (about 51 steps from [-T, T]).
+constexpr double kFullRootWidth = 1e-15;
+
+//! Coefficients c0..c3 of det[y1 - y0, y2 - y0, p - y0] as a cubic in t.
+void offset_cubic(const OffsetTriangle& tri, const Vec3& p, double c[4]);
+
+//! The real roots of c0 + c1 t + c2 t^2 + c3 t^3 in [-T, T], ascending: the interval is split at
+//! the cubic's critical points (each piece monotone) and every piece with a sign change bisected to
+//! kCoarseRootWidth * T. Robust against vanishing leading coefficients, which are common (parallel
+//! normals make the cubic a line). Returns the count (at most 3).
+int cubic_root_brackets(const double c[4], double T, RootBracket out[3]);
+
+//! Bisects \p b on to kFullRootWidth * T (or 200 steps in all, or an exact zero) and returns its
+//! midpoint: the same number as one uninterrupted bisection of the piece would give.
+double refine_root(const double c[4], double T, RootBracket& b);
+
+//! Barycentric coordinates of p's projection onto the plane of the triangle offset by t; (-1, -1,
+//! -1) and *degenerate = true (if given) where that triangle is degenerate (never inside).
+Vec3 offset_barycentric(const OffsetTriangle& tri, const Vec3& p, double t, bool* degenerate = nullptr);
+
+//! Whether the root in the coarse bracket \p b is sure to lie outside the triangle, that is, to
+//! have a barycentric coordinate below -tolerance once refined, so that refining can be skipped.
+//! The coordinates are rational in t with the offset triangle's squared area as denominator.
+//! Where that triangle keeps its orientation and size across the bracket (its area vector is
+//! quadratic in t, so its ends and middle fix it), they are smooth and, over so narrow a bracket,
+//! linear to within far less than their change across it: a coordinate below -tolerance at both
+//! ends by twice that change is below it at the root. Otherwise (the offset triangle degenerates
+//! inside, as at a cylinder's axis, where every face's cubic has a root) the answer is false.
+bool root_outside(const OffsetTriangle& tri, const Vec3& p, const RootBracket& b, double tolerance);
+
+}  // namespace strata::internal
