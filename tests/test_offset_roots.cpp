@@ -188,7 +188,8 @@ TEST(OffsetRoots, AnOutsideVerdictHoldsAtTheRefinedRoot) {
 
 // Where the offset triangle collapses (every point's cubic has a root there), its coordinates are
 // not smooth across the bracket, and refined they are rounding noise: such a root is never
-// dropped, so that it is tested as the encoder always did. On the unit cylinder the first two
+// dropped on its coordinates (the encoder refines it and recognizes the collapse,
+// offset_collapsed()). On the unit cylinder the first two
 // vertices' offsets meet on the axis at t = -1; seen from a point outside, the first coordinate
 // is about the same negative number at both ends of that root's bracket, which a test of the
 // coordinates alone would take for "outside".
@@ -208,6 +209,19 @@ TEST(OffsetRoots, ARootWhereTheOffsetCollapsesIsNeverDropped) {
     }
   }
   EXPECT_GT(collapses, 1000);
+}
+
+// The root where the cylinder's offset collapses onto its axis is reported as collapsed; the
+// roots of points placed on a generic offset triangle are not.
+TEST(OffsetRoots, ACollapsedOffsetIsRecognized) {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Sample pole = random_sample(rng, Kind::Pole);
+    EXPECT_TRUE(offset_collapsed(pole.tri, -1.0)) << "trial " << trial;
+    EXPECT_FALSE(offset_collapsed(pole.tri, 0.0)) << "trial " << trial;
+    const Sample generic = random_sample(rng, Kind::Generic);
+    EXPECT_FALSE(offset_collapsed(generic.tri, generic.t)) << "trial " << trial;
+  }
 }
 
 // The barycentric coordinates of a point on the offset triangle reproduce it, and a degenerate

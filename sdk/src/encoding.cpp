@@ -114,6 +114,9 @@ class Encoder {
       // the coarse brackets, and only the others refined.
       if (internal::root_outside(tri, p, brackets[r], opt_.barycentric_tolerance)) continue;
       const double t = internal::refine_root(c, T, brackets[r]);
+      // A root where the offset triangle collapses (the base's focal points) is no projection;
+      // counted as one, such roots made vertices ambiguous and at times won as the nearest.
+      if (internal::offset_collapsed(tri, t)) continue;
       Vec3 b = internal::offset_barycentric(tri, p, t);
       if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
       b = b.cwiseMax(0.0);

@@ -106,6 +106,10 @@ Vec3 offset_barycentric(const OffsetTriangle& tri, const Vec3& p, double t, bool
   return Vec3(1.0 - b1 - b2, b1, b2);
 }
 
+bool offset_collapsed(const OffsetTriangle& tri, double t) {
+  return !(area_vector(tri, t).norm() > 1e-8 * area_vector(tri, 0.0).norm());
+}
+
 bool root_outside(const OffsetTriangle& tri, const Vec3& p, const RootBracket& b, double tolerance) {
   if (!(b.lo < b.hi)) return false;
   const Vec3 a[3] = {area_vector(tri, b.lo), area_vector(tri, 0.5 * (b.lo + b.hi)), area_vector(tri, b.hi)};

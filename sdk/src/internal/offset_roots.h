@@ -47,6 +47,12 @@ double refine_root(const double c[4], double T, RootBracket& b);
 //! -1) and *degenerate = true (if given) where that triangle is degenerate (never inside).
 Vec3 offset_barycentric(const OffsetTriangle& tri, const Vec3& p, double t, bool* degenerate = nullptr);
 
+//! Whether the triangle offset by t has collapsed: its area at most 1e-8 of the triangle's own (a
+//! collinear or coincident offset, as at the focal points of the base's curvature, where every
+//! point's cubic has a root). A root there is no projection: the barycentric coordinates of the
+//! collapsed triangle are rounding noise.
+bool offset_collapsed(const OffsetTriangle& tri, double t);
+
 //! Whether the root in the coarse bracket \p b is sure to lie outside the triangle, that is, to
 //! have a barycentric coordinate below -tolerance once refined, so that refining can be skipped.
 //! The coordinates are rational in t with the offset triangle's squared area as denominator.
