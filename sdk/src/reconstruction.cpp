@@ -107,8 +107,9 @@ struct GnScratch {
   internal::VertexMultigrid::Workspace mgw;
 };
 
-// Frees \p g's arrays (the small dense factor of the multigrid's coarsest level stays), keeping
-// its settings (the exact steps' damping and the iteration budgets).
+// Frees \p g's arrays (the small dense factor of the multigrid's coarsest level stays: Eigen's
+// LDLT does not move cleanly), keeping its settings (the exact steps' damping and the iteration
+// budgets).
 void release_step_scratch(GnScratch& g) {
   auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
   release(g.grad, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
@@ -1177,7 +1178,7 @@ class VolumeReconstructor::Impl {
       for (int v : subset)
         if (!saved[v]) saved[v] = 1, kept.emplace_back(v, s.P[v]);
       const bool converged = local_polish(set, s, s.amplitude, tol, st, 1, damping);
-      compute_volumes(F, s, V);
+      update_volumes(F, s, set.faces, V);
       if (converged) return true;
       above_tolerance(F, s.amplitude, V, tol, off);
       if (off.empty()) return true;
@@ -1200,6 +1201,15 @@ class VolumeReconstructor::Impl {
     if (L.llt) return;
     const std::vector<Face>& lf = L.local_faces.empty() ? L.faces : L.local_faces;
     build_jj_pattern(lf, internal::build_adjacency(static_cast<int>(L.verts.size()), lf), L);
+  }
+
+  // V's entries of \p faces recomputed, after a step that moved only vertices of these prisms.
+  void update_volumes(const Level& L, const State& s, const std::vector<int>& faces,
+                      std::vector<double>& V) const {
+    for_each(faces.size(), [&](std::size_t k) {
+      const Face& f = L.faces[faces[k]];
+      V[faces[k]] = prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+    });
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
