@@ -325,6 +325,61 @@ TEST(MultigridBend, ThePolishsLocalEndMeetsTheToleranceWithFewerIterations) {
   expect_local_end(VolumeReconstructor(e, all_local).reconstruct(c.edited_base.vertices), rl);
 }
 
+// The local end's contract under options that push it: every round's system within
+// local_polish_max_fraction of the level (max_local_end_prisms counts them all, not only the
+// first), and a local end that does not reach the tolerance in max_final_steps rounds is undone, the
+// whole-level steps going on from the positions before it. Every run converges without new pairs,
+// and the error the solver reports is the one of the positions it returns (a local end undone
+// without its volumes recomputed would report another).
+TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
+  cases::CylinderCaseOptions o;
+  o.detail = cases::DetailKind::Bumps;
+  o.target_detail_triangles = 12000;
+  o.jitter = 0.4;
+  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  const double prisms = static_cast<double>(c.detail.faces.size());
+  auto run = [&](const ReconstructOptions& ro) {
+    const ReconstructResult r = VolumeReconstructor(e, ro).reconstruct(c.edited_base.vertices);
+    const VolumeMetrics m = volume_metrics(e, fr, r.positions);
+    EXPECT_TRUE(r.stats.converged);
+    EXPECT_LE(m.max_relative_error, ro.tolerance * (1 + 1e-9));
+    EXPECT_NEAR(r.stats.max_relative_error, m.max_relative_error, 1e-9 * ro.tolerance);
+    EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u);
+    EXPECT_LE(r.stats.local_ends_undone, r.stats.local_ends);
+    return r.stats;
+  };
+  ReconstructOptions base = multigrid_reconstruct_options();
+  base.threads = 1;
+  for (double fraction : {0.02, 0.2, 1.0}) {
+    SCOPED_TRACE(fraction);
+    ReconstructOptions ro = base;
+    ro.local_polish_max_fraction = fraction;
+    const ReconstructStats st = run(ro);
+    EXPECT_GE(st.local_ends, 1);
+    EXPECT_GT(st.max_local_end_prisms, 0);
+    EXPECT_LE(static_cast<double>(st.max_local_end_prisms), fraction * prisms);
+  }
+  // One round a local end (measured: its 1,449-prism round leaves prisms above the tolerance):
+  // undone, and the factorized whole-level steps finish.
+  ReconstructOptions one_round = base;
+  one_round.max_final_steps = 1;
+  const ReconstructStats st1 = run(one_round);
+  EXPECT_GE(st1.local_ends_undone, 1);
+  EXPECT_GE(st1.local_factorizations, 1);
+  EXPECT_GT(st1.factorizations, st1.local_factorizations);
+  // Without rings around the off prisms (measured: 10 rounds leave some off), the first local
+  // end is undone, and a later one, tried once the whole-level steps have halved the off prisms,
+  // finishes.
+  ReconstructOptions no_rings = base;
+  no_rings.local_polish_rings = 0;
+  const ReconstructStats st0 = run(no_rings);
+  EXPECT_GE(st0.local_ends_undone, 1);
+  EXPECT_GT(st0.local_ends, st0.local_ends_undone);
+  EXPECT_EQ(st0.factorizations, st0.local_factorizations);
+}
+
 // On a regular grid the multigrid polish stalls on the checkerboard modes; factorized steps finish
 // it, so the preset still converges there.
 TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {

@@ -1165,10 +1165,12 @@ class VolumeReconstructor::Impl {
       const LocalSet set = local_set(subset);
       // Every round's system is bounded, not only the first: the off prisms need not shrink.
       if (set.faces.size() > max_prisms) {
-        if (round == 0) return false;
+        if (round == 0) return false;  // not tried: nothing moved
         break;
       }
+      st.max_local_end_prisms = std::max<long long>(st.max_local_end_prisms, set.faces.size());
       if (round == 0) {
+        ++st.local_ends;
         // The whole-level steps' arrays (a few hundred bytes per prism, the multigrid's included)
         // go before the local factorization, which would otherwise raise the solve's peak memory
         // (measured at 1M prisms: 952 bytes per prism without this, 829 with it). A fallback to
@@ -1185,6 +1187,7 @@ class VolumeReconstructor::Impl {
     }
     for (const auto& [v, p] : kept) s.P[v] = p;
     compute_volumes(F, s, V);
+    ++st.local_ends_undone;
     return false;
   }
 

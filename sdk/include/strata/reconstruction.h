@@ -268,6 +268,15 @@ struct ReconstructStats {
   //! Of these, those of steps that move a neighbourhood only (the local end of the polish, up to
   //! local_polish_max_fraction of the level, and the fold repair's local steps).
   long long local_factorizations = 0;
+  //! The polish's local ends (ReconstructOptions::local_polish_max_fraction) tried (their first
+  //! round's system within the limit), and of these those undone (the tolerance not reached in
+  //! max_final_steps rounds, or a later round's system over the limit): the whole-level steps then
+  //! went on from the positions before it.
+  int local_ends = 0;
+  int local_ends_undone = 0;
+  //! Prisms of the largest system a local end solved (0 if none): at most
+  //! local_polish_max_fraction of the finest level's prisms.
+  long long max_local_end_prisms = 0;
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
