@@ -285,18 +285,33 @@ INSTANTIATE_TEST_SUITE_P(PaperCases, MultigridBend,
                                            cases::DetailKind::Cuboid),
                          [](const auto& info) { return std::string(cases::to_string(info.param)); });
 
+// The paper's bumps over a scan-like triangulation (12k prisms, jitter 0.4), encoded, and the
+// base frames of its bend: the local-end tests' case.
+namespace {
+struct ScanLikeBumps {
+  cases::CylinderCase c = make();
+  DetailEncoding e = encode_detail(c.detail, c.base);
+  BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+
+  static cases::CylinderCase make() {
+    cases::CylinderCaseOptions o;
+    o.detail = cases::DetailKind::Bumps;
+    o.target_detail_triangles = 12000;
+    o.jitter = 0.4;
+    return cases::make_cylinder_case(o);
+  }
+};
+}  // namespace
+
 // The polish's local end (local_polish_max_fraction): once few prisms are off, only their
 // neighbourhoods move, by small factorized steps, where whole-level steps each take a multigrid
 // solve. Every prism still meets the tolerance, with fewer conjugate-gradient iterations than the
 // whole-level polish, and no new intersecting pairs.
 TEST(MultigridBend, ThePolishsLocalEndMeetsTheToleranceWithFewerIterations) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Bumps;
-  o.target_detail_triangles = 12000;
-  o.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  const ScanLikeBumps b;
+  const cases::CylinderCase& c = b.c;
+  const DetailEncoding& e = b.e;
+  const BaseFrames& fr = b.fr;
   ReconstructOptions whole = multigrid_reconstruct_options();
   whole.threads = 1;
   whole.local_polish_max_fraction = 0.0;
@@ -329,16 +344,12 @@ TEST(MultigridBend, ThePolishsLocalEndMeetsTheToleranceWithFewerIterations) {
 // local_polish_max_fraction of the level (max_local_end_prisms counts them all, not only the
 // first), and a local end that does not reach the tolerance in max_final_steps rounds is undone, the
 // whole-level steps going on from the positions before it. Every run converges without new pairs,
-// and the error the solver reports is the one of the positions it returns (a local end undone
-// without its volumes recomputed would report another).
+// and the error the solver reports is the one of the positions it returns.
 TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Bumps;
-  o.target_detail_triangles = 12000;
-  o.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  const ScanLikeBumps b;
+  const cases::CylinderCase& c = b.c;
+  const DetailEncoding& e = b.e;
+  const BaseFrames& fr = b.fr;
   const double prisms = static_cast<double>(c.detail.faces.size());
   auto run = [&](const ReconstructOptions& ro) {
     const ReconstructResult r = VolumeReconstructor(e, ro).reconstruct(c.edited_base.vertices);
