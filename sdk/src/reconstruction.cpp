@@ -1160,6 +1160,7 @@ class VolumeReconstructor::Impl {
     std::vector<int> subset, next;
     std::vector<std::pair<int, Vec3>> kept;  // each moved vertex's position on entry
     double damping = kMinDamping;            // carried over the rounds, as over a fixed set's steps
+    int stalled = 0;                         // rounds in a row that left as many prisms off
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
       const LocalSet set = local_set(subset);
@@ -1182,8 +1183,13 @@ class VolumeReconstructor::Impl {
       const bool converged = local_polish(set, s, s.amplitude, tol, st, 1, damping);
       update_volumes(F, s, set.faces, V);
       if (converged) return true;
+      const std::size_t before = off.size();
       above_tolerance(F, s.amplitude, V, tol, off);
       if (off.empty()) return true;
+      // Two rounds in a row without fewer prisms off: the rest would not do better (measured
+      // without rings, local_polish_rings = 0, on the 12k bumps: eight more rounds at 19 off).
+      stalled = off.size() < before ? 0 : stalled + 1;
+      if (stalled == 2) break;
     }
     for (const auto& [v, p] : kept) s.P[v] = p;
     compute_volumes(F, s, V);

@@ -167,8 +167,9 @@ struct ReconstructOptions {
   //! vertices around them make a system of at most this fraction of the finest level's prisms
   //! (the prisms with a moving vertex), the polish ends in rounds of one factorized step that
   //! moves only those vertices, each round grown again from the prisms still above the tolerance
-  //! (so the later rounds are small). If max_final_steps rounds do not reach the tolerance, or a
-  //! later round's system exceeds the limit, the positions go back and the whole-level steps go
+  //! (so the later rounds are small). If max_final_steps rounds do not reach the tolerance, two
+  //! rounds in a row leave as many prisms above it, or a later round's system exceeds the limit,
+  //! the positions go back and the whole-level steps go
   //! on; the local end is then tried again only once the prisms above the tolerance are at most
   //! half as many as at the failed attempt. 0: whole-level steps only (the default:
   //! with factorized whole-level steps the gain is small, 8.8 -> 8.5 s on the 100k bumps). The
