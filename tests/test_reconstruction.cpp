@@ -77,6 +77,7 @@ struct FoldingRings {
   FoldingRings() {
     none.retry_volume_iterations = 0;
     none.fold_repair_rounds = 0;
+    none.fallback_schedule = false;
     none.coarse_regularization_iterations = 2;
   }
   ReconstructResult solve(const ReconstructOptions& o) const {
@@ -231,6 +232,7 @@ TEST(Reconstruction, FoldedSolveKeepsTheBetterOfTwoSchedules) {
     // the coarse levels regularized as lightly as the finest (2 sweeps), which folds here.
     ReconstructOptions retry;
     retry.fold_repair_rounds = 0;
+    retry.fallback_schedule = false;
     retry.coarse_regularization_iterations = 2;
     ReconstructOptions only = retry;
     only.retry_volume_iterations = 0;
@@ -282,6 +284,44 @@ TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
   const ReconstructResult blind = f.solve(repair);
   EXPECT_EQ(blind.stats.fold_repairs, 0);
   EXPECT_EQ(blind.positions, plain.positions);
+}
+
+// fallback_schedule: a solve left with new pairs is solved once more with the other preset, at
+// its tolerance, and the better result kept: exactly that preset's own. On the paper's rings
+// (FoldingRings' case), without retries or repair rounds: the multigrid preset leaves new pairs
+// (measured: 64) and the default options, which have none there, are kept; the default options
+// with the coarse levels lightly regularized leave more (56) than the multigrid preset with its
+// retries (24), which is kept.
+TEST(Reconstruction, FoldedSolveFallsBackToTheOtherPreset) {
+  const FoldingRings f;
+  // Returns the kept result's new pairs.
+  auto expect_fell_back_to = [&](const ReconstructOptions& o, ReconstructOptions other) -> long long {
+    ReconstructOptions alone = o;
+    alone.fallback_schedule = false;
+    const ReconstructResult first = f.solve(alone);
+    EXPECT_GT(first.stats.new_intersecting_pairs, 0);  // the case: it folds
+    const ReconstructResult r = f.solve(o);
+    other.tolerance = o.tolerance;
+    other.fallback_schedule = false;
+    const ReconstructResult theirs = f.solve(other);
+    EXPECT_EQ(r.stats.fallbacks, 1);
+    EXPECT_TRUE(r.stats.fallback_kept);
+    EXPECT_EQ(r.positions, theirs.positions);
+    EXPECT_EQ(r.stats.new_intersecting_pairs, static_cast<long long>(f.new_pairs(r.positions)));
+    EXPECT_LT(r.stats.new_intersecting_pairs, first.stats.new_intersecting_pairs);
+    EXPECT_TRUE(r.stats.converged);
+    return r.stats.new_intersecting_pairs;
+  };
+  ReconstructOptions mg = multigrid_reconstruct_options();
+  mg.retry_volume_iterations = 0;
+  mg.multigrid.retry_iterations = 0;
+  mg.fold_repair_rounds = 0;
+  EXPECT_EQ(expect_fell_back_to(mg, ReconstructOptions{}), 0);
+  ReconstructOptions light = f.none;
+  light.fallback_schedule = true;
+  expect_fell_back_to(light, multigrid_reconstruct_options());
+  // A solve without new pairs does not fall back.
+  EXPECT_EQ(f.solve(ReconstructOptions{}).stats.fallbacks, 0);
 }
 
 // A solve that ends above the tolerance is checked for new pairs too, and repaired: the result

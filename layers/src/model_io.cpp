@@ -66,6 +66,7 @@ json options_json(const ModelOptions& o) {
             {"finest_volume_iterations", r.finest_volume_iterations},
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
+            {"fallback_schedule", r.fallback_schedule},
             {"fold_repair_rounds", r.fold_repair_rounds},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
@@ -177,6 +178,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
                                    : 0;
   ro.retry_on_new_intersections =
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
+  // Files written before the option existed did not fall back.
+  ro.fallback_schedule = r.contains("fallback_schedule") && h.boolean(r, "fallback_schedule", wr);
   // Files written before fold repair existed did not repair (their results stay as they were).
   auto optional_count = [&](const char* key, int fallback) {
     return r.contains(key) ? static_cast<int>(h.integer(r, key, wr, 0, 100000)) : fallback;

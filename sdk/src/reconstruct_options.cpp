@@ -29,6 +29,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"volume_iterations", &o.volume_iterations},
           {"retry_volume_iterations", &o.retry_volume_iterations},
           {"retry_on_new_intersections", &o.retry_on_new_intersections},
+          {"fallback_schedule", &o.fallback_schedule},
           {"fold_repair_rounds", &o.fold_repair_rounds},
           {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
           {"fold_repair_rings", &o.fold_repair_rings},

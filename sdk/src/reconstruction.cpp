@@ -289,6 +289,8 @@ class VolumeReconstructor::Impl {
         PhaseTimer timer(st.seconds_folds);
         fold_checked(s, a, st, V, first);
       }
+      if (opt_.fallback_schedule && first.counted && first.new_pairs > 0)
+        fall_back(fr, request, s, st, first);
       st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
     } else {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
@@ -755,6 +757,36 @@ class VolumeReconstructor::Impl {
     if (o.converged || o.counted || !opt_.retry_on_new_intersections) return;
     o = outcome(s, a, V, /*count_unconverged=*/true);
     repair_folds(s, a, st, V, o);
+  }
+
+  // ReconstructOptions::fallback_schedule: the clean-start solve once more with the other
+  // preset, from its own Impl (built on first use: its hierarchy and solver structures differ), and
+  // its result kept in s.P and \p first if better.
+  void fall_back(const BaseFrames& fr, const ReconstructRequest& request, State& s, ReconstructStats& st,
+                 Outcome& first) const {
+    if (!fallback_) {
+      ReconstructOptions o = opt_.step_solver == VolumeStepSolver::Multigrid
+                                 ? ReconstructOptions{}
+                                 : multigrid_reconstruct_options();
+      o.tolerance = opt_.tolerance;
+      o.threads = opt_.threads;
+      o.retry_on_new_intersections = true;
+      o.fallback_schedule = false;
+      fallback_ = std::make_unique<Impl>(enc_, std::move(o));
+    }
+    ++st.fallbacks;
+    ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
+    Outcome other;
+    other.converged = r.stats.converged;
+    other.max_error = r.stats.max_relative_error;
+    other.tolerance = opt_.tolerance;
+    other.counted = r.stats.new_intersecting_pairs >= 0;
+    other.new_pairs = other.counted ? static_cast<std::size_t>(r.stats.new_intersecting_pairs) : 0;
+    if (other.counted && other.better_than(first)) {
+      s.P = std::move(r.positions);
+      first = std::move(other);
+      st.fallback_kept = true;
+    }
   }
 
   // Local fold repair (ReconstructOptions::fold_repair_rounds): rounds of regularization around
@@ -1545,6 +1577,8 @@ class VolumeReconstructor::Impl {
   // The rest detail's own intersecting pairs (found at the first retry check), so that a result's
   // new pairs can be told. Mutable like the levels' factorizations.
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
+  // The other preset's solver (ReconstructOptions::fallback_schedule), built on first use.
+  mutable std::unique_ptr<Impl> fallback_;
   double setup_seconds_ = 0.0;
   // The solver's threads (ReconstructOptions::threads); null: the calling thread only.
   std::unique_ptr<tbb::task_arena> arena_;

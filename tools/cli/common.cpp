@@ -289,6 +289,8 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"local_ends_undone", s.local_ends_undone},
               {"max_local_end_prisms", s.max_local_end_prisms},
               {"retries", s.retries},
+              {"fallbacks", s.fallbacks},
+              {"fallback_kept", s.fallback_kept},
               {"fold_repairs", s.fold_repairs},
               {"solver_new_intersecting_pairs", s.new_intersecting_pairs},
               {"final_sweeps", s.final_sweeps},

@@ -104,6 +104,17 @@ struct ReconstructOptions {
   //! 100k prisms 0.05 s per count, the rest detail counted once) and retry if there are any.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
+  //! If a clean-start solve still has new intersecting pairs after its retries and fold repairs,
+  //! solve once more with the other solver's preset (the multigrid preset,
+  //! multigrid_reconstruct_options(), for a step_solver other than Multigrid; these defaults for
+  //! Multigrid), with the same tolerance and threads, and keep the better result (converged first,
+  //! then fewer new pairs; Outcome as for the retry). It builds that solver's hierarchy on first use
+  //! and costs a second solve, only then. Why: which schedule folds depends on the mesh, and the
+  //! two presets fail on different ones. Measured (2026-11-26): the defaults left 18 new pairs on
+  //! the rings bend at 50k prisms, jitter 0.4 (16.8 s), where the multigrid preset has none (0.56
+  //! s at this tolerance); the multigrid preset left 1 and 20 on the regular 20k rings and cuboid,
+  //! where the defaults have none. Requires retry_on_new_intersections.
+  bool fallback_schedule = true;
   //! Local fold repair, before any retry: a converged clean-start solve with new intersecting
   //! pairs (counted as for retry_on_new_intersections, which must be on) gets up to this many
   //! repair rounds; so does the result kept when no schedule converged, whose rounds are kept only
@@ -279,6 +290,10 @@ struct ReconstructStats {
   //! local_polish_max_fraction of the finest level's prisms.
   long long max_local_end_prisms = 0;
   int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  //! Solves run again with the other preset (ReconstructOptions::fallback_schedule), 0 or 1, and
+  //! whether that result was kept.
+  int fallbacks = 0;
+  bool fallback_kept = false;
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
   //! counted by the solver (retry_on_new_intersections: clean-start solves and exact solves from a
