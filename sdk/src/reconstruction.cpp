@@ -770,10 +770,13 @@ class VolumeReconstructor::Impl {
                                  : multigrid_reconstruct_options();
       o.tolerance = opt_.tolerance;
       o.threads = opt_.threads;
-      o.retry_on_new_intersections = true;
+      o.progress = opt_.progress;
       o.fallback_schedule = false;
       fallback_ = std::make_unique<Impl>(enc_, std::move(o));
     }
+    // The rest detail's pairs, counted already (first.counted), are the same for it.
+    if (!fallback_->rest_pairs_ && rest_pairs_)
+      fallback_->rest_pairs_ = std::make_unique<IntersectionResult>(*rest_pairs_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;

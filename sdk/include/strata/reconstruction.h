@@ -282,16 +282,17 @@ struct ReconstructStats {
   long long local_factorizations = 0;
   //! The polish's local ends (ReconstructOptions::local_polish_max_fraction) tried (their first
   //! round's system within the limit), and of these those undone (the tolerance not reached in
-  //! max_final_steps rounds, or a later round's system over the limit): the whole-level steps then
-  //! went on from the positions before it.
+  //! max_final_steps rounds, two rounds in a row without fewer prisms off, or a later round's
+  //! system over the limit): the whole-level steps then went on from the positions before it.
   int local_ends = 0;
   int local_ends_undone = 0;
   //! Prisms of the largest system a local end solved (0 if none): at most
   //! local_polish_max_fraction of the finest level's prisms.
   long long max_local_end_prisms = 0;
-  int retries = 0;       //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  int retries = 0;  //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
   //! Solves run again with the other preset (ReconstructOptions::fallback_schedule), 0 or 1, and
-  //! whether that result was kept.
+  //! whether that result was kept. The other counts here are of this solver's own solve; the other
+  //! preset's work shows in seconds_solve only.
   int fallbacks = 0;
   bool fallback_kept = false;
   int fold_repairs = 0;  //!< local fold repair rounds (ReconstructOptions::fold_repair_rounds)
