@@ -65,6 +65,10 @@ for method in ("volumes", "vectors"):
     check(s["faces"] == need(r, "output.faces"), f"{method}: output mesh has {s['faces']} faces")
 
 vol, vec = reports["volumes"], reports["vectors"]
+# No --solver: auto, which takes the default options for a detail this small.
+for method, r in reports.items():
+    check(r.get("solver_requested") == "auto", f"{method}: solver_requested is {r.get('solver_requested')!r}")
+    check(r.get("solver") == "legacy", f"{method}: auto chose {r.get('solver')!r} for {need(r, 'inputs.detail.faces')} faces")
 it = need(vol, "iterations") or {}
 for key in ("levels", "cycles", "volume_sweeps", "regularization_sweeps", "cg_iterations", "final_sweeps"):
     check(isinstance(it.get(key), int) and it[key] >= 0, f"volumes: iterations.{key} = {it.get(key)!r}")
@@ -108,6 +112,22 @@ if errors:
     print("FAIL (multigrid):\n  " + "\n  ".join(errors), file=sys.stderr)
     sys.exit(1)
 print("reconstruct_report: multigrid checks passed")
+PY
+# auto over a detail of at least 80,000 triangles takes the multigrid preset (the displacement
+# vectors, which need no solver, keep this check cheap; the report names the solver either way).
+"$STRATA" generate --case bumps --triangles 90000 --out-dir "$TMP/large" >/dev/null
+"$STRATA" reconstruct --detail "$TMP/large/detail.obj" --base "$TMP/large/base.obj" \
+  --edited-base "$TMP/large/edited_base.obj" --method vectors -o "$TMP/large.obj" --report "$TMP/large.json" -q \
+  >/dev/null
+python3 - "$TMP/large.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+faces = r["inputs"]["detail"]["faces"]
+if not (faces >= 80000 and r.get("solver") == "multigrid" and r.get("solver_requested") == "auto"):
+    print("FAIL (auto): %d faces, solver %r, requested %r" % (faces, r.get("solver"), r.get("solver_requested")),
+          file=sys.stderr)
+    sys.exit(1)
+print("reconstruct_report: auto checks passed")
 PY
 if "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
   --edited-base "$TMP/irregular/edited_base.obj" --solver magic -o "$TMP/x.obj" >/dev/null 2>&1; then

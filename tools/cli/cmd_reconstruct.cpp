@@ -17,8 +17,8 @@ struct ReconstructCmdOptions {
   std::string edited_base;
   std::string method = "volumes";
   std::string output;
-  std::string report;   // empty: no report
-  SolverChoice solver;  // --solver, --set: solver_options()
+  std::string report;               // empty: no report
+  SolverChoice solver{"auto", {}};  // --solver, --set: solver_options()
   bool quiet = false;
 };
 
@@ -46,8 +46,9 @@ void print_summary(std::ostream& os, const json& r) {
      << " new\n";
   const json& it = r["iterations"];
   if (!it.is_null())
-    os << "solver         " << it["levels"].get<int>() << " levels, " << it["cycles"].get<int>()
-       << " cycles, " << it["volume_sweeps"].get<int>() << " volume + "
+    os << "solver         " << r["solver"].get<std::string>()
+       << (r["solver_requested"] == "auto" ? " (auto)" : "") << ": " << it["levels"].get<int>() << " levels, "
+       << it["cycles"].get<int>() << " cycles, " << it["volume_sweeps"].get<int>() << " volume + "
        << it["regularization_sweeps"].get<int>() << " regularization sweeps, "
        << it["final_sweeps"].get<int>() << " final sweeps, " << it["cg_iterations"].get<long long>()
        << " CG iterations, " << (it["converged"].get<bool>() ? "converged" : "NOT converged") << "\n";
@@ -78,7 +79,10 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   const TimedIntersections& input = in.input;
   times.encode = in.encode_seconds;
 
-  ReconstructOptions options = solver_options(o.solver);
+  // auto: chosen by the detail's size (kAutoMultigridPrisms); the report names both.
+  SolverChoice solver = o.solver;
+  solver.solver = resolve_solver(o.solver, detail.mesh.faces.size());
+  ReconstructOptions options = solver_options(solver);
   options.progress = log.progress(to_string(method));
   MethodOutcome outcome = run_method(method, {encoding, edited.mesh.vertices, input.result}, options, log);
   times.setup = outcome.times.setup;
@@ -96,7 +100,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
 
   json report{{"command", "reconstruct"},
               {"method", to_string(method)},
-              {"solver", o.solver.solver},
+              {"solver", solver.solver},
+              {"solver_requested", o.solver.solver},
               {"set", o.solver.sets},
               {"inputs",
                {{"detail", mesh_json(detail.mesh, detail.name)},
@@ -133,7 +138,7 @@ Subcommand register_reconstruct(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("-o,--output", o->output, "Reconstructed detail mesh to write (atomically)")->required();
   app->add_option("--report", o->report, "Also write a JSON report (metrics, timings, iterations) here");
-  add_solver_option(app, o->solver);
+  add_solver_option(app, o->solver, /*with_auto=*/true);
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->footer(
       "Example:\n  strata reconstruct --detail detail.obj --base base.obj --edited-base edited_base.obj \\\n"

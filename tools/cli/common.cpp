@@ -1,6 +1,7 @@
 #include "common.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -141,13 +142,17 @@ cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triang
   return o;
 }
 
-void add_solver_option(CLI::App* app, SolverChoice& choice) {
-  app->add_option(
-         "--solver", choice.solver,
-         "Volume solver: legacy (conjugate-gradient cycles, a factorized polish) or multigrid (a "
-         "vertex-space multigrid throughout, no factorization; for large irregular meshes such as scans)")
-      ->check(CLI::IsMember({"legacy", "multigrid"}))
-      ->capture_default_str();
+void add_solver_option(CLI::App* app, SolverChoice& choice, bool with_auto) {
+  std::string help =
+      "Volume solver: legacy (conjugate-gradient cycles, a factorized polish) or multigrid (a "
+      "vertex-space multigrid throughout, no factorization; for large meshes such as scans)";
+  std::vector<std::string> solvers{"legacy", "multigrid"};
+  if (with_auto) {
+    help += ", or auto: multigrid for a detail of at least " + std::to_string(kAutoMultigridPrisms) +
+            " triangles, legacy below";
+    solvers.insert(solvers.begin(), "auto");
+  }
+  app->add_option("--solver", choice.solver, help)->check(CLI::IsMember(solvers))->capture_default_str();
   std::string names;
   for (const std::string& n : reconstruct_option_names()) names += (names.empty() ? "" : ", ") + n;
   app->add_option("--set", choice.sets,
@@ -167,7 +172,13 @@ void add_solver_option(CLI::App* app, SolverChoice& choice) {
           "NAME=VALUE"));
 }
 
+std::string resolve_solver(const SolverChoice& choice, std::size_t prisms) {
+  if (choice.solver != "auto") return choice.solver;
+  return prisms >= kAutoMultigridPrisms ? "multigrid" : "legacy";
+}
+
 ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
+  assert(choice.solver == "legacy" || choice.solver == "multigrid");
   ReconstructOptions o =
       choice.solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
   o.threads = threads;
