@@ -138,7 +138,8 @@ TEST(Reconstruction, UneditedBaseGivesBackTheDetailFromTheCleanStart) {
 
 // The cuboid's sharp corners carry the largest offsets: the hardest round trip. The acceptance
 // bound, 0.5% of the diagonal (measured 0.36% at 8k prisms and 0.26% at 4k; 0.84-0.94% with the
-// coarse levels regularized as lightly as the finest).
+// coarse levels regularized as lightly as the finest). It does not hold at every size: 0.81% at
+// 5k and 1.17% at 20k (README, Looked into on 2026-11-26, fifth session).
 TEST(Reconstruction, CuboidRoundTripWithinHalfAPercentOfTheDiagonal) {
   for (int triangles : {4000, 8000}) {
     const cases::CylinderCase c = make_case(cases::DetailKind::Cuboid, triangles);
