@@ -1594,6 +1594,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.volume_scales = 3;
   o.max_cycles = 2;
   o.final_max_cycles = 3;
+  o.coarse_regularization_iterations = 8;  // 64 folded its 100k bends (see the field)
   o.volume_iterations = 1;
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.2;

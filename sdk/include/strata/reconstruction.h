@@ -145,11 +145,15 @@ struct ReconstructOptions {
   int regularization_iterations = 2;
   //! m on the coarse levels of the clean-start solve (cheap there: a quarter of the vertices and
   //! less per level). The coarse levels set the detail's large-scale shape, and their smoothing
-  //! decides how close an unedited base's round trip comes back: the cuboid's max vertex distance
-  //! at 4k-30k prisms was 0.56-1.05% of the diagonal with 2 sweeps, 0.10-0.36% with 8 (the 0.5%
-  //! target); the paper's three bends at 15k then need no fold repair, at 100k the bumps and the
-  //! cuboid neither (the rings 6 rounds, as with 2).
-  int coarse_regularization_iterations = 8;
+  //! decides how close an unedited base's round trip comes back (max vertex distance over the
+  //! diagonal, the 0.5% target): on the cuboid, whose sharp corners are the hardest, 8 sweeps gave
+  //! 0.10-0.36% at 4k, 8k, 15k and 30k prisms but 0.81% at 5k, 1.17% at 20k and 0.90% at 100k;
+  //! 32 give at most 0.41% over the three cases at 5k-100k, regular and scan-like. More smoothing
+  //! there brings the coarse shape nearer the displacement vectors', which fold in a bend: every
+  //! 90-degree bend measured still ends without new pairs, some of the rings after more repair
+  //! rounds (20k at jitter 0.4: 7.0 s, 1.4 s with 8 sweeps); 64 made the multigrid preset's 100k
+  //! bend fold (18 s), so the preset keeps 8.
+  int coarse_regularization_iterations = 32;
   //! Cycles (volume steps, then m regularization sweeps) per level and volume scale at most.
   int max_cycles = 3;
   //! Cycles at most on the finest level at full volume scale, where the regularization settles
@@ -228,7 +232,9 @@ struct ReconstructOptions {
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
 //! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
 //! polish's local end (local_polish_max_fraction 0.2), and a last retry with accurate steps
-//! (MultigridStepOptions::retry_iterations 20). The other fields keep their defaults. On
+//! (MultigridStepOptions::retry_iterations 20), and 8 regularization sweeps on the coarse levels
+//! (more folded its bends; its unedited-base round trip is then 0.3-3.9% of the diagonal, over the
+//! 0.5% target: README). The other fields keep their defaults. On
 //! the 100k bends over scan-like (irregular) triangulations, 1.0-1.4 s on one thread (one of
 //! twelve 3.9 s, with repair rounds), 860 bytes per prism on the bumps (2026-11-26, Intel VM), where the
 //! defaults take 5-7 s and 2 KB (README, Measured results). On regular triangulations its polish stalls and
