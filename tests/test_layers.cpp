@@ -418,6 +418,10 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.multigrid.smoothness, 0.03);
   EXPECT_EQ(back.multigrid.polish_damping, 2e-8);
   EXPECT_EQ(back.multigrid.polish_iterations, o.reconstruct.multigrid.polish_iterations);
+  EXPECT_EQ(back.tangential_regularization, TangentialRegularization::RestLaplacian);
+  EXPECT_EQ(back.coarsest_regularization_iterations, o.reconstruct.coarsest_regularization_iterations);
+  EXPECT_EQ(back.coarsest_max_cycles, o.reconstruct.coarsest_max_cycles);
+  EXPECT_GT(back.coarsest_max_cycles, 0);
 
   const layers::StrataContainer c = layers::read_strata_container(path);
   layers::StrataContainer bad = c;
@@ -426,6 +430,11 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   bad.model_json = m.dump();
   layers::write_strata_container(bad, tmp.file("bad.strata"));
   expect_rejected(tmp.file("bad.strata"), "a Jacobi-CG polish");
+  m = nlohmann::json::parse(c.model_json);
+  m["options"]["reconstruct"]["tangential_regularization"] = "laplacian";
+  bad.model_json = m.dump();
+  layers::write_strata_container(bad, tmp.file("bad2.strata"));
+  expect_rejected(tmp.file("bad2.strata"), "an unknown tangential regularization");
 }
 
 TEST(LayersFile, ForeignAndMissingFilesAreNamed) {

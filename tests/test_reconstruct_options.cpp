@@ -24,6 +24,10 @@ TEST(ReconstructOptionNames, SetEachKindOfField) {
   set_reconstruct_option(o, "multigrid.iterations", "20");
   set_reconstruct_option(o, "multigrid.smoothness", "0.1");
   set_reconstruct_option(o, "threads", "-1");  // parsed; VolumeReconstructor checks the range
+  set_reconstruct_option(o, "tangential_regularization", "rest_laplacian");
+  set_reconstruct_option(o, "coarsest_max_cycles", "10");
+  EXPECT_EQ(o.tangential_regularization, TangentialRegularization::RestLaplacian);
+  EXPECT_EQ(o.coarsest_max_cycles, 10);
   EXPECT_EQ(o.volume_scales, 7);
   EXPECT_EQ(o.tolerance, 2.5e-5);
   EXPECT_FALSE(o.retry_on_new_intersections);
@@ -38,7 +42,7 @@ TEST(ReconstructOptionNames, SetEachKindOfField) {
   EXPECT_EQ(o.multigrid.polish_iterations, d.multigrid.polish_iterations);
 }
 
-// Every listed name is settable by a value of one of the four kinds, and exactly one kind: the
+// Every listed name is settable by a value of one of the five kinds, and exactly one kind: the
 // table and the names agree.
 TEST(ReconstructOptionNames, EveryNameTakesExactlyOneKindOfValue) {
   const std::vector<std::string> names = reconstruct_option_names();
@@ -46,7 +50,7 @@ TEST(ReconstructOptionNames, EveryNameTakesExactlyOneKindOfValue) {
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
   for (const std::string& n : names) {
     int accepted = 0;
-    for (const char* v : {"3", "true", "direct"}) {
+    for (const char* v : {"3", "true", "direct", "rest_laplacian"}) {
       ReconstructOptions o;
       try {
         set_reconstruct_option(o, n, v);
@@ -79,6 +83,8 @@ TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
   EXPECT_NE(message("tolerance", "0.1x").find("is not a finite number"), std::string::npos);
   EXPECT_NE(message("retry_on_new_intersections", "1").find("is not true or false"), std::string::npos);
   EXPECT_NE(message("polish_solver", "cholesky").find("is not jacobi_cg, direct or multigrid"),
+            std::string::npos);
+  EXPECT_NE(message("tangential_regularization", "laplacian").find("is not rest_offset or rest_laplacian"),
             std::string::npos);
   EXPECT_NE(message("progress", "x").find("unknown"), std::string::npos);  // a callback: not settable
   // One NAME=VALUE argument, as --set gives it: split at the first '='.
@@ -122,7 +128,22 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
             "reconstruction option local_polish_max_fraction = 1.5 is out of range (0 to 1)");
   EXPECT_EQ(refusal("multigrid.retry_iterations", "-1"),
             "reconstruction option multigrid.retry_iterations = -1 is out of range (at least 0)");
+  EXPECT_EQ(refusal("coarsest_max_cycles", "-1"),
+            "reconstruction option coarsest_max_cycles = -1 is out of range (at least 0; 0 is max_cycles)");
   EXPECT_EQ(refusal("volume_scales", "3"), "accepted");
+  // The rest Laplacian needs the original base's frames, which an encoding built by hand may lack.
+  DetailEncoding bare = e;
+  bare.base_rest_normals.clear();
+  bare.base_rest_tangents.clear();
+  ReconstructOptions o;
+  o.tangential_regularization = TangentialRegularization::RestLaplacian;
+  try {
+    VolumeReconstructor rec(bare, o);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& ex) {
+    EXPECT_NE(std::string(ex.what()).find("tangential_regularization = rest_laplacian"), std::string::npos);
+  }
+  EXPECT_NO_THROW(VolumeReconstructor(bare, ReconstructOptions{}));
 }
 
 }  // namespace

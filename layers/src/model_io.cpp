@@ -73,6 +73,9 @@ json options_json(const ModelOptions& o) {
             {"fold_repair_max_fraction", r.fold_repair_max_fraction},
             {"regularization_iterations", r.regularization_iterations},
             {"coarse_regularization_iterations", r.coarse_regularization_iterations},
+            {"coarsest_regularization_iterations", r.coarsest_regularization_iterations},
+            {"coarsest_max_cycles", r.coarsest_max_cycles},
+            {"tangential_regularization", to_string(r.tangential_regularization)},
             {"max_cycles", r.max_cycles},
             {"final_max_cycles", r.final_max_cycles},
             {"tangential_lambda", r.tangential_lambda},
@@ -193,6 +196,17 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   // Files written before the option existed regularized every level alike.
   ro.coarse_regularization_iterations =
       optional_count("coarse_regularization_iterations", ro.regularization_iterations);
+  // Files written before these options existed: the coarsest level as the others, rest offsets.
+  ro.coarsest_regularization_iterations = optional_count("coarsest_regularization_iterations", 0);
+  ro.coarsest_max_cycles = optional_count("coarsest_max_cycles", 0);
+  if (r.contains("tangential_regularization")) {
+    const std::string name = h.text(r, "tangential_regularization", wr);
+    try {
+      set_reconstruct_option(ro, "tangential_regularization", name);
+    } catch (const InvalidInput&) {
+      h.fail("options.reconstruct: unknown tangential_regularization '" + name + "'");
+    }
+  }
   ro.max_cycles = static_cast<int>(h.integer(r, "max_cycles", wr, 1, 100000));
   ro.final_max_cycles = static_cast<int>(h.integer(r, "final_max_cycles", wr, 1, 100000));
   ro.tangential_lambda = h.number(r, "tangential_lambda", wr);

@@ -157,6 +157,8 @@ void set_regularization_weights(DetailEncoding& e) {
 void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames& frames) {
   const int n = detail.num_vertices();
   e.base_rest_points = frames.points;
+  e.base_rest_normals = frames.normals;
+  e.base_rest_tangents = frames.tangents;
   e.normal_offsets.resize(n);
   e.tangential_offsets.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -332,6 +334,10 @@ DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>
   for (int v : vertices) {
     r.detail_rest.push_back(e.detail_rest[v]);
     r.base_rest_points.push_back(e.base_rest_points[v]);
+    if (!e.base_rest_normals.empty()) {
+      r.base_rest_normals.push_back(e.base_rest_normals[v]);
+      r.base_rest_tangents.push_back(e.base_rest_tangents[v]);
+    }
     r.normal_offsets.push_back(e.normal_offsets[v]);
     r.tangential_offsets.push_back(e.tangential_offsets[v]);
     if (limit)

@@ -12,7 +12,7 @@
 namespace strata {
 namespace {
 
-using Field = std::variant<int*, double*, bool*, VolumeStepSolver*>;
+using Field = std::variant<int*, double*, bool*, VolumeStepSolver*, TangentialRegularization*>;
 
 struct Named {
   const char* name;
@@ -37,6 +37,9 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"finest_volume_iterations", &o.finest_volume_iterations},
           {"regularization_iterations", &o.regularization_iterations},
           {"coarse_regularization_iterations", &o.coarse_regularization_iterations},
+          {"coarsest_regularization_iterations", &o.coarsest_regularization_iterations},
+          {"coarsest_max_cycles", &o.coarsest_max_cycles},
+          {"tangential_regularization", &o.tangential_regularization},
           {"max_cycles", &o.max_cycles},
           {"final_max_cycles", &o.final_max_cycles},
           {"tangential_lambda", &o.tangential_lambda},
@@ -92,6 +95,13 @@ void set_reconstruct_option(ReconstructOptions& options, const std::string& name
     } else if (auto* b = std::get_if<bool*>(&f.field)) {
       if (value != "true" && value != "false") bad_value(name, value, "true or false");
       **b = value == "true";
+    } else if (auto* r = std::get_if<TangentialRegularization*>(&f.field)) {
+      if (value == to_string(TangentialRegularization::RestOffset))
+        **r = TangentialRegularization::RestOffset;
+      else if (value == to_string(TangentialRegularization::RestLaplacian))
+        **r = TangentialRegularization::RestLaplacian;
+      else
+        bad_value(name, value, "rest_offset or rest_laplacian");
     } else {
       VolumeStepSolver* s = std::get<VolumeStepSolver*>(f.field);
       if (value == "jacobi_cg")
@@ -112,6 +122,10 @@ void set_reconstruct_option(ReconstructOptions& options, const std::string& name
   const auto eq = name_equals_value.find('=');
   if (eq == std::string::npos) throw InvalidInput("not NAME=VALUE: '" + name_equals_value + "'");
   set_reconstruct_option(options, name_equals_value.substr(0, eq), name_equals_value.substr(eq + 1));
+}
+
+const char* to_string(TangentialRegularization form) {
+  return form == TangentialRegularization::RestLaplacian ? "rest_laplacian" : "rest_offset";
 }
 
 std::vector<std::string> reconstruct_option_names() {

@@ -58,6 +58,10 @@ struct Level {
   double mean_abs_target = 0.0;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
   std::vector<double> weights;
+  // TangentialRegularization::RestLaplacian: per level-local vertex, the tangential Laplacian
+  // (with `weights`) of the rest detail and of the rest base points, in the original base's frame
+  // at the vertex (first tangent, normal x tangent); zero on boundary vertices.
+  std::vector<Eigen::Vector2d> rest_lap_detail, rest_lap_base;
   std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
   std::vector<int> inserted, ring_offsets, ring_vertices;
   // The direct solver of J J^T (prisms sharing a vertex): its lower triangle with the pattern
@@ -125,10 +129,12 @@ struct State {
   std::vector<Vec3> Q;              // base points on the edited base
   std::vector<Vec3> N;              // unit normals at the base points
   std::vector<Vec3> R;              // rest tangential offset, rotated into the edited base's frame
+  std::vector<Vec3> T;              // first tangents at the base points (RestLaplacian only)
   std::vector<Vec3> P0;             // positions at the start of the current multigrid pass
   std::vector<double> dRho;         // prolongated change of d/f
   std::vector<Vec3> dT;             // prolongated change of the tangential displacement
   std::vector<double> rho;          // regularization scratch: d/f per level vertex
+  std::vector<Vec3> pk;             // regularization scratch: positions per level vertex (RestLaplacian)
   std::vector<Vec3> tdev;           // regularization scratch: tangential deviation per level vertex
   std::vector<Vec3> before;         // the level's positions before a regularization round (level-local)
   std::vector<Vec3> pinned_at;      // where the pinned vertices stay (empty: none pinned)
@@ -443,6 +449,12 @@ class VolumeReconstructor::Impl {
     for (const BasePoint& b : enc_.base_points)
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
+    if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian &&
+        (static_cast<int>(enc_.base_rest_normals.size()) != n ||
+         static_cast<int>(enc_.base_rest_tangents.size()) != n))
+      throw InvalidInput(
+          "encoding has no base rest frames (base_rest_normals, base_rest_tangents), which the "
+          "reconstruction option tangential_regularization = rest_laplacian needs");
     // Each option by its name (set_reconstruct_option()'s), so that a --set NAME=VALUE out of
     // range is named in the error.
     auto check = [](bool ok, const char* name, double value, const char* range) {
@@ -473,6 +485,10 @@ class VolumeReconstructor::Impl {
           "at least 0");
     check(o.coarse_regularization_iterations >= 0, "coarse_regularization_iterations",
           o.coarse_regularization_iterations, "at least 0");
+    check(o.coarsest_regularization_iterations >= 0, "coarsest_regularization_iterations",
+          o.coarsest_regularization_iterations, "at least 0; 0 is as the coarse levels");
+    check(o.coarsest_max_cycles >= 0, "coarsest_max_cycles", o.coarsest_max_cycles,
+          "at least 0; 0 is max_cycles");
     check(o.max_cycles >= 1, "max_cycles", o.max_cycles, "at least 1");
     check(o.final_max_cycles >= 1, "final_max_cycles", o.final_max_cycles, "at least 1");
     check(o.tangential_lambda >= 0, "tangential_lambda", o.tangential_lambda, "at least 0");
@@ -553,6 +569,7 @@ class VolumeReconstructor::Impl {
         L.targets[j] = prism_volume(p[f[0]], p[f[1]], p[f[2]], q[f[0]], q[f[1]], q[f[2]]);
       }
     }
+    if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian) rest_laplacians(L);
     if (opt_.step_solver == VolumeStepSolver::Multigrid ||
         (finest && opt_.polish_solver == VolumeStepSolver::Multigrid)) {
       L.mg = std::make_unique<internal::VertexMultigrid>(nv, lf, L.nb_offsets, L.nb, L.weights);
@@ -564,6 +581,30 @@ class VolumeReconstructor::Impl {
     double sum = 0.0;
     for (double v : L.targets) sum += std::abs(v);
     L.mean_abs_target = L.targets.empty() ? 0.0 : sum / L.targets.size();
+  }
+
+  // TangentialRegularization::RestLaplacian's c_i before the amplitude: the level's tangential
+  // Laplacians of the rest detail and of the rest base points, in the original base's frames.
+  void rest_laplacians(Level& L) const {
+    const int nv = static_cast<int>(L.verts.size());
+    L.rest_lap_detail.assign(nv, Eigen::Vector2d::Zero());
+    L.rest_lap_base.assign(nv, Eigen::Vector2d::Zero());
+    const std::vector<Vec3>& p = enc_.detail_rest;
+    const std::vector<Vec3>& q = enc_.base_rest_points;
+    for (int k = 0; k < nv; ++k) {
+      if (L.boundary[k]) continue;  // held at the rest offset
+      const int i = L.verts[k];
+      Vec3 lp = Vec3::Zero(), lq = Vec3::Zero();
+      for (int t = L.nb_offsets[k]; t < L.nb_offsets[k + 1]; ++t) {
+        const int j = L.verts[L.nb[t]];
+        lp += L.weights[t] * (p[j] - p[i]);
+        lq += L.weights[t] * (q[j] - q[i]);
+      }
+      const Vec3& t1 = enc_.base_rest_tangents[i];
+      const Vec3 t2 = enc_.base_rest_normals[i].cross(t1);
+      L.rest_lap_detail[k] = Eigen::Vector2d(lp.dot(t1), lp.dot(t2));
+      L.rest_lap_base[k] = Eigen::Vector2d(lq.dot(t1), lq.dot(t2));
+    }
   }
 
   // The lower triangle of J J^T's pattern: prism j and every prism k <= j that shares a vertex
@@ -641,6 +682,7 @@ class VolumeReconstructor::Impl {
         throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
     s.Q = fr.points;
     s.N = fr.normals;
+    if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian) s.T = fr.tangents;
     s.R.resize(n);
     for (int i = 0; i < n; ++i) {
       const Eigen::Vector2d& o = enc_.tangential_offsets[i];
@@ -1080,18 +1122,20 @@ class VolumeReconstructor::Impl {
   int solve_level(const Level& L, State& s, double h, double tol, int max_cycles, ReconstructStats& st,
                   std::vector<double>& V) const {
     double lambda = 1.0;
+    int sweeps =
+        &L == &levels_.back() ? opt_.regularization_iterations : opt_.coarse_regularization_iterations;
+    if (&L == &levels_.front() && levels_.size() > 1) {
+      if (opt_.coarsest_regularization_iterations > 0) sweeps = opt_.coarsest_regularization_iterations;
+      if (opt_.coarsest_max_cycles > 0) max_cycles = opt_.coarsest_max_cycles;
+    }
     int c = 0;
     for (;; ++c) {
       project(L, s, h, tol, st, V);
       ++st.cycles;
-      if (c + 1 >= max_cycles || (&L == &levels_.back() ? opt_.regularization_iterations
-                                                        : opt_.coarse_regularization_iterations) == 0)
-        break;
+      if (c + 1 >= max_cycles || sweeps == 0) break;
       // The level's vertices only: a coarse level of a 1M-prism detail has a few thousand.
       s.before.resize(L.verts.size());
       for (std::size_t k = 0; k < L.verts.size(); ++k) s.before[k] = s.P[L.verts[k]];
-      const int sweeps =
-          &L == &levels_.back() ? opt_.regularization_iterations : opt_.coarse_regularization_iterations;
       for (int it = 0; it < sweeps; ++it) regularize(L, s, lambda);
       st.regularization_sweeps += sweeps;
       lambda *= opt_.regularization_decay;
@@ -1491,21 +1535,27 @@ class VolumeReconstructor::Impl {
   }
 
   // Section 4.2 on the displacements d_i = p_i - q_i (Jacobi sweep): the length filter
-  // d -> d + lambda f Laplacian(d/f) and the tangential Laplacian of the tangential displacement
-  // (relative to its rest offset), both with the original's weights.
+  // d -> d + lambda f Laplacian(d/f) and a tangential Laplacian (TangentialRegularization): of the
+  // tangential displacement relative to its rest offset, or of the positions less the rest
+  // detail's own, both with the original's weights.
   // \p only: the level-local vertices to move (nullptr: all).
   void regularize(const Level& L, State& s, double lambda_scale,
                   const std::vector<int>* only = nullptr) const {
     const int nv = static_cast<int>(L.verts.size());
+    const bool positions = opt_.tangential_regularization == TangentialRegularization::RestLaplacian;
     s.rho.resize(nv);
     s.tdev.resize(nv);
+    if (positions) s.pk.resize(nv);  // the positions before the sweep (a Jacobi sweep reads those)
     for_each(nv, [&](std::size_t k) {
       const int i = L.verts[k];
       const Vec3 d = s.P[i] - s.Q[i];
       const double hgt = d.dot(s.N[i]);
       s.rho[k] = hgt / guarded_f_[i];
       s.tdev[k] = d - hgt * s.N[i] - s.R[i];
+      if (positions) s.pk[k] = s.P[i];
     });
+    // The rest Laplacian of the detail scaled by the amplitude, q + a (p - q): linear in a.
+    const double amp = s.amplitude;
     const double ll = opt_.length_lambda * lambda_scale, lt = opt_.tangential_lambda * lambda_scale;
     const std::size_t count = only ? only->size() : static_cast<std::size_t>(nv);
     for_each(count, [&](std::size_t c) {
@@ -1516,13 +1566,22 @@ class VolumeReconstructor::Impl {
       Vec3 avg_t = Vec3::Zero();
       for (int t = b; t < e; ++t) {
         avg_rho += L.weights[t] * s.rho[L.nb[t]];
-        avg_t += L.weights[t] * s.tdev[L.nb[t]];
+        if (!positions) avg_t += L.weights[t] * s.tdev[L.nb[t]];
       }
       const int i = L.verts[k];
       if (pinned(i)) return;
       const Vec3& n = s.N[i];
       const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
-      Vec3 lap = avg_t - s.tdev[k];
+      Vec3 lap;
+      if (positions) {
+        lap.setZero();
+        for (int t = b; t < e; ++t) lap += L.weights[t] * (s.pk[L.nb[t]] - s.pk[k]);
+        // c_i in the edited base's frame (first tangent, normal x tangent), as R is carried.
+        const Eigen::Vector2d c = (1.0 - amp) * L.rest_lap_base[k] + amp * L.rest_lap_detail[k];
+        lap -= c[0] * s.T[i] + c[1] * n.cross(s.T[i]);
+      } else {
+        lap = avg_t - s.tdev[k];
+      }
       lap -= lap.dot(n) * n;
       // On the boundary the one-sided Laplacian cannot hold the tangential deviation, which then
       // drifts; it is held at zero there (the detail's open edge keeps its rest offset).
@@ -1593,8 +1652,11 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.polish_solver = VolumeStepSolver::Multigrid;
   o.volume_scales = 3;
   o.max_cycles = 2;
-  o.final_max_cycles = 3;
+  o.final_max_cycles = 5;
   o.coarse_regularization_iterations = 8;  // 64 folded its 100k bends (see the field)
+  o.tangential_regularization = TangentialRegularization::RestLaplacian;
+  o.coarsest_regularization_iterations = 200;
+  o.coarsest_max_cycles = 10;
   o.volume_iterations = 1;
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.2;

@@ -68,6 +68,12 @@ struct DetailEncoding {
   //! Tangential part of p_i - q_i in the base point's local frame (zero for normal projections;
   //! the fallbacks keep theirs so that nothing is lost).
   std::vector<Eigen::Vector2d> tangential_offsets;
+  //! The original base's frame at each q_i (unit normal and first tangent, as
+  //! evaluate_base_frames() gives them): the frame of the tangential offsets, and the one in which
+  //! the regularization carries the rest detail's tangential Laplacian to an edited base
+  //! (TangentialRegularization::RestLaplacian). Empty in an encoding built by hand; that mode then
+  //! refuses it.
+  std::vector<Vec3> base_rest_normals, base_rest_tangents;
   //! Target prism volume V*_j for each detail face.
   std::vector<double> target_volumes;
   //! Regularization weights from the original detail mesh (normalized clamped cotangent weights),

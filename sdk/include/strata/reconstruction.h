@@ -33,6 +33,23 @@ enum class VolumeStepSolver {
   Multigrid
 };
 
+//! What the tangential part of the regularization (section 4.2) smooths. Both leave an unedited
+//! base's rest detail a fixed point; they differ in where they pull an edited one.
+enum class TangentialRegularization {
+  //! The tangential displacement's deviation from its rest offset (rotated into the edited base's
+  //! frame): p' is pulled towards q' + d n' + the rest offset, the displacement vectors' shape
+  //! with other lengths, which folds in a bend tighter than the detail is high.
+  RestOffset,
+  //! The paper's operator p' -> p' + lambda (I - n n^T) (Laplacian(p') - c_i), the Laplacian of
+  //! the positions with the original's weights, where c_i is the rest detail's own tangential
+  //! Laplacian at p_i, carried from the original base's frame to the edited one (so the rest
+  //! shape stays a fixed point; without c_i the round trip came back 2-11% off). Its smoothed
+  //! state spreads the vertices over the detail surface instead of following the base's normals,
+  //! so smoothing it to convergence does not fold a bend (see ReconstructOptions::
+  //! coarsest_regularization_iterations). Needs the encoding's base_rest_normals and tangents.
+  RestLaplacian
+};
+
 //! Options of VolumeStepSolver::Multigrid. eps and eps_lap are relative to the mean diagonal of
 //! J^T J, so they do not depend on the mesh's scale.
 struct MultigridStepOptions {
@@ -154,6 +171,16 @@ struct ReconstructOptions {
   //! rounds (20k at jitter 0.4: 7.0 s, 1.4 s with 8 sweeps); 64 made the multigrid preset's 100k
   //! bend fold (18 s), so the preset keeps 8.
   int coarse_regularization_iterations = 32;
+  //! m on the coarsest level, if the hierarchy has more than one (0: as the other coarse levels).
+  //! The coarsest level sets the detail's largest-scale shape, whose slowest modes (a rotation of
+  //! the detail about a tube's axis, anchored only at its open ends) a few sweeps per cycle do not
+  //! smooth out; they are what a round trip keeps. The multigrid preset takes 200 sweeps and 10
+  //! cycles there with TangentialRegularization::RestLaplacian (see multigrid_reconstruct_options()).
+  int coarsest_regularization_iterations = 0;
+  //! Cycles at most on the coarsest level (0: max_cycles).
+  int coarsest_max_cycles = 0;
+  //! See TangentialRegularization.
+  TangentialRegularization tangential_regularization = TangentialRegularization::RestOffset;
   //! Cycles (volume steps, then m regularization sweeps) per level and volume scale at most.
   int max_cycles = 3;
   //! Cycles at most on the finest level at full volume scale, where the regularization settles
@@ -258,6 +285,9 @@ void set_reconstruct_option(ReconstructOptions& options, const std::string& name
 
 //! The names set_reconstruct_option() takes, sorted.
 std::vector<std::string> reconstruct_option_names();
+
+//! The value set_reconstruct_option() takes for \p form: "rest_offset" or "rest_laplacian".
+const char* to_string(TangentialRegularization form);
 
 //! Iteration counts and timings of one reconstruction.
 struct ReconstructStats {
