@@ -171,13 +171,14 @@ struct ReconstructOptions {
   //! rounds (20k at jitter 0.4: 7.0 s, 1.4 s with 8 sweeps); 64 made the multigrid preset's 100k
   //! bend fold (18 s), so the preset keeps 8.
   int coarse_regularization_iterations = 32;
-  //! m on the coarsest level, if the hierarchy has more than one (0: as the other coarse levels).
-  //! The coarsest level sets the detail's largest-scale shape, whose slowest modes (a rotation of
-  //! the detail about a tube's axis, anchored only at its open ends) a few sweeps per cycle do not
-  //! smooth out; they are what a round trip keeps. The multigrid preset takes 200 sweeps and 10
-  //! cycles there with TangentialRegularization::RestLaplacian (see multigrid_reconstruct_options()).
+  //! m on the coarsest level at the last volume scale, if the hierarchy has more than one level
+  //! (0: as the other coarse levels). The coarsest level sets the detail's largest-scale shape,
+  //! whose slowest modes (a rotation of the detail about a tube's axis, anchored only at its open
+  //! ends) a few sweeps per cycle do not smooth out; they are what a round trip keeps. The
+  //! multigrid preset takes 200 sweeps and 10 cycles there with
+  //! TangentialRegularization::RestLaplacian (see multigrid_reconstruct_options()).
   int coarsest_regularization_iterations = 0;
-  //! Cycles at most on the coarsest level (0: max_cycles).
+  //! Cycles at most on the coarsest level at the last volume scale (0: max_cycles).
   int coarsest_max_cycles = 0;
   //! See TangentialRegularization.
   TangentialRegularization tangential_regularization = TangentialRegularization::RestOffset;
