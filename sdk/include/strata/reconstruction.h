@@ -257,18 +257,19 @@ struct ReconstructOptions {
 };
 
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
-//! with the schedule it was measured with: 3 volume scales, 2 cycles per level (3 on the finest at
-//! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), and the
-//! polish's local end (local_polish_max_fraction 0.2), and a last retry with accurate steps
-//! (MultigridStepOptions::retry_iterations 20), and 8 regularization sweeps on the coarse levels
-//! (more folded its bends; its unedited-base round trip is then 0.3-3.9% of the diagonal, over the
-//! 0.5% target: README). The other fields keep their defaults. On
-//! the 100k bends over scan-like (irregular) triangulations, 1.0-1.4 s on one thread (one of
-//! twelve 3.9 s, with repair rounds), 860 bytes per prism on the bumps (2026-11-26, Intel VM), where the
-//! defaults take 5-7 s and 2 KB (README, Measured results). On regular triangulations its polish stalls and
-//! factorized steps finish it, no faster than the defaults (see Multigrid). Its fold outcomes are erratic:
-//! twelve perturbed 100k bends end without new pairs, one of them after five repair rounds; the
-//! bear's arm bend needs the last retry (README).
+//! with the schedule it was measured with: 3 volume scales, 2 cycles per level (4 on the finest at
+//! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), the
+//! polish's local end (local_polish_max_fraction 0.2), a last retry with accurate steps
+//! (MultigridStepOptions::retry_iterations 20), 8 regularization sweeps on the coarse levels, and
+//! the rest Laplacian (TangentialRegularization::RestLaplacian) with the coarsest level smoothed
+//! to convergence at full scale (200 sweeps, 10 cycles). The other fields keep their defaults.
+//! Measured on one thread (2026-11-26, Intel VM): on the 100k bends over scan-like (irregular)
+//! triangulations 1.3-1.6 s and 932 bytes per prism (bumps), where the defaults take 5-7 s and
+//! 2 KB; 0 new pairs on the regular and scan-like bends at 20k, 50k and 100k (the regular cuboid
+//! at 100k after two retries, 30 s); an unedited base's round trip within 0.07-0.34% of the
+//! diagonal at 5k-100k (0.4-1.4% at 100k with the rest offsets and 8 coarsest sweeps). On regular
+//! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
+//! outcomes are erratic from mesh to mesh (README).
 ReconstructOptions multigrid_reconstruct_options();
 
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
