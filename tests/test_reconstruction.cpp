@@ -334,6 +334,14 @@ TEST(Reconstruction, FoldedSolveFallsBackToTheMultigridPreset) {
   ReconstructOptions light = f.none;
   light.fallback_schedule = true;
   expect_fell_back_to(f, light, multigrid_reconstruct_options());
+  // An encoding without the base's rest frames (built by hand) falls back too, to the preset
+  // with rest offsets, where its rest Laplacian would refuse the encoding.
+  DetailEncoding bare = f.e;
+  bare.base_rest_normals.clear();
+  bare.base_rest_tangents.clear();
+  const ReconstructResult r = VolumeReconstructor(bare, light).reconstruct(f.c.edited_base.vertices);
+  EXPECT_EQ(r.stats.fallbacks, 1);
+  EXPECT_TRUE(r.stats.converged);
 }
 
 // A solve that ends above the tolerance is checked for new pairs too, and repaired: the result

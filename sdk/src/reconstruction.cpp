@@ -814,6 +814,11 @@ class VolumeReconstructor::Impl {
       o.threads = opt_.threads;
       o.progress = opt_.progress;
       o.fallback_schedule = false;
+      // An encoding built by hand may lack the base's rest frames, which the preset's rest
+      // Laplacian needs: it then falls back to the preset with rest offsets, not to an error.
+      if (enc_.base_rest_normals.size() != enc_.detail_rest.size() ||
+          enc_.base_rest_tangents.size() != enc_.detail_rest.size())
+        o.tangential_regularization = TangentialRegularization::RestOffset;
       fallback_ = std::make_unique<Impl>(enc_, std::move(o));
     }
     // The rest detail's pairs, counted already (first.counted), are the same for it.
