@@ -334,7 +334,8 @@ DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>
   for (int v : vertices) {
     r.detail_rest.push_back(e.detail_rest[v]);
     r.base_rest_points.push_back(e.base_rest_points[v]);
-    if (!e.base_rest_normals.empty()) {
+    if (static_cast<int>(e.base_rest_normals.size()) == n &&
+        static_cast<int>(e.base_rest_tangents.size()) == n) {
       r.base_rest_normals.push_back(e.base_rest_normals[v]);
       r.base_rest_tangents.push_back(e.base_rest_tangents[v]);
     }
