@@ -8,10 +8,22 @@
 #include <vector>
 
 #include "strata/mesh.h"
+#include "strata/reconstruction.h"
 
 namespace strata::test {
 
 //! The largest distance between corresponding points of \p a and \p b (same sizes).
+// The multigrid preset as it was before the rest Laplacian (rest offsets, the coarsest level as
+// the others, 3 final cycles): the tests whose folds or local ends were measured on it.
+inline ReconstructOptions rest_offset_multigrid_preset() {
+  ReconstructOptions o = multigrid_reconstruct_options();
+  o.tangential_regularization = TangentialRegularization::RestOffset;
+  o.coarsest_regularization_iterations = 0;
+  o.coarsest_max_cycles = 0;
+  o.final_max_cycles = 3;
+  return o;
+}
+
 inline double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   double d = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());

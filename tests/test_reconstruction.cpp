@@ -314,11 +314,7 @@ static long long expect_fell_back_to(const FoldingRings& f, const ReconstructOpt
 // which have none there, are kept. A solve without new pairs does not fall back.
 TEST(Reconstruction, FoldedSolveFallsBackToTheDefaultOptions) {
   const FoldingRings f;
-  ReconstructOptions mg = multigrid_reconstruct_options();
-  mg.tangential_regularization = TangentialRegularization::RestOffset;
-  mg.coarsest_regularization_iterations = 0;
-  mg.coarsest_max_cycles = 0;
-  mg.final_max_cycles = 3;
+  ReconstructOptions mg = test::rest_offset_multigrid_preset();
   mg.retry_volume_iterations = 0;
   mg.multigrid.retry_iterations = 0;
   mg.fold_repair_rounds = 0;
@@ -462,7 +458,7 @@ TEST(DragState, StepsBeforeResetOrOfAnotherSizeAreRejected) {
 // Over the unedited base every level's state is the rest detail, which holds every level's target
 // volumes and is a fixed point of the regularization, in both tangential forms (the rest
 // Laplacian's only through its c_i: without it the bumps' flanks slide, the 100k round trips came
-// back 2-9% off): a step gives the detail back. The bumps' flanks and the cuboid's corners have
+// back 2.3-11% off): a step gives the detail back. The bumps' flanks and the cuboid's corners have
 // the largest tangential Laplacians, which c_i must cancel on every level.
 TEST(DragState, AStepOverTheUneditedBaseKeepsTheDetail) {
   for (cases::DetailKind kind : {cases::DetailKind::Bumps, cases::DetailKind::Cuboid})

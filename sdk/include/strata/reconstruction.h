@@ -172,11 +172,10 @@ struct ReconstructOptions {
   //! bend fold (18 s), so the preset keeps 8.
   int coarse_regularization_iterations = 32;
   //! m on the coarsest level at the clean start's last volume scale (not in drag or warm steps),
-  //! if the hierarchy has more than one level
-  //! (0: as the other coarse levels). The coarsest level sets the detail's largest-scale shape,
-  //! whose slowest modes (a rotation of the detail about a tube's axis, anchored only at its open
-  //! ends) a few sweeps per cycle do not smooth out; they are what a round trip keeps. The
-  //! multigrid preset takes 200 sweeps and 10 cycles there with
+  //! if the hierarchy has more than one level (0: as the other coarse levels). The coarsest level sets the
+  //! detail's largest-scale shape, whose slowest modes (a rotation of the detail about a tube's axis,
+  //! anchored only at its open ends) a few sweeps per cycle do not smooth out; they are what a round trip
+  //! keeps. The multigrid preset takes 200 sweeps and 10 cycles there with
   //! TangentialRegularization::RestLaplacian (see multigrid_reconstruct_options()).
   int coarsest_regularization_iterations = 0;
   //! Cycles at most on the coarsest level at the clean start's last volume scale (0: max_cycles).
@@ -276,9 +275,10 @@ ReconstructOptions multigrid_reconstruct_options();
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
 //! for a MultigridStepOptions field) from text, as tools and configuration files give it: whole
 //! numbers for counts, decimals for reals, true/false for flags, jacobi_cg/direct/multigrid for
-//! step_solver and polish_solver, rest_offset/rest_laplacian for tangential_regularization. For tuning a
-//! solve from a command line (`--set NAME=VALUE`); the ranges are checked by VolumeReconstructor, as for any
-//! options. \throw InvalidInput for an unknown name, or a value that is not of the field's type (the
+//! step_solver and polish_solver, rest_offset/rest_laplacian for tangential_regularization. For
+//! tuning a solve from a command line (`--set NAME=VALUE`); the ranges are checked by
+//! VolumeReconstructor, as for any options.
+//! \throw InvalidInput for an unknown name, or a value that is not of the field's type (the
 //!        message names both).
 void set_reconstruct_option(ReconstructOptions& options, const std::string& name, const std::string& value);
 
