@@ -319,6 +319,55 @@ TEST(IntersectReference, RandomSoupsMatchBruteForce) {
   }
 }
 
+// The floating-point pre-filter (a separating axis with a rounding bound) before the exact
+// predicates: unwelded coplanar triangles in a tilted plane far from the origin, as a scan's flat
+// regions are, touching exactly along their edges (counted) or shrunk about their centroids so that
+// gaps of a few units in the last place open (not counted), and sheets lifted off the plane by
+// such gaps. The search must agree with the exact brute force pair for pair.
+TEST(IntersectReference, NearlyTouchingCoplanarTrianglesMatchBruteForce) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const Vec3 o = Vec3(uni(rng), uni(rng), uni(rng)) * std::pow(10.0, 3 * trial);
+    const Vec3 u = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
+    const Vec3 v = u.cross(Vec3(uni(rng), uni(rng), uni(rng))).normalized();
+    const Vec3 n = u.cross(v);
+    const double scale = std::max(1.0, o.norm());
+    const double ulp = std::numeric_limits<double>::epsilon() * scale;
+    auto at = [&](double x, double y) { return Vec3(o + 0.01 * scale * (x * u + y * v)); };
+    TriMesh m;
+    auto add = [&](const Tri& t) {
+      const int b = m.num_vertices();
+      for (const Vec3& p : t) m.vertices.push_back(p);
+      m.faces.push_back({b, b + 1, b + 2});
+    };
+    std::uniform_int_distribution<int> pick(0, 3);
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j)
+        for (int half = 0; half < 2; ++half) {
+          Tri t = half == 0 ? Tri{at(i, j), at(i + 1, j), at(i + 1, j + 1)}
+                            : Tri{at(i, j), at(i + 1, j + 1), at(i, j + 1)};
+          const Vec3 c = (t[0] + t[1] + t[2]) / 3.0;
+          switch (pick(rng)) {
+            case 0:  // as it is: touches its neighbours exactly (the same rounded vertices)
+              break;
+            case 1:  // shrunk by a few ulps: gaps at the rounding scale
+              for (Vec3& p : t) p = c + (1.0 - 4.0 * std::numeric_limits<double>::epsilon()) * (p - c);
+              break;
+            case 2:  // lifted off the plane by a few ulps
+              for (Vec3& p : t) p += 3.0 * ulp * n;
+              break;
+            default:  // grown slightly: overlaps its neighbours in the plane
+              for (Vec3& p : t) p = c + (1.0 + 1e-9) * (p - c);
+              break;
+          }
+          add(t);
+        }
+    expect_matches_brute_force(m);
+  }
+}
+
 TEST(IntersectReference, FaceOrderDoesNotMatter) {
   std::mt19937 rng(7);
   TriMesh m = small_triangle_soup(500, rng);
