@@ -1677,7 +1677,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.coarsest_max_cycles = 10;
   o.volume_iterations = 1;
   o.tolerance = 5e-4;
-  o.local_polish_max_fraction = 0.2;
+  o.local_polish_max_fraction = 0.25;
   o.multigrid.retry_iterations = 20;
   return o;
 }

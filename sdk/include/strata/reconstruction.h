@@ -216,12 +216,13 @@ struct ReconstructOptions {
   //! on; the local end is then tried again only once the prisms above the tolerance are at most
   //! half as many as at the failed attempt. 0: whole-level steps only (the default:
   //! with factorized whole-level steps the gain is small, 8.8 -> 8.5 s on the 100k bumps). The
-  //! multigrid preset takes 0.2, where one local factorization costs about what a whole-level
-  //! multigrid step does: on the 1M bumps bend the first whole-level step left 23,600 prisms
-  //! above the tolerance, whose local system (129k prisms) took three rounds, 0.55 s, in place of
-  //! a second whole-level step (the polish 3.05-3.15 -> 2.24-2.29 s); on the 100k bends the first
-  //! step leaves more than the limit (8,104 prisms on the bumps), so a second whole-level step
-  //! runs as before (0.09 s there) and the local end follows it (46 prisms). The fold repair's
+  //! multigrid preset takes 0.25, where one local factorization costs less than a whole-level
+  //! multigrid step: on the 1M bumps bend (jitter 0.4) the first whole-level step leaves 26,212
+  //! prisms above the tolerance, whose local system (222k prisms, 22% of the level) took four
+  //! rounds, 0.9-1.2 s, in place of a second whole-level step of about 2.4 s (the polish 4.3 ->
+  //! 2.6-2.9 s, the peak memory unchanged; with 0.2 that system was over the limit); on the 100k
+  //! bends the first step leaves more than the limit (12,147 prisms on the bumps), so a second
+  //! whole-level step runs (0.12 s there) and the local end follows it (44 prisms). The fold repair's
   //! whole-level polish never ends locally: its wide correction is what unfolds (a local end there
   //! left 6 new pairs on the regular 100k rings).
   double local_polish_max_fraction = 0.0;
@@ -259,7 +260,7 @@ struct ReconstructOptions {
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
 //! with the schedule it was measured with: 3 volume scales, 2 cycles per level (4 on the finest at
 //! full scale), one volume step a cycle, a tolerance of 5e-4 (half the acceptance's 1e-3), the
-//! polish's local end (local_polish_max_fraction 0.2), a last retry with accurate steps
+//! polish's local end (local_polish_max_fraction 0.25), a last retry with accurate steps
 //! (MultigridStepOptions::retry_iterations 20), 8 regularization sweeps on the coarse levels, and
 //! the rest Laplacian (TangentialRegularization::RestLaplacian) with the coarsest level smoothed
 //! to convergence at full scale (200 sweeps, 10 cycles). The other fields keep their defaults.
