@@ -221,10 +221,10 @@ struct ReconstructOptions {
   //! prisms above the tolerance, whose local system (222k prisms, 22% of the level) took four
   //! rounds, 0.9-1.2 s, in place of a second whole-level step of about 2.4 s (the polish 4.3 ->
   //! 2.6-2.9 s, the peak memory unchanged; with 0.2 that system was over the limit); on the 100k
-  //! bends the first step leaves more than the limit (12,147 prisms on the bumps), so a second
-  //! whole-level step runs (0.12 s there) and the local end follows it (44 prisms). The fold repair's
-  //! whole-level polish never ends locally: its wide correction is what unfolds (a local end there
-  //! left 6 new pairs on the regular 100k rings).
+  //! bumps the first step leaves 12,147 prisms off, whose system is over the limit, so a second
+  //! whole-level step runs (0.12 s there) and the local end follows it (44 prisms). The fold
+  //! repair's whole-level polish never ends locally: its wide correction is what unfolds (a local
+  //! end there left 6 new pairs on the regular 100k rings).
   double local_polish_max_fraction = 0.0;
   //! Rings of vertices around the off prisms that a local polish step moves.
   int local_polish_rings = 2;
