@@ -21,10 +21,15 @@ JOBS=${STRATA_JOBS:-2}
 # cli.layers, the other Layers.* tests), four of the five real-scan cage bends and two of the three
 # limit projections of fitted cages (bear_arm_90 and armadillo stay). Together they took 890 s of
 # the 2,294 test-seconds of the sanitizer run on 2026-11-25 (a clean clone, 2 cores, -j2: 1,164 s
-# of wall time before, 739 s without them; the Release tests 99 s). Everything else,
+# of wall time before, 739 s without them; the Release tests 99 s). Also left out since
+# 2026-11-26's seventh session, when the sanitizer run took 930 s of wall time (1,839
+# test-seconds; an AMD VM in a slow phase): the real-scan tests on more than one scan each, whose
+# code paths the same tests run on a smaller scan (the layered scans but the camel, the limit
+# projections but the man's and the camel's, the armadillo's arm folds; 293 test-seconds): the
+# stage then took 786 s (220 tests) on the same VM. Everything else,
 # the CLI tests included, runs under ASan + UBSan; --timeout stops a test that got slow instead of
 # eating the CI budget.
-ASAN_EXCLUDE='Benchmark|viewer|FoldedSolveKeepsTheBetterOfTwoSchedules|FoldedSolveFallsBackToTheMultigridPreset|SavedModelsContinueEditingExactlyAsInMemory|AmplitudeScalesTheBandsPrismVolumes|RealScanCageBend.*/(elephant|diplodocus|camel)|ScanProjection.*(refined_elephant|diplodocus)'
+ASAN_EXCLUDE='Benchmark|viewer|FoldedSolveKeepsTheBetterOfTwoSchedules|FoldedSolveFallsBackToTheMultigridPreset|SavedModelsContinueEditingExactlyAsInMemory|AmplitudeScalesTheBandsPrismVolumes|RealScanCageBend.*/(elephant|diplodocus|camel)|ScanProjection.*(refined_elephant|diplodocus|armadillo|bear)|LayersOnScan.*/(man|bear|armadillo) |RealScanFold.*armadillo'
 
 section() { printf '\n==== %s\n' "$*"; }
 passed=0
