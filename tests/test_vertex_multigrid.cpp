@@ -442,16 +442,13 @@ TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
 // The rest Laplacian under a band's amplitude a (ReconstructRequest::amplitude): its c_i is the
 // blend (1 - a) Lap(q) + a Lap(p) of the base points' and the detail's rest Laplacians, the
 // tangential Laplacian of the scaled detail q + a (p - q). Over the unedited base its clean start
-// comes back where the rest offsets' does (which scales the offsets), for damped and exaggerated
-// detail. (Not the scaled detail itself: over a curved base a prism's volume is not linear in its
-// height, so the scaled targets a V* put it 0.6% / 2.4% of the diagonal away with either form.)
+// converges without new pairs, the detail's height scales with a, and it comes back near where the
+// rest offsets' does (which scales the offsets), for damped and exaggerated detail. (Not to the
+// scaled detail itself: over a curved base a prism's volume is not linear in its height.)
 TEST(MultigridPreset, AnAmplitudeScalesTheRestLaplacianAsTheRestOffsets) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Bumps;
-  o.target_detail_triangles = 8000;
-  o.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const ScanLikeBumps b;
+  const cases::CylinderCase& c = b.c;
+  const DetailEncoding& e = b.e;
   ReconstructOptions lap = multigrid_reconstruct_options();
   lap.threads = 1;
   ASSERT_EQ(lap.tangential_regularization, TangentialRegularization::RestLaplacian);
@@ -467,7 +464,15 @@ TEST(MultigridPreset, AnAmplitudeScalesTheRestLaplacianAsTheRestOffsets) {
     EXPECT_TRUE(r.stats.converged) << "amplitude " << a;
     EXPECT_TRUE(s.stats.converged) << "amplitude " << a;
     EXPECT_EQ(r.stats.new_intersecting_pairs, 0) << "amplitude " << a;
-    // Measured: 0.25% and 0.54% of the diagonal.
-    EXPECT_LE(test::max_distance(r.positions, s.positions), 0.01 * diag) << "amplitude " << a;
+    // The RMS displacement from the base points, relative to the rest detail's (measured 0.54 and
+    // 1.78: on the cylinder a prism's volume grows faster than its height).
+    double d2 = 0.0, r2 = 0.0;
+    for (std::size_t i = 0; i < r.positions.size(); ++i) {
+      d2 += (r.positions[i] - e.base_rest_points[i]).squaredNorm();
+      r2 += (e.detail_rest[i] - e.base_rest_points[i]).squaredNorm();
+    }
+    EXPECT_NEAR(std::sqrt(d2 / r2), a, 0.15 * a) << "amplitude " << a;
+    // Measured: 0.13% and 1.19% of the diagonal apart.
+    EXPECT_LE(test::max_distance(r.positions, s.positions), 0.02 * diag) << "amplitude " << a;
   }
 }

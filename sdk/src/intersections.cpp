@@ -309,10 +309,11 @@ class SelfIntersectionSearch {
 
   void test(const Prim& p, const Prim& q) {
     if (!overlap(p.box, q.box) || share_vertex(p, q)) return;
-    const Vec3* a = vertices_.data();
-    if (separated(a[p.v[0]], a[p.v[1]], a[p.v[2]], a[q.v[0]], a[q.v[1]], a[q.v[2]])) return;
-    const Triangle t(to_point(vertices_[p.v[0]]), to_point(vertices_[p.v[1]]), to_point(vertices_[p.v[2]]));
-    const Triangle u(to_point(vertices_[q.v[0]]), to_point(vertices_[q.v[1]]), to_point(vertices_[q.v[2]]));
+    const Vec3 &a0 = vertices_[p.v[0]], &a1 = vertices_[p.v[1]], &a2 = vertices_[p.v[2]];
+    const Vec3 &b0 = vertices_[q.v[0]], &b1 = vertices_[q.v[1]], &b2 = vertices_[q.v[2]];
+    if (separated(a0, a1, a2, b0, b1, b2)) return;
+    const Triangle t(to_point(a0), to_point(a1), to_point(a2));
+    const Triangle u(to_point(b0), to_point(b1), to_point(b2));
     if (CGAL::do_intersect(t, u)) report(p.face, q.face);
   }
 

@@ -220,8 +220,8 @@ struct ReconstructOptions {
   //! multigrid step: on the 1M bumps bend (jitter 0.4) the first whole-level step leaves 26,212
   //! prisms above the tolerance, whose local system (222k prisms, 22% of the level) took four
   //! rounds, 0.9-1.2 s, in place of a second whole-level step of about 2.4 s (the polish 4.3 ->
-  //! 2.6-2.9 s, the peak memory unchanged; with 0.2 that system was over the limit); on the 100k
-  //! bumps the first step leaves 12,147 prisms off, whose system is over the limit, so a second
+  //! 2.6-2.9 s, the peak 902 against 899 bytes per prism; with 0.2 that system was over the limit); on the
+  //! 100k bumps the first step leaves 12,147 prisms off, whose system is over the limit, so a second
   //! whole-level step runs (0.12 s there) and the local end follows it (44 prisms). The fold
   //! repair's whole-level polish never ends locally: its wide correction is what unfolds (a local
   //! end there left 6 new pairs on the regular 100k rings).
