@@ -117,7 +117,7 @@ INSTANTIATE_TEST_SUITE_P(Fig6, PaperBend,
 TEST(Reconstruction, RingsBendKeepsVolumesAndCutsVectorFolds) {
   // Ring crests are taller than the inner bend radius and get squeezed together; volumes keep
   // the prisms exactly and leave far fewer intersecting pairs than vectors (not yet none: see
-  // the README's measured results).
+  // sdk/docs/engine-log.md).
   const Outcome o = run_bend(make_case(cases::DetailKind::Rings, 8000));
   EXPECT_LE(o.volumes.max_relative_error, 1e-3);
   EXPECT_LE(o.volumes.rms_relative_error, 1e-4);

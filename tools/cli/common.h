@@ -121,7 +121,7 @@ struct SolverChoice {
   std::vector<std::string> sets;
 };
 //! `--solver auto` takes the multigrid preset for a detail of at least this many prisms, the
-//! default options below. Measured on the paper's 90-degree bends, one thread (README): at 100k
+//! default options below. Measured on the paper's 90-degree bends, one thread (engine log): at 100k
 //! prisms the preset took 1.2-1.3 s on the three scan-like (jitter 0.4) bends against 6.0-31 s, and
 //! on the regular grids 4.9 s against 6.8 s (bumps), 21.7 s against 69 s (rings) and 6.9 s against
 //! 6.8 s (cuboid), in less than half the memory; at 50k the two were even (median solve 2.4 s

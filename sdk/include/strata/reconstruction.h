@@ -270,7 +270,7 @@ struct ReconstructOptions {
 //! at 100k after two retries, 30 s); an unedited base's round trip within 0.07-0.34% of the
 //! diagonal at 5k-100k (0.4-1.4% at 100k with the rest offsets and 8 coarsest sweeps). On regular
 //! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
-//! outcomes are erratic from mesh to mesh (README).
+//! outcomes are erratic from mesh to mesh (sdk/docs/engine-log.md).
 ReconstructOptions multigrid_reconstruct_options();
 
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
