@@ -422,8 +422,19 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.coarsest_regularization_iterations, o.reconstruct.coarsest_regularization_iterations);
   EXPECT_EQ(back.coarsest_max_cycles, o.reconstruct.coarsest_max_cycles);
   EXPECT_GT(back.coarsest_max_cycles, 0);
+  EXPECT_TRUE(back.retry_other_regularization);
 
   const layers::StrataContainer c = layers::read_strata_container(path);
+  // A file written before retry_other_regularization existed solves as it did then: without it.
+  {
+    layers::StrataContainer old = c;
+    nlohmann::json j = nlohmann::json::parse(old.model_json);
+    ASSERT_TRUE(j["options"]["reconstruct"].contains("retry_other_regularization"));
+    j["options"]["reconstruct"].erase("retry_other_regularization");
+    old.model_json = j.dump();
+    layers::write_strata_container(old, tmp.file("old.strata"));
+    EXPECT_FALSE(layers::read_model(tmp.file("old.strata")).options().reconstruct.retry_other_regularization);
+  }
   layers::StrataContainer bad = c;
   nlohmann::json m = nlohmann::json::parse(bad.model_json);
   m["options"]["reconstruct"]["polish_solver"] = "jacobi-cg";  // not a polish solver

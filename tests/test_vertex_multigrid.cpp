@@ -454,6 +454,42 @@ TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
   EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u);
 }
 
+// ReconstructOptions::retry_other_regularization: a preset solve that folds is retried with the
+// rest offsets on the same hierarchy, and that retry is exactly the rest offsets' own solve. The
+// regular 3k cuboid, without repair rounds or the other retries (measured: the rest Laplacian
+// leaves 10 new pairs, the rest offsets none).
+TEST(MultigridPreset, AFoldedSolveIsRetriedWithTheRestOffsets) {
+  cases::CylinderCaseOptions o;
+  o.detail = cases::DetailKind::Cuboid;
+  o.target_detail_triangles = 3000;
+  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  ASSERT_EQ(find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs, 0u);
+  ReconstructOptions ro = multigrid_reconstruct_options();
+  ro.threads = 1;
+  ro.fold_repair_rounds = 0;
+  ro.retry_volume_iterations = 0;
+  ro.multigrid.retry_iterations = 0;
+  ro.fallback_schedule = false;
+  ASSERT_TRUE(ro.retry_other_regularization);  // the default
+  ReconstructOptions off = ro;
+  off.retry_other_regularization = false;
+  const ReconstructResult folded = VolumeReconstructor(e, off).reconstruct(c.edited_base.vertices);
+  EXPECT_TRUE(folded.stats.converged);
+  EXPECT_EQ(folded.stats.retries, 0);
+  EXPECT_GT(folded.stats.new_intersecting_pairs, 0);  // the case: the rest Laplacian folds it
+  const ReconstructResult r = VolumeReconstructor(e, ro).reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(r.stats.retries, 1);
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_EQ(r.stats.new_intersecting_pairs, 0);
+  EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u);
+  ReconstructOptions offsets = ro;
+  offsets.tangential_regularization = TangentialRegularization::RestOffset;
+  const ReconstructResult theirs = VolumeReconstructor(e, offsets).reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(theirs.stats.retries, 0);
+  EXPECT_EQ(r.positions, theirs.positions);
+}
+
 // The rest Laplacian under a band's amplitude a (ReconstructRequest::amplitude): its c_i is the
 // blend (1 - a) Lap(q) + a Lap(p) of the base points' and the detail's rest Laplacians, the
 // tangential Laplacian of the scaled detail q + a (p - q). Over the unedited base its clean start

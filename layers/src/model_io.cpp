@@ -67,6 +67,7 @@ json options_json(const ModelOptions& o) {
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
             {"fallback_schedule", r.fallback_schedule},
+            {"retry_other_regularization", r.retry_other_regularization},
             {"fold_repair_rounds", r.fold_repair_rounds},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
@@ -183,6 +184,9 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
   // Files written before the option existed did not fall back.
   ro.fallback_schedule = r.contains("fallback_schedule") && h.boolean(r, "fallback_schedule", wr);
+  // Absent in files written before 2026-11-27, whose solves had no such retry.
+  ro.retry_other_regularization =
+      r.contains("retry_other_regularization") && h.boolean(r, "retry_other_regularization", wr);
   // Files written before fold repair existed did not repair (their results stay as they were).
   auto optional_count = [&](const char* key, int fallback) {
     return r.contains(key) ? static_cast<int>(h.integer(r, key, wr, 0, 100000)) : fallback;

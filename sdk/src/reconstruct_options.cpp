@@ -30,6 +30,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"retry_volume_iterations", &o.retry_volume_iterations},
           {"retry_on_new_intersections", &o.retry_on_new_intersections},
           {"fallback_schedule", &o.fallback_schedule},
+          {"retry_other_regularization", &o.retry_other_regularization},
           {"fold_repair_rounds", &o.fold_repair_rounds},
           {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
           {"fold_repair_rings", &o.fold_repair_rings},

@@ -125,6 +125,10 @@ void release_step_scratch(GnScratch& g) {
 // The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
 // the sweeps (one State per call, so calls share nothing but the levels' factorizations).
 struct State {
+  // The tangential regularization in use: the options', or RestOffset in the retry of
+  // ReconstructOptions::retry_other_regularization.
+  TangentialRegularization tangential = TangentialRegularization::RestOffset;
+
   std::vector<Vec3> P;              // current detail positions
   std::vector<Vec3> Q;              // base points on the edited base
   std::vector<Vec3> N;              // unit normals at the base points
@@ -285,6 +289,14 @@ class VolumeReconstructor::Impl {
           s.P.swap(kept);
       };
       auto failed = [&] { return !first.converged || first.new_pairs > 0; };
+      // First with the other tangential regularization (retry_other_regularization): the rest
+      // offsets fold on other regular grids than the rest Laplacian.
+      if (opt_.retry_other_regularization &&
+          opt_.tangential_regularization == TangentialRegularization::RestLaplacian && failed()) {
+        s.tangential = TangentialRegularization::RestOffset;
+        retry(opt_.volume_iterations, 0);
+        s.tangential = opt_.tangential_regularization;
+      }
       if (opt_.retry_volume_iterations > 0 && opt_.retry_volume_iterations != opt_.volume_iterations &&
           failed())
         retry(opt_.retry_volume_iterations, 0);
@@ -683,6 +695,7 @@ class VolumeReconstructor::Impl {
         throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
     s.Q = fr.points;
     s.N = fr.normals;
+    s.tangential = opt_.tangential_regularization;
     if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian) s.T = fr.tangents;
     s.R.resize(n);
     for (int i = 0; i < n; ++i) {
@@ -1560,7 +1573,7 @@ class VolumeReconstructor::Impl {
   void regularize(const Level& L, State& s, double lambda_scale,
                   const std::vector<int>* only = nullptr) const {
     const int nv = static_cast<int>(L.verts.size());
-    const bool positions = opt_.tangential_regularization == TangentialRegularization::RestLaplacian;
+    const bool positions = s.tangential == TangentialRegularization::RestLaplacian;
     s.rho.resize(nv);
     s.tdev.resize(nv);
     if (positions) s.pk.resize(nv);  // the positions before the sweep (a Jacobi sweep reads those)

@@ -526,6 +526,7 @@ int main(int argc, char** argv) {
             {"retry_volume_iterations", ro.retry_volume_iterations},
             {"retry_on_new_intersections", ro.retry_on_new_intersections},
             {"fallback_schedule", ro.fallback_schedule},
+            {"retry_other_regularization", ro.retry_other_regularization},
             {"fold_repair_rounds", ro.fold_repair_rounds},
             {"fold_repair_rings", ro.fold_repair_rings},
             {"fold_repair_sweeps", ro.fold_repair_sweeps},

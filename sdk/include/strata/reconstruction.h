@@ -121,6 +121,19 @@ struct ReconstructOptions {
   //! 100k prisms 0.05 s per count, the rest detail counted once) and retry if there are any.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
+  //! With TangentialRegularization::RestLaplacian: a clean-start solve that ends unconverged or
+  //! with new intersecting pairs (after its fold repair rounds) is first retried with the rest
+  //! offsets' tangential regularization (TangentialRegularization::RestOffset, on the same
+  //! hierarchy, the options otherwise the same), before the retries of retry_volume_iterations and
+  //! MultigridStepOptions::retry_iterations, which run only if that retry fails as well; the
+  //! better result is kept (as for them). Why: the two regularizations fold on different regular
+  //! grids (first attempts at 20k prisms: the rest Laplacian 2,630 new pairs on the regular
+  //! cuboid and 3 on the rings, the rest offsets 0 and 104), and on scan-like triangulations
+  //! neither. Measured (2026-11-27, the multigrid preset, one thread): the regular 100k cuboid
+  //! bend 39.4 -> 21.4 s and the regular 20k cuboid 5.8 -> 1.4 s, both ending with 0 new pairs;
+  //! the other 34 runs of the 3 cases x regular / jitter 0.4 x 20k, 50k, 100k bends and round trips
+  //! end as before. Requires retry_on_new_intersections for the pair count.
+  bool retry_other_regularization = true;
   //! If a clean-start solve still has new intersecting pairs after its retries and fold repairs,
   //! solve once more with the other solver's preset (the multigrid preset,
   //! multigrid_reconstruct_options(), for a step_solver other than Multigrid; these defaults for
@@ -329,7 +342,7 @@ struct ReconstructStats {
   //! Prisms of the largest system a local end solved (0 if none): at most
   //! local_polish_max_fraction of the finest level's prisms.
   long long max_local_end_prisms = 0;
-  int retries = 0;  //!< clean-start solves run again (ReconstructOptions::retry_volume_iterations)
+  int retries = 0;  //!< clean-start solves run again (retry_other_regularization, retry_volume_iterations)
   //! Solves run again with the other preset (ReconstructOptions::fallback_schedule), 0 or 1, and
   //! whether that result was kept. The other counts here are of this solver's own solve; the other
   //! preset's work shows in seconds_solve only.
