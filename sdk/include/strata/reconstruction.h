@@ -130,9 +130,10 @@ struct ReconstructOptions {
   //! grids (first attempts at 20k prisms: the rest Laplacian 2,630 new pairs on the regular
   //! cuboid and 3 on the rings, the rest offsets 0 and 104), and on scan-like triangulations
   //! neither. Measured (2026-11-27, the multigrid preset, one thread): the regular 100k cuboid
-  //! bend 39.4 -> 21.4 s and the regular 20k cuboid 5.8 -> 1.4 s, both ending with 0 new pairs;
-  //! the other 34 runs of the 3 cases x regular / jitter 0.4 x 20k, 50k, 100k bends and round trips
-  //! end as before. Requires retry_on_new_intersections for the pair count.
+  //! bend 39.4 -> 18.8 s, the regular 20k cuboid 5.8 -> 1.6 s and the regular 50k bumps 6.6 -> 7.4
+  //! s, all ending with 0 new pairs; the other 33 runs of the 3 cases x regular / jitter 0.4 x 20k,
+  //! 50k, 100k bends and round trips do not retry and end as before. Requires
+  //! retry_on_new_intersections for the pair count.
   bool retry_other_regularization = true;
   //! If a clean-start solve still has new intersecting pairs after its retries and fold repairs,
   //! solve once more with the other solver's preset (the multigrid preset,
