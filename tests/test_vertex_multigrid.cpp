@@ -328,6 +328,21 @@ struct ScanLikeBumps {
     return cases::make_cylinder_case(o);
   }
 };
+
+// The paper's cuboid over its regular triangulation, at about \p triangles prisms, encoded: the
+// cases where the preset's polish stalls or its first attempt folds.
+struct RegularCuboid {
+  explicit RegularCuboid(int triangles) : c(make(triangles)), e(encode_detail(c.detail, c.base)) {}
+  cases::CylinderCase c;
+  DetailEncoding e;
+
+  static cases::CylinderCase make(int triangles) {
+    cases::CylinderCaseOptions o;
+    o.detail = cases::DetailKind::Cuboid;
+    o.target_detail_triangles = triangles;
+    return cases::make_cylinder_case(o);
+  }
+};
 }  // namespace
 
 // The polish's local end (local_polish_max_fraction): once few prisms are off, only their
@@ -431,11 +446,9 @@ TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
 // end. Measured on the regular 2k cuboid: the 10 multigrid steps end above the tolerance, then 4
 // factorized steps converge, without new pairs; with the preset's 25 iterations no factorization.
 TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Cuboid;
-  o.target_detail_triangles = 2000;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const RegularCuboid b(2000);
+  const cases::CylinderCase& c = b.c;
+  const DetailEncoding& e = b.e;
   ReconstructOptions ro = multigrid_reconstruct_options();
   ro.threads = 1;
   ro.local_polish_max_fraction = 0.0;
@@ -459,11 +472,9 @@ TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
 // regular 3k cuboid, without repair rounds or the other retries (measured: the rest Laplacian
 // leaves 10 new pairs, the rest offsets none).
 TEST(MultigridPreset, AFoldedSolveIsRetriedWithTheRestOffsets) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Cuboid;
-  o.target_detail_triangles = 3000;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const RegularCuboid b(3000);
+  const cases::CylinderCase& c = b.c;
+  const DetailEncoding& e = b.e;
   ASSERT_EQ(find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs, 0u);
   ReconstructOptions ro = multigrid_reconstruct_options();
   ro.threads = 1;

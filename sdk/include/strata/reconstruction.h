@@ -128,8 +128,8 @@ struct ReconstructOptions {
   //! MultigridStepOptions::retry_iterations, which run only if that retry fails as well; the
   //! better result is kept (as for them). Why: the two regularizations fold on different regular
   //! grids (first attempts at 20k prisms: the rest Laplacian 2,630 new pairs on the regular
-  //! cuboid and 3 on the rings, the rest offsets 0 and 104), and on scan-like triangulations
-  //! neither. Measured (2026-11-27, the multigrid preset, one thread): the regular 100k cuboid
+  //! cuboid and 3 on the rings, the rest offsets 0 and 104; on the scan-like ones, jitter 0.4,
+  //! neither). Measured (2026-11-27, the multigrid preset, one thread): the regular 100k cuboid
   //! bend 39.4 -> 18.8 s, the regular 20k cuboid 5.8 -> 1.6 s and the regular 50k bumps 6.6 -> 7.4
   //! s, all ending with 0 new pairs; the other 33 runs of the 3 cases x regular / jitter 0.4 x 20k,
   //! 50k, 100k bends and round trips do not retry and end as before. Requires
