@@ -51,6 +51,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"max_final_steps", &o.max_final_steps},
           {"local_polish_max_fraction", &o.local_polish_max_fraction},
           {"local_polish_rings", &o.local_polish_rings},
+          {"local_polish_max_motion", &o.local_polish_max_motion},
           {"min_length_fraction", &o.min_length_fraction},
           {"fixed_point_tolerance", &o.fixed_point_tolerance},
           {"step_solver", &o.step_solver},

@@ -201,6 +201,7 @@ class VolumeReconstructor::Impl {
     for (double f : enc_.normal_offsets) mean_f += std::abs(f);
     mean_f = n > 0 ? mean_f / n : 0.0;
     mean_abs_f_ = mean_f;
+    rest_diagonal_ = bbox_diagonal(enc_.detail_rest);
     guarded_f_.resize(n);
     const double fmin = std::max(opt_.min_length_fraction * mean_f, 1e-300);
     for (int i = 0; i < n; ++i) {
@@ -1292,6 +1293,13 @@ class VolumeReconstructor::Impl {
         if (!saved[v]) saved[v] = 1, kept.emplace_back(v, s.P[v]);
       const bool converged = local_polish(set, s, s.amplitude, tol, st, 1, damping);
       update_volumes(F, s, set.faces, V);
+      if (opt_.local_polish_max_motion > 0) {
+        // local_polish_max_motion: a patch fixing a checkerboard by ripples is undone.
+        const double bound = opt_.local_polish_max_motion * rest_diagonal_;
+        double moved = 0.0;
+        for (const auto& [v, p] : kept) moved = std::max(moved, (s.P[v] - p).squaredNorm());
+        if (!(moved <= bound * bound)) break;
+      }
       if (converged) return true;
       const std::size_t before = off.size();
       above_tolerance(F, s.amplitude, V, tol, off);
@@ -1673,6 +1681,7 @@ class VolumeReconstructor::Impl {
   // The other preset's solver (ReconstructOptions::fallback_schedule), built on first use.
   mutable std::unique_ptr<Impl> fallback_;
   double setup_seconds_ = 0.0;
+  double rest_diagonal_ = 0.0;  // the rest detail's bounding-box diagonal
   // The solver's threads (ReconstructOptions::threads); null: the calling thread only.
   std::unique_ptr<tbb::task_arena> arena_;
 };

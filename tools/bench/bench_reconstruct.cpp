@@ -532,6 +532,7 @@ int main(int argc, char** argv) {
             {"fold_repair_sweeps", ro.fold_repair_sweeps},
             {"local_polish_max_fraction", ro.local_polish_max_fraction},
             {"local_polish_rings", ro.local_polish_rings},
+            {"local_polish_max_motion", ro.local_polish_max_motion},
             {"fold_repair_max_fraction", ro.fold_repair_max_fraction},
             {"regularization_iterations", ro.regularization_iterations},
             {"coarse_regularization_iterations", ro.coarse_regularization_iterations},
