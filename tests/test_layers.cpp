@@ -405,6 +405,9 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.multigrid.iterations = 7;
   o.reconstruct.multigrid.smoothness = 0.03;
   o.reconstruct.multigrid.polish_damping = 2e-8;
+  o.reconstruct.multigrid.single_precision_cycles = false;
+  o.reconstruct.local_polish_rings = 3;
+  o.reconstruct.local_polish_max_motion = 5e-3;
   model.set_options(o);
   test::ScratchDir tmp("strata_layers");
   const std::string path = tmp.file("mg.strata");
@@ -423,6 +426,14 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.coarsest_max_cycles, o.reconstruct.coarsest_max_cycles);
   EXPECT_GT(back.coarsest_max_cycles, 0);
   EXPECT_TRUE(back.retry_other_regularization);
+  // The local end's and the multigrid retry's options too (not written before 2026-11-27).
+  EXPECT_EQ(back.local_polish_max_fraction, o.reconstruct.local_polish_max_fraction);
+  EXPECT_GT(back.local_polish_max_fraction, 0.0);
+  EXPECT_EQ(back.local_polish_rings, 3);
+  EXPECT_EQ(back.local_polish_max_motion, 5e-3);
+  EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
+  EXPECT_GT(back.multigrid.retry_iterations, 0);
+  EXPECT_FALSE(back.multigrid.single_precision_cycles);
 
   const layers::StrataContainer c = layers::read_strata_container(path);
   // A file written before retry_other_regularization existed solves as it did then: without it.
@@ -434,6 +445,28 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     old.model_json = j.dump();
     layers::write_strata_container(old, tmp.file("old.strata"));
     EXPECT_FALSE(layers::read_model(tmp.file("old.strata")).options().reconstruct.retry_other_regularization);
+  }
+  // A file written before the local end's options were stored reads the defaults, as it did then.
+  {
+    layers::StrataContainer old = c;
+    nlohmann::json j = nlohmann::json::parse(old.model_json);
+    for (const char* key : {"local_polish_max_fraction", "local_polish_rings", "local_polish_max_motion"}) {
+      ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
+      j["options"]["reconstruct"].erase(key);
+    }
+    for (const char* key : {"retry_iterations", "single_precision_cycles"}) {
+      ASSERT_TRUE(j["options"]["reconstruct"]["multigrid"].contains(key)) << key;
+      j["options"]["reconstruct"]["multigrid"].erase(key);
+    }
+    old.model_json = j.dump();
+    layers::write_strata_container(old, tmp.file("older.strata"));
+    const ReconstructOptions read = layers::read_model(tmp.file("older.strata")).options().reconstruct;
+    const ReconstructOptions defaults;
+    EXPECT_EQ(read.local_polish_max_fraction, defaults.local_polish_max_fraction);
+    EXPECT_EQ(read.local_polish_rings, defaults.local_polish_rings);
+    EXPECT_EQ(read.local_polish_max_motion, defaults.local_polish_max_motion);
+    EXPECT_EQ(read.multigrid.retry_iterations, defaults.multigrid.retry_iterations);
+    EXPECT_EQ(read.multigrid.single_precision_cycles, defaults.multigrid.single_precision_cycles);
   }
   layers::StrataContainer bad = c;
   nlohmann::json m = nlohmann::json::parse(bad.model_json);

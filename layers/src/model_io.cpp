@@ -85,6 +85,9 @@ json options_json(const ModelOptions& o) {
             {"level_tolerance", r.level_tolerance},
             {"tolerance", r.tolerance},
             {"max_final_steps", r.max_final_steps},
+            {"local_polish_max_fraction", r.local_polish_max_fraction},
+            {"local_polish_rings", r.local_polish_rings},
+            {"local_polish_max_motion", r.local_polish_max_motion},
             {"min_length_fraction", r.min_length_fraction},
             {"fixed_point_tolerance", r.fixed_point_tolerance},
             {"step_solver", solver_name(r.step_solver)},
@@ -100,7 +103,9 @@ json options_json(const ModelOptions& o) {
               {"polish_iterations", r.multigrid.polish_iterations},
               {"polish_tolerance", r.multigrid.polish_tolerance},
               {"polish_damping", r.multigrid.polish_damping},
-              {"polish_smoothness", r.multigrid.polish_smoothness}}}}},
+              {"polish_smoothness", r.multigrid.polish_smoothness},
+              {"retry_iterations", r.multigrid.retry_iterations},
+              {"single_precision_cycles", r.multigrid.single_precision_cycles}}}}},
           {"projection",
            {{"seed_resolution", o.projection.seed_resolution},
             {"max_iterations", o.projection.max_iterations},
@@ -219,6 +224,13 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.level_tolerance = h.number(r, "level_tolerance", wr);
   ro.tolerance = h.number(r, "tolerance", wr);
   ro.max_final_steps = static_cast<int>(h.integer(r, "max_final_steps", wr, 0, 100000));
+  // The local end's options were not written before 2026-11-27 (ninth session): such files read
+  // as they did then, with the defaults (no local end).
+  if (r.contains("local_polish_max_fraction"))
+    ro.local_polish_max_fraction = h.number(r, "local_polish_max_fraction", wr);
+  ro.local_polish_rings = optional_count("local_polish_rings", ro.local_polish_rings);
+  if (r.contains("local_polish_max_motion"))
+    ro.local_polish_max_motion = h.number(r, "local_polish_max_motion", wr);
   ro.min_length_fraction = h.number(r, "min_length_fraction", wr);
   ro.fixed_point_tolerance = h.number(r, "fixed_point_tolerance", wr);
   auto solver = [&](const char* key, bool cycle_steps) {
@@ -246,6 +258,11 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
     mo.polish_tolerance = h.number(mg, "polish_tolerance", wm);
     mo.polish_damping = h.number(mg, "polish_damping", wm);
     mo.polish_smoothness = h.number(mg, "polish_smoothness", wm);
+    // Not written before 2026-11-27 (ninth session): such files read the defaults, as they did.
+    if (mg.contains("retry_iterations"))
+      mo.retry_iterations = static_cast<int>(h.integer(mg, "retry_iterations", wm, 0, 1000000));
+    if (mg.contains("single_precision_cycles"))
+      mo.single_precision_cycles = h.boolean(mg, "single_precision_cycles", wm);
   }
   const json& p = h.at(j, "projection", w);
   const std::string wp = "options.projection";
