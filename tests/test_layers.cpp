@@ -430,6 +430,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.local_polish_max_fraction, o.reconstruct.local_polish_max_fraction);
   EXPECT_GT(back.local_polish_max_fraction, 0.0);
   EXPECT_EQ(back.local_polish_rings, 3);
+  EXPECT_FALSE(back.finest_intermediate_solves);  // the preset's
   EXPECT_EQ(back.local_polish_max_motion, 5e-3);
   EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
   EXPECT_GT(back.multigrid.retry_iterations, 0);
@@ -450,7 +451,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
-    for (const char* key : {"local_polish_max_fraction", "local_polish_rings", "local_polish_max_motion"}) {
+    for (const char* key : {"local_polish_max_fraction", "local_polish_rings", "local_polish_max_motion",
+                            "finest_intermediate_solves"}) {
       ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
       j["options"]["reconstruct"].erase(key);
     }
@@ -463,6 +465,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     const ReconstructOptions read = layers::read_model(tmp.file("older.strata")).options().reconstruct;
     const ReconstructOptions defaults;
     EXPECT_EQ(read.local_polish_max_fraction, defaults.local_polish_max_fraction);
+    EXPECT_TRUE(read.finest_intermediate_solves);
     EXPECT_EQ(read.local_polish_rings, defaults.local_polish_rings);
     EXPECT_EQ(read.local_polish_max_motion, defaults.local_polish_max_motion);
     EXPECT_EQ(read.multigrid.retry_iterations, defaults.multigrid.retry_iterations);

@@ -64,6 +64,7 @@ json options_json(const ModelOptions& o) {
             {"coarsening_ratio", r.coarsening_ratio},
             {"volume_iterations", r.volume_iterations},
             {"finest_volume_iterations", r.finest_volume_iterations},
+            {"finest_intermediate_solves", r.finest_intermediate_solves},
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
             {"fallback_schedule", r.fallback_schedule},
@@ -181,6 +182,9 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("finest_volume_iterations")
           ? static_cast<int>(h.integer(r, "finest_volume_iterations", wr, 1, 100000))
           : ro.volume_iterations;
+  // Files written before 2026-11-27 (ninth session) solved the finest level at every scale.
+  ro.finest_intermediate_solves =
+      !r.contains("finest_intermediate_solves") || h.boolean(r, "finest_intermediate_solves", wr);
   // Files written before the option existed did not retry.
   ro.retry_volume_iterations = r.contains("retry_volume_iterations")
                                    ? static_cast<int>(h.integer(r, "retry_volume_iterations", wr, 0, 100000))

@@ -36,6 +36,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"fold_repair_rings", &o.fold_repair_rings},
           {"fold_repair_sweeps", &o.fold_repair_sweeps},
           {"finest_volume_iterations", &o.finest_volume_iterations},
+          {"finest_intermediate_solves", &o.finest_intermediate_solves},
           {"regularization_iterations", &o.regularization_iterations},
           {"coarse_regularization_iterations", &o.coarse_regularization_iterations},
           {"coarsest_regularization_iterations", &o.coarsest_regularization_iterations},

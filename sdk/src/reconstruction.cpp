@@ -1106,7 +1106,11 @@ class VolumeReconstructor::Impl {
       // down as a whole: pinned at full height next to free vertices at the clean start would
       // make steep walls at the border of the solved part, which fold.
       place_pinned(s, t);
-      multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, false, st, V);
+      // finest_intermediate_solves: the finest level's volumes at the full scale only.
+      const bool coarse_only = !opt_.finest_intermediate_solves && sc + 1 < k;
+      multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, coarse_only, st,
+                     V);
+      if (coarse_only) st.finest_cycles_per_scale.push_back(0);
       report("reconstruct", static_cast<double>(sc + 1) / k);
     }
     s.clean_start = false;
@@ -1698,6 +1702,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.coarsest_regularization_iterations = 200;
   o.coarsest_max_cycles = 10;
   o.volume_iterations = 1;
+  o.finest_intermediate_solves = false;
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.25;
   o.multigrid.retry_iterations = 20;

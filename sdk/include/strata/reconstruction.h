@@ -172,6 +172,15 @@ struct ReconstructOptions {
   //! full scale and the polish reach the tolerance); more steps cost time (measured on the 100k
   //! bends: 5 steps take about 1.6 times as long, with the same intersection counts).
   int finest_volume_iterations = 1;
+  //! Whether the intermediate volume scales solve the finest level's volumes. false: there the
+  //! finest level only follows the coarse levels' solution (prolongation, then m regularization
+  //! sweeps, as in a warm start's coarse_levels_only), and its volumes are solved at the full scale
+  //! alone (ReconstructStats::finest_cycles_per_scale is 0 at the others). The multigrid preset
+  //! takes false: the coarse levels' scales are what keeps the detail from folding, and the
+  //! finest level's cycles at the intermediate scales took about a third of the solve (on the
+  //! scan-like 100k bends, jitter 0.4: 1.56 / 1.65 / 1.95 s -> 1.24 / 1.07 / 1.47 s, bumps / rings
+  //! / cuboid, 0 new pairs either way; see sdk/docs/engine-log.md, 2026-11-27, ninth session).
+  bool finest_intermediate_solves = true;
   //! m: regularization sweeps per cycle on the finest level.
   int regularization_iterations = 2;
   //! m on the coarse levels of the clean-start solve (cheap there: a quarter of the vertices and
