@@ -178,8 +178,9 @@ struct ReconstructOptions {
   //! alone (ReconstructStats::finest_cycles_per_scale is 0 at the others). The multigrid preset
   //! takes false: the coarse levels' scales are what keeps the detail from folding, and the
   //! finest level's cycles at the intermediate scales took about a third of the solve (on the
-  //! scan-like 100k bends, jitter 0.4: 1.56 / 1.65 / 1.95 s -> 1.24 / 1.07 / 1.47 s, bumps / rings
-  //! / cuboid, 0 new pairs either way; see sdk/docs/engine-log.md, 2026-11-27, ninth session).
+  //! scan-like 100k bends, jitter 0.4, medians of three: 1.88 / 1.85 / 2.57 s -> 1.28 / 1.35 /
+  //! 1.79 s, bumps / rings / cuboid, 0 new pairs either way; see sdk/docs/engine-log.md,
+  //! 2026-11-27, ninth session).
   bool finest_intermediate_solves = true;
   //! m: regularization sweeps per cycle on the finest level.
   int regularization_iterations = 2;
