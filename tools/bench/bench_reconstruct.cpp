@@ -63,13 +63,13 @@ double cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// The median of \p v (the mean of the middle two for an even count); v is not empty.
 // The multigrid passes (volume scales) that solve the finest level's volume constraints: the
 // throughput counts those, not the intermediate scales' coarse-level-only passes.
 int finest_passes(const ReconstructOptions& o) {
   return o.finest_intermediate_solves ? o.volume_scales : 1;
 }
 
+// The median of \p v (the mean of the middle two for an even count); v is not empty.
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
