@@ -177,7 +177,7 @@ struct ReconstructOptions {
   //! sweeps, as in a warm start's coarse_levels_only), and its volumes are solved at the full scale
   //! alone (ReconstructStats::finest_cycles_per_scale is 0 at the others). The multigrid preset
   //! takes false: the coarse levels' scales are what keeps the detail from folding, and the
-  //! finest level's cycles at the intermediate scales took about a third of the solve (on the
+  //! finest level's cycles at the intermediate scales took 27-32% of the solve (on the
   //! scan-like 100k bends, jitter 0.4, medians of three: 1.88 / 1.85 / 2.57 s -> 1.28 / 1.35 /
   //! 1.79 s, bumps / rings / cuboid, 0 new pairs either way; see sdk/docs/engine-log.md,
   //! 2026-11-27, ninth session).
@@ -260,8 +260,9 @@ struct ReconstructOptions {
   //! base the preset brought the regular cuboid at 60k-160k prisms back 0.61-1.56% of the diagonal
   //! off (the acceptance: 0.5%): a ripple of about 20 vertices at a corner column, after rounds
   //! that moved them by up to 1.5% of the diagonal; with this bound 0.18-0.22%. The scan-like
-  //! bends' local ends move less: 0.26% on the 100k bumps, 0.29% on the 1M bumps (jitter 0.4),
-  //! which the default keeps. 0: no bound (as before 2026-11-27, ninth session).
+  //! bends' local ends move less, and the default keeps them: 0.33% of the diagonal on the 100k
+  //! bumps, 0.20-0.37% on the 1M bumps (jitter 0.4; measured with the finest level solved at
+  //! every scale). 0: no bound (as before 2026-11-27, ninth session).
   double local_polish_max_motion = 4e-3;
   //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
   //! filter's ratio d_i / f_i, which is undefined at f = 0.
@@ -337,6 +338,9 @@ struct ReconstructStats {
   int regularization_sweeps = 0;    //!< regularization sweeps over all levels and scales
   int cycles = 0;                   //!< cycles (volume steps + regularization) over all levels and scales
   int final_sweeps = 0;             //!< exact Gauss-Newton polish steps on the finest level
+  //! Cycles on the finest level per multigrid pass (a clean start's volume scales, retries
+  //! appending theirs; a warm start's one pass); 0 where a clean start's intermediate scale did not
+  //! solve it (ReconstructOptions::finest_intermediate_solves false).
   std::vector<int> finest_cycles_per_scale;
   double max_relative_error = 0.0;  //!< on the finest level at the end
   double rms_relative_error = 0.0;
