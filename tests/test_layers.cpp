@@ -407,7 +407,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.multigrid.polish_damping = 2e-8;
   o.reconstruct.multigrid.single_precision_cycles = false;
   o.reconstruct.local_polish_rings = 3;
-  o.reconstruct.local_polish_max_motion = 5e-3;
+  o.reconstruct.local_polish_max_motion = 6e-3;
   model.set_options(o);
   test::ScratchDir tmp("strata_layers");
   const std::string path = tmp.file("mg.strata");
@@ -431,7 +431,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_GT(back.local_polish_max_fraction, 0.0);
   EXPECT_EQ(back.local_polish_rings, 3);
   EXPECT_FALSE(back.finest_intermediate_solves);  // the preset's
-  EXPECT_EQ(back.local_polish_max_motion, 5e-3);
+  EXPECT_EQ(back.local_polish_max_motion, 6e-3);
   EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
   EXPECT_GT(back.multigrid.retry_iterations, 0);
   EXPECT_FALSE(back.multigrid.single_precision_cycles);

@@ -312,51 +312,53 @@ TEST(MultigridPreset, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
   }
 }
 
-// ReconstructOptions::local_polish_max_motion: over the unedited base the preset's local end
-// fixed the regular 60k cuboid's last off prisms (a checkerboard at a corner column) by rippling a
-// patch, round after round, and came back 0.61% of the diagonal off, over the acceptance's 0.5%;
-// bounded, the rounds are undone and the whole-level steps bring it back within 0.18%.
-TEST(MultigridPreset, ALocalEndThatRipplesIsUndone) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Cuboid;
-  o.target_detail_triangles = 60000;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  const double diagonal = bbox_diagonal(c.detail.vertices);
-  ReconstructOptions ro = multigrid_reconstruct_options();
-  ASSERT_EQ(ro.local_polish_max_motion, 4e-3);  // the default
-  // The schedule that rippled this case (the finest level solved at the intermediate scales too;
-  // without them this case's local end does not ripple: 0.19% of the diagonal unbounded).
-  ro.finest_intermediate_solves = true;
-  ReconstructOptions unbounded = ro;
-  unbounded.local_polish_max_motion = 0.0;
-  const ReconstructResult before = VolumeReconstructor(e, unbounded).reconstruct(c.base.vertices);
-  const ReconstructResult after = VolumeReconstructor(e, ro).reconstruct(c.base.vertices);
-  ASSERT_TRUE(before.stats.converged);
-  ASSERT_TRUE(after.stats.converged);
-  EXPECT_EQ(before.stats.local_ends_undone, 0);
-  EXPECT_GT(test::max_distance(before.positions, c.detail.vertices), 0.005 * diagonal);
-  EXPECT_GE(after.stats.local_ends_undone, 1);
-  EXPECT_LE(test::max_distance(after.positions, c.detail.vertices), 0.005 * diagonal);
-  EXPECT_EQ(find_self_intersections(after.positions, c.detail.faces).num_pairs, 0u);
-}
-
 // The paper's bumps over a scan-like triangulation (12k prisms, jitter 0.4), encoded, and the
 // base frames of its bend: the local-end tests' case.
 namespace {
 struct ScanLikeBumps {
-  cases::CylinderCase c = make();
-  DetailEncoding e = encode_detail(c.detail, c.base);
-  BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  explicit ScanLikeBumps(int triangles = 12000)
+      : c(make(triangles)),
+        e(encode_detail(c.detail, c.base)),
+        fr(evaluate_base_frames(e, c.edited_base.vertices)) {}
+  cases::CylinderCase c;
+  DetailEncoding e;
+  BaseFrames fr;
 
-  static cases::CylinderCase make() {
+  static cases::CylinderCase make(int triangles) {
     cases::CylinderCaseOptions o;
     o.detail = cases::DetailKind::Bumps;
-    o.target_detail_triangles = 12000;
+    o.target_detail_triangles = triangles;
     o.jitter = 0.4;
     return cases::make_cylinder_case(o);
   }
 };
+
+// ReconstructOptions::local_polish_max_motion: a local end whose rounds move a vertex farther than
+// the bound is undone, and the whole-level steps finish the polish. The bound was made for a
+// regular 60k cuboid whose local end rippled a patch (0.61% of the diagonal off over the unedited
+// base); since the decimation's order changed (2026-11-27, tenth session) no regular cuboid of
+// 20k-110k prisms ripples, so the contract is checked here with a bound that every local end of the
+// 12k scan-like bend exceeds (measured: 2 local ends, both undone; unbounded, 1 kept).
+TEST(MultigridPreset, ALocalEndThatMovesTooFarIsUndone) {
+  const ScanLikeBumps b;
+  ReconstructOptions ro = multigrid_reconstruct_options();
+  ro.threads = 1;
+  ro.local_polish_max_motion = 0.0;  // no bound
+  const ReconstructResult kept = VolumeReconstructor(b.e, ro).reconstruct(b.c.edited_base.vertices);
+  ASSERT_TRUE(kept.stats.converged);
+  EXPECT_GE(kept.stats.local_ends, 1);
+  EXPECT_EQ(kept.stats.local_ends_undone, 0);
+  ro.local_polish_max_motion = 1e-9;  // of the diagonal: any motion at all
+  const ReconstructResult r = VolumeReconstructor(b.e, ro).reconstruct(b.c.edited_base.vertices);
+  ASSERT_TRUE(r.stats.converged);
+  EXPECT_GE(r.stats.local_ends, 1);
+  EXPECT_EQ(r.stats.local_ends_undone, r.stats.local_ends);
+  const VolumeMetrics m = volume_metrics(b.e, b.fr, r.positions);
+  EXPECT_LE(m.max_relative_error, ro.tolerance * (1 + 1e-9));
+  EXPECT_NEAR(r.stats.max_relative_error, m.max_relative_error, 1e-9 * ro.tolerance);
+  EXPECT_EQ(r.stats.new_intersecting_pairs, 0);
+  EXPECT_EQ(find_self_intersections(r.positions, b.c.detail.faces).num_pairs, 0u);
+}
 
 // The paper's cuboid over its regular triangulation, at about \p triangles prisms, encoded: the
 // cases where the preset's polish stalls or its first attempt folds.
@@ -443,21 +445,22 @@ TEST(MultigridBend, ThePolishsLocalEndMeetsTheToleranceWithFewerIterations) {
 // whole-level steps going on from the positions before it. Every run converges without new pairs,
 // and the error the solver reports is the one of the positions it returns.
 TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
-  const ScanLikeBumps b;
-  const cases::CylinderCase& c = b.c;
-  const DetailEncoding& e = b.e;
-  const BaseFrames& fr = b.fr;
-  const double prisms = static_cast<double>(c.detail.faces.size());
-  auto run = [&](const ReconstructOptions& ro) {
-    const ReconstructResult r = VolumeReconstructor(e, ro).reconstruct(c.edited_base.vertices);
-    const VolumeMetrics m = volume_metrics(e, fr, r.positions);
+  // The branches below depend on the case (and on the hierarchy's coarse levels): since the
+  // decimation's order changed (2026-11-27, tenth session) the 12k bend reaches neither a local end
+  // at the 0.02 limit nor an undone one-round end, the 11k bend reaches all but the latter, and the
+  // 14k bend reaches that one.
+  const ScanLikeBumps b(11000), b14(14000);
+  auto run = [&](const ReconstructOptions& ro, const ScanLikeBumps& sb) {
+    const ReconstructResult r = VolumeReconstructor(sb.e, ro).reconstruct(sb.c.edited_base.vertices);
+    const VolumeMetrics m = volume_metrics(sb.e, sb.fr, r.positions);
     EXPECT_TRUE(r.stats.converged);
     EXPECT_LE(m.max_relative_error, ro.tolerance * (1 + 1e-9));
     EXPECT_NEAR(r.stats.max_relative_error, m.max_relative_error, 1e-9 * ro.tolerance);
-    EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u);
+    EXPECT_EQ(find_self_intersections(r.positions, sb.c.detail.faces).num_pairs, 0u);
     EXPECT_LE(r.stats.local_ends_undone, r.stats.local_ends);
     return r.stats;
   };
+  const double prisms = static_cast<double>(b.c.detail.faces.size());
   // The preset before the rest Laplacian, whose polish the counts below were measured on: the
   // contract does not depend on it, but which branches a case reaches does (with the current
   // preset no local end happens at the 0.02 limit and none is undone).
@@ -467,26 +470,27 @@ TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
     SCOPED_TRACE(fraction);
     ReconstructOptions ro = base;
     ro.local_polish_max_fraction = fraction;
-    const ReconstructStats st = run(ro);
+    const ReconstructStats st = run(ro, b);
     EXPECT_GE(st.local_ends, 1);
     EXPECT_GT(st.max_local_end_prisms, 0);
     EXPECT_LE(static_cast<double>(st.max_local_end_prisms), fraction * prisms);
   }
-  // One round a local end (measured: its 1,449-prism round leaves prisms above the tolerance):
-  // undone, and the factorized whole-level steps finish.
+  // One round a local end (measured on the 14k bend: 2 local ends, both undone, 2 local and 5
+  // factorizations in all): undone, and the factorized whole-level steps finish.
   ReconstructOptions one_round = base;
   one_round.max_final_steps = 1;
-  const ReconstructStats st1 = run(one_round);
+  const ReconstructStats st1 = run(one_round, b14);
   EXPECT_GE(st1.local_ends_undone, 1);
   EXPECT_GE(st1.local_factorizations, 1);
   EXPECT_GT(st1.factorizations, st1.local_factorizations);
-  // Without rings around the off prisms, the first local end stalls (measured: 66, 21, 19, 19, 19
-  // prisms off after its rounds) and is undone after two rounds without progress, not after all
-  // max_final_steps of them (eleven local factorizations in all without that rule); a later one,
-  // tried once the whole-level steps have halved the off prisms, finishes.
+  // Without rings around the off prisms, the first local end fails and is undone, not after all
+  // max_final_steps rounds (measured on the 11k bend: after one round, its second round's system
+  // being over the limit; on the 12k bend before the decimation's order changed, after two rounds
+  // without fewer prisms off); a later one, tried once the whole-level steps have halved the off
+  // prisms, finishes (2 local ends, 2 local factorizations in all).
   ReconstructOptions no_rings = base;
   no_rings.local_polish_rings = 0;
-  const ReconstructStats st0 = run(no_rings);
+  const ReconstructStats st0 = run(no_rings, b);
   EXPECT_GE(st0.local_ends_undone, 1);
   EXPECT_GT(st0.local_ends, st0.local_ends_undone);
   EXPECT_EQ(st0.factorizations, st0.local_factorizations);

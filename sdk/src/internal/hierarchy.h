@@ -30,7 +30,9 @@ struct HierarchyOptions {
 };
 
 //! Decimates (positions, faces) by shortest-edge-first half-edge collapses that keep the mesh
-//! manifold, boundaries in place and face normals from flipping.
+//! manifold, boundaries in place and face normals from flipping; equally long edges in a fixed
+//! pseudo-random order. Each level keeps about `ratio` of the finer level's vertices; it stops at
+//! max_levels, below coarsest_vertices, or when the collapses stall. Deterministic.
 Hierarchy build_hierarchy(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
                           const HierarchyOptions& options);
 
