@@ -1242,7 +1242,9 @@ class VolumeReconstructor::Impl {
         relative_error(L, s.amplitude, V, nullptr) <= tol)
       return;
     // A multigrid polish that stalls (its linear solves leave what the hierarchy does not
-    // represent, as a regular grid's checkerboard modes) is finished by factorized steps.
+    // represent, as a regular grid's checkerboard modes) is finished by factorized steps. The
+    // multigrid's arrays go first, as before a local end: the factorization sets the peak.
+    release_step_scratch(s.gn);
     ensure_factorizable(L);
     s.gn.damping = kMinDamping;
     st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Factorized, st, V);
