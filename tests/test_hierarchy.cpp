@@ -93,7 +93,7 @@ void check_hierarchy(const TriMesh& mesh, const internal::HierarchyOptions& o) {
     }
     EXPECT_EQ(present, verts);
   }
-  // Deterministic: the same input gives the same hierarchy.
+  // Deterministic: the same input gives the same hierarchy (the queue's ties go by a fixed order).
   const Hierarchy again = internal::build_hierarchy(mesh.vertices, mesh.faces, o);
   ASSERT_EQ(again.levels.size(), h.levels.size());
   for (std::size_t l = 0; l < h.levels.size(); ++l) {
@@ -112,7 +112,6 @@ TriMesh tube(double jitter, int triangles) {
   return cases::make_cylinder_case(o).detail;
 }
 
-// The regular grid: its equally long edges are collapsed in a scrambled order, not row by row.
 TEST(Hierarchy, RegularTubeLevelsAreNestedManifoldAndOfTheInputsTopology) {
   internal::HierarchyOptions o;
   o.coarsest_vertices = 100;

@@ -390,9 +390,9 @@ TEST(Reconstruction, ThreadCountDoesNotChangeTheResult) {
 TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   // The cold solve stops its regularization once it barely moves (with a decayed weight); a warm
   // restart regularizes a little further, so it stays close but not bitwise at the start. How far
-  // depends on the hierarchy's coarse levels: measured at 2k-12k prisms, 0.9-2.2% of the diagonal
-  // (1.1% at 3k before the decimation's order changed on 2026-11-27, tenth session, and 2.2% at
-  // 4k), so the bound is 3%.
+  // depends on the hierarchy's coarse levels: measured at 2k-12k prisms, 0.9-2.2% of the diagonal;
+  // at this 3k case 2.2% (1.1% before the decimation's order changed on 2026-11-27, tenth session;
+  // that hierarchy reached 2.2% at 4k), so the bound is 3%.
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
   const VolumeReconstructor rec(encode_detail(c.detail, c.base));
   const ReconstructResult a = rec.reconstruct(c.edited_base.vertices);

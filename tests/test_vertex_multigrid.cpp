@@ -312,8 +312,8 @@ TEST(MultigridPreset, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
   }
 }
 
-// The paper's bumps over a scan-like triangulation (12k prisms, jitter 0.4), encoded, and the
-// base frames of its bend: the local-end tests' case.
+// The paper's bumps over a scan-like triangulation (jitter 0.4; 12k prisms unless given), encoded,
+// and the base frames of its bend: the local-end tests' cases.
 namespace {
 struct ScanLikeBumps {
   explicit ScanLikeBumps(int triangles = 12000)
@@ -495,6 +495,17 @@ TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
   EXPECT_GT(st0.local_ends, st0.local_ends_undone);
   EXPECT_EQ(st0.factorizations, st0.local_factorizations);
   EXPECT_LT(st0.local_factorizations, no_rings.max_final_steps);
+  // The stall rule alone: with no size limit (fraction 1), no motion bound and no rings, a local
+  // end that leaves as many prisms off two rounds in a row is undone before max_final_steps rounds
+  // (measured on the 11k bend: 4 local ends, 3 undone, 23 local factorizations in all). Each round
+  // is one local factorization, so fewer of them than undone ends times max_final_steps means that
+  // some undone end stopped early, which nothing but the stall rule does here.
+  ReconstructOptions stall = no_rings;
+  stall.local_polish_max_fraction = 1.0;
+  stall.local_polish_max_motion = 0.0;
+  const ReconstructStats sts = run(stall, b);
+  ASSERT_GE(sts.local_ends_undone, 1);
+  EXPECT_LT(sts.local_factorizations, sts.local_ends_undone * stall.max_final_steps);
 }
 
 // A multigrid polish that ends above the tolerance (its linear solves leave what the hierarchy does

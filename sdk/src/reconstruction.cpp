@@ -1311,7 +1311,8 @@ class VolumeReconstructor::Impl {
       above_tolerance(F, s.amplitude, V, tol, off);
       if (off.empty()) return true;
       // Two rounds in a row without fewer prisms off: the rest would not do better (measured
-      // without rings, local_polish_rings = 0, on the 12k bumps: eight more rounds at 19 off).
+      // without rings, local_polish_rings = 0, on the 12k bumps with the hierarchy before
+      // 2026-11-27, tenth session: eight more rounds at 19 off).
       stalled = off.size() < before ? 0 : stalled + 1;
       if (stalled == 2) break;
     }

@@ -263,10 +263,10 @@ struct ReconstructOptions {
   //! 1.5% of the diagonal; with a bound of 0.4%, 0.18-0.22% (measured with the hierarchy before
   //! 2026-11-27, tenth session). The scan-like bends' local ends move less, and are kept: 0.33% of
   //! the diagonal on the 100k bumps, 0.20-0.37% on the 1M bumps then; with the current hierarchy
-  //! 0.37-0.46% on the 1M bumps (jitter 0.4), which the 0.4% bound undid (the polish 9.3 s; with
-  //! 0.5% the local end is kept and the polish takes 2.6 s), hence 0.5%. With it the regular cuboid's round
-  //! trip is within 0.10-0.48% at 20k-200k prisms (the 160k: 0.48%, 0.19% with the 0.4% bound). 0: no bound
-  //! (as before 2026-11-27, ninth session).
+  //! 0.40 and 0.46% (the largest of each local end) on the 1M bumps (jitter 0.4), which the 0.4% bound undid
+  //! (the polish 9.3 s; with 0.5% the local end is kept and the polish takes 2.6 s), hence 0.5%. With it the
+  //! regular cuboid's round trip is within 0.10-0.48% at 20k-200k prisms (the 160k: 0.48%, 0.19% with the
+  //! 0.4% bound). 0: no bound (as before 2026-11-27, ninth session).
   double local_polish_max_motion = 5e-3;
   //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
   //! filter's ratio d_i / f_i, which is undefined at f = 0.
@@ -308,7 +308,8 @@ struct ReconstructOptions {
 //! triangulations 1.3-1.6 s and 932 bytes per prism (bumps), where the defaults take 5-7 s and
 //! 2 KB; 0 new pairs on the regular and scan-like bends at 20k, 50k and 100k (the regular cuboid
 //! at 100k after two retries, 30 s); an unedited base's round trip within 0.07-0.34% of the
-//! diagonal at 5k-100k (0.4-1.4% at 100k with the rest offsets and 8 coarsest sweeps). On regular
+//! diagonal at 5k-100k (0.4-1.4% at 100k with the rest offsets and 8 coarsest sweeps); with the
+//! hierarchy of 2026-11-27, tenth session, the cuboid's within 0.10-0.48% at 20k-200k. On regular
 //! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
 //! outcomes are erratic from mesh to mesh (sdk/docs/engine-log.md).
 ReconstructOptions multigrid_reconstruct_options();

@@ -54,10 +54,13 @@ class Decimator {
   void decimate_to(int target, std::vector<int>& removed, std::vector<int>& ring_offsets,
                    std::vector<int>& rings) {
     while (live_ > target && !heap_.empty()) {
-      // A live edge has one current entry: about 3 per live vertex. The rest are deleted edges'
-      // and stale lengths' entries, which are dropped once they would double the heap: popping
-      // them one by one from a heap of millions took longer than the collapses.
-      if (heap_.size() > 6 * static_cast<std::size_t>(live_)) prune();
+      // A live edge has one current entry (rarely a duplicate): about 3 per live vertex. The rest
+      // are deleted edges' and stale lengths' entries, which are dropped once they would double the heap:
+      // popping them one by one from a heap of millions took longer than the collapses.
+      if (heap_.size() > 6 * static_cast<std::size_t>(live_)) {
+        prune();
+        if (heap_.empty()) break;
+      }
       std::pop_heap(heap_.begin(), heap_.end());
       const Entry e = heap_.back();
       heap_.pop_back();
