@@ -102,6 +102,7 @@ struct GnScratch {
   double damping = kMinDamping;  // of the exact steps, adapted step by step
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   int mg_iterations = 0;         // multigrid cycle steps' iterations; 0: MultigridStepOptions::iterations
+  double motion = 0.0;           // the last step's largest vertex move (0 if it was undone)
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag;
@@ -1223,15 +1224,17 @@ class VolumeReconstructor::Impl {
       // After a local end that failed (its rounds undone), the next is tried only once the off
       // prisms are at most half as many: each attempt costs up to max_final_steps factorizations.
       double retry_below = limit;
+      double whole_motion = 0.0;  // the last whole-level step's largest vertex move
       for (std::vector<int> off;; ++steps) {
         above_tolerance(L, s.amplitude, V, tol, off);
         if (off.empty() || !(scale > 0)) break;
         if (static_cast<double>(off.size()) <= retry_below) {
-          if (finish_locally(off, s, tol, st, V)) break;
+          if (finish_locally(off, s, tol, whole_motion, st, V)) break;
           retry_below = 0.5 * static_cast<double>(off.size());
         }
         if (steps == opt_.max_final_steps) break;
         gauss_newton_step(L, s, s.amplitude, StepSolve::Exact, st, V);
+        whole_motion = s.gn.motion;
       }
       st.volume_sweeps += steps;
       st.final_sweeps += steps;
@@ -1268,8 +1271,9 @@ class VolumeReconstructor::Impl {
   // tolerance holds on every prism that has a free vertex (prisms whose three vertices are pinned
   // cannot move, here or in a whole-level step); if not, or if a round's system would have more
   // than local_polish_max_fraction of the level's prisms, the positions are as on entry. V: the
-  // volumes of the positions left.
-  bool finish_locally(std::vector<int> off, State& s, double tol, ReconstructStats& st,
+  // volumes of the positions left. \p whole_motion: the largest vertex move of the polish's last
+  // whole-level step (0 if none), which raises the local_polish_max_motion bound to itself.
+  bool finish_locally(std::vector<int> off, State& s, double tol, double whole_motion, ReconstructStats& st,
                       std::vector<double>& V) const {
     const Level& F = levels_.back();
     const auto max_prisms = static_cast<std::size_t>(opt_.local_polish_max_fraction * F.faces.size());
@@ -1300,8 +1304,9 @@ class VolumeReconstructor::Impl {
       const bool converged = local_polish(set, s, s.amplitude, tol, st, 1, damping);
       update_volumes(F, s, set.faces, V);
       if (opt_.local_polish_max_motion > 0) {
-        // local_polish_max_motion: a patch fixing a checkerboard by ripples is undone.
-        const double bound = opt_.local_polish_max_motion * rest_diagonal_;
+        // local_polish_max_motion: a patch fixing a checkerboard by ripples is undone, unless the
+        // last whole-level step moved a vertex as far (the step the local end stands in for).
+        const double bound = std::max(opt_.local_polish_max_motion * rest_diagonal_, whole_motion);
         double moved = 0.0;
         for (const auto& [v, p] : kept) moved = std::max(moved, (s.P[v] - p).squaredNorm());
         if (!(moved <= bound * bound)) break;
@@ -1474,6 +1479,10 @@ class VolumeReconstructor::Impl {
       for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
       ++st.step_halvings;
     }
+    double motion2 = 0.0;
+    if (!undone)
+      for (int i : L.verts) motion2 = std::max(motion2, w.delta[i].squaredNorm());
+    w.motion = alpha * std::sqrt(motion2);
     // Levenberg-Marquardt: after an exact step that had to be undone (the constraints are only
     // multi-affine, and a nearly singular J J^T gives long steps) the next is damped more; after
     // one taken in full, less.
