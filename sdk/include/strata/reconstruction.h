@@ -255,25 +255,20 @@ struct ReconstructOptions {
   //! The local end's rounds are undone, and the whole-level steps go on, once they have moved a
   //! vertex farther than this fraction of the rest detail's bounding-box diagonal and farther than
   //! the polish's last whole-level step moved any vertex (the step a local end stands in for; none
-  //! before the first). The default is the round trip's acceptance (0.5%): a local end may not by
-  //! itself move the detail farther. The whole-level steps can move much more: on the scan-like 100k
-  //! cuboid bend (jitter 0.4) the first two moved a vertex 11.9% and 8.1% of the diagonal, and the
-  //! local end after them 0.96-1.05% (converged, no new pairs); with the 0.5% bound alone two of its
-  //! three local ends were undone and the reconstruction took 2.24-2.55 s, 1.77-1.81 s with the last
-  //! step's move as the bound too (2026-11-27, eleventh session).
-  //! Why: the prisms left above the tolerance can sit in checkerboard patterns (regular grids)
+  //! before the first). Why: the prisms left above the tolerance can sit in checkerboard patterns
   //! that a step moving only a small patch, its border held, fixes by moving its vertices up and
-  //! down, more in every round, where a whole-level step spreads the correction. Over the unedited
-  //! base the preset brought the regular cuboid at 60k-160k prisms back 0.61-1.56% of the diagonal
-  //! off: a ripple of about 20 vertices at a corner column, after rounds that moved them by up to
-  //! 1.5% of the diagonal; with a bound of 0.4%, 0.18-0.22% (measured with the hierarchy before
-  //! 2026-11-27, tenth session). The scan-like bends' local ends move less, and are kept: 0.33% of
-  //! the diagonal on the 100k bumps, 0.20-0.37% on the 1M bumps then; with the current hierarchy
-  //! 0.40 and 0.46% (the largest of each local end) on the 1M bumps (jitter 0.4), which the 0.4% bound undid
-  //! (the polish 9.3 s; with 0.5% the local end is kept and the polish takes 2.6 s), hence 0.5%. With it the
-  //! regular cuboid's round trip is within 0.10-0.48% at 20k-200k prisms (the 160k: 0.48%, 0.19% with the
-  //! 0.4% bound). 0: no bound (as before 2026-11-27, ninth session).
-  double local_polish_max_motion = 5e-3;
+  //! down, more in every round, where a whole-level step spreads the correction. Such a ripple
+  //! shows where the solve should end near the rest detail: over the unedited base, where the
+  //! polish ends locally before any whole-level step. The default, 0.25%, is half the round trip's
+  //! acceptance (0.5%). Measured (2026-11-27, eleventh session; `strata reconstruct --solver
+  //! multigrid` over the unedited base of the cuboid scan at 20k-200k prisms): with 0.5% the
+  //! round trips came back up to 0.484% of the diagonal off (regular 160k) and 0.457% (jitter 0.4,
+  //! 50k); with 0.25% up to 0.241% (regular 120k) and 0.265% (jitter 100k). Bends: a whole-level step moves
+  //! far more (on the scan-like 100k cuboid the first two moved a vertex 11.9% and 8.1% of the diagonal, on
+  //! the 1M bumps the first 5.2%), so their local ends (0.96-1.05% and 0.37-0.40% there) are kept; before
+  //! that rule two of the 100k cuboid's three local ends were undone (2.24-2.55 s against
+  //! 1.77-1.81 s). 0: no bound.
+  double local_polish_max_motion = 2.5e-3;
   //! Displacement lengths |f_i| below this fraction of the mean |f| are clamped in the length
   //! filter's ratio d_i / f_i, which is undefined at f = 0.
   double min_length_fraction = 0.05;
