@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 #include "paper_cases.h"
@@ -519,4 +520,70 @@ TEST(DragState, PreviewsFollowTheDrag) {
   EXPECT_LE(volume_metrics(e, fr, x.positions).max_relative_error, 1e-4);
   EXPECT_EQ(0u, find_self_intersections(x.positions, c.detail.faces).num_pairs);
   EXPECT_LT(max_distance(x.positions, exact), 0.1 * max_distance(e.detail_rest, exact));
+}
+
+// ReconstructOptions::progress: a clean start reports after every level of every volume scale,
+// with fractions that only grow, within [0, 1], and end at 1.
+TEST(ReconstructionProgress, ReportsEveryLevelOfEveryScaleInOrder) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 4000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  std::vector<std::pair<std::string, double>> reports;
+  ReconstructOptions o;
+  o.threads = 1;
+  o.progress = [&](const std::string& phase, double f) { reports.emplace_back(phase, f); };
+  const VolumeReconstructor rec(e, o);
+  const ReconstructResult r = rec.reconstruct(c.edited_base.vertices);
+  ASSERT_TRUE(r.stats.converged);
+  ASSERT_EQ(r.stats.retries, 0);  // so that every report is the first schedule's
+  ASSERT_GE(r.stats.levels, 2);
+  ASSERT_EQ(reports.size(), static_cast<std::size_t>(o.volume_scales * r.stats.levels));
+  double last = 0.0;
+  for (const auto& [phase, f] : reports) {
+    EXPECT_EQ(phase, "reconstruct");
+    EXPECT_GT(f, last);
+    EXPECT_LE(f, 1.0);
+    last = f;
+  }
+  EXPECT_DOUBLE_EQ(reports.back().second, 1.0);
+  // Weighted by the levels' prisms: the finest level's full-scale solve is most of the work.
+  EXPECT_LT(reports[reports.size() - 2].second, 0.8);
+}
+
+// ReconstructOptions::cancel: a flag set during a solve stops it with Cancelled; the reconstructor
+// stays usable, and its next solve is the same, bit for bit, as a fresh one's.
+TEST(ReconstructionCancel, StopsTheSolveAndLeavesTheReconstructorUsable) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 4000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  for (const bool multigrid : {false, true}) {
+    SCOPED_TRACE(multigrid ? "multigrid preset" : "defaults");
+    std::atomic<bool> stop{false};
+    int reports = 0;
+    ReconstructOptions o = multigrid ? multigrid_reconstruct_options() : ReconstructOptions{};
+    o.threads = 1;
+    o.cancel = &stop;
+    o.progress = [&](const std::string&, double) {
+      if (++reports == 2) stop = true;  // after the second level of the first scale
+    };
+    const VolumeReconstructor rec(e, o);
+    EXPECT_THROW(rec.reconstruct(c.edited_base.vertices), Cancelled);
+    EXPECT_EQ(reports, 2);  // stopped before the next level ended
+    stop = false;
+    const ReconstructResult again = rec.reconstruct(c.edited_base.vertices);
+    o.progress = nullptr;
+    const ReconstructResult fresh = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    EXPECT_TRUE(again.stats.converged);
+    EXPECT_EQ(again.positions, fresh.positions);
+    // Set before the call: nothing is solved.
+    stop = true;
+    reports = 0;
+    EXPECT_THROW(rec.reconstruct(c.edited_base.vertices), Cancelled);
+    EXPECT_EQ(reports, 0);
+    DragState drag;
+    drag.reset(rec.base_frames(c.base.vertices), fresh.positions);
+    WarmStartOptions warm;
+    warm.coarse_levels_only = true;
+    EXPECT_THROW(rec.drag_step(c.edited_base.vertices, drag, warm), Cancelled);
+    stop = false;
+    EXPECT_NO_THROW(rec.drag_step(c.edited_base.vertices, drag, warm));
+  }
 }

@@ -382,6 +382,7 @@ void LayeredModel::set_options(const ModelOptions& options) {
   if (impl_->drag) throw InvalidInput("set_options() during a drag");
   impl_->options = options;
   impl_->options.reconstruct.progress = nullptr;
+  impl_->options.reconstruct.cancel = nullptr;
 }
 const std::vector<std::string>& LayeredModel::history() const {
   return impl_->history;
@@ -436,6 +437,7 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   Impl& m = *model.impl_;
   m.options = o.model;
   m.options.reconstruct.progress = nullptr;
+  m.options.reconstruct.cancel = nullptr;
   m.bands.resize(nb);
   m.bands[nb - 1].mesh = scan;
   // Intermediate bands, finest first, each decimated from the smoothed next finer band.

@@ -130,23 +130,25 @@ struct State {
   // ReconstructOptions::retry_other_regularization.
   TangentialRegularization tangential = TangentialRegularization::RestOffset;
 
-  std::vector<Vec3> P;              // current detail positions
-  std::vector<Vec3> Q;              // base points on the edited base
-  std::vector<Vec3> N;              // unit normals at the base points
-  std::vector<Vec3> R;              // rest tangential offset, rotated into the edited base's frame
-  std::vector<Vec3> T;              // first tangents at the base points (RestLaplacian only)
-  std::vector<Vec3> P0;             // positions at the start of the current multigrid pass
-  std::vector<double> dRho;         // prolongated change of d/f
-  std::vector<Vec3> dT;             // prolongated change of the tangential displacement
-  std::vector<double> rho;          // regularization scratch: d/f per level vertex
-  std::vector<Vec3> pk;             // regularization scratch: positions per level vertex (RestLaplacian)
-  std::vector<Vec3> tdev;           // regularization scratch: tangential deviation per level vertex
-  std::vector<Vec3> before;         // the level's positions before a regularization round (level-local)
-  std::vector<Vec3> pinned_at;      // where the pinned vertices stay (empty: none pinned)
-  double amplitude = 1.0;           // scales every target and rest offset (ReconstructRequest)
-  bool clean_start = false;         // inside clean_start() (the coarsest level's own options)
-  int volume_iterations = 0;        // volume steps per cycle on the level being solved
-  int cycle_volume_iterations = 0;  // the clean start's n (volume_iterations, or the retry's)
+  std::vector<Vec3> P;                // current detail positions
+  std::vector<Vec3> Q;                // base points on the edited base
+  std::vector<Vec3> N;                // unit normals at the base points
+  std::vector<Vec3> R;                // rest tangential offset, rotated into the edited base's frame
+  std::vector<Vec3> T;                // first tangents at the base points (RestLaplacian only)
+  std::vector<Vec3> P0;               // positions at the start of the current multigrid pass
+  std::vector<double> dRho;           // prolongated change of d/f
+  std::vector<Vec3> dT;               // prolongated change of the tangential displacement
+  std::vector<double> rho;            // regularization scratch: d/f per level vertex
+  std::vector<Vec3> pk;               // regularization scratch: positions per level vertex (RestLaplacian)
+  std::vector<Vec3> tdev;             // regularization scratch: tangential deviation per level vertex
+  std::vector<Vec3> before;           // the level's positions before a regularization round (level-local)
+  std::vector<Vec3> pinned_at;        // where the pinned vertices stay (empty: none pinned)
+  double amplitude = 1.0;             // scales every target and rest offset (ReconstructRequest)
+  bool clean_start = false;           // inside clean_start() (the coarsest level's own options)
+  int volume_iterations = 0;          // volume steps per cycle on the level being solved
+  int cycle_volume_iterations = 0;    // the clean start's n (volume_iterations, or the retry's)
+  const char* phase = "reconstruct";  // the progress reports' phase (ReconstructOptions::progress)
+  double work_done = 0.0, work_total = 0.0;  // a clean start's progress, in weighted prisms
   GnScratch gn;
 };
 
@@ -251,11 +253,13 @@ class VolumeReconstructor::Impl {
     auto t0 = Clock::now();
     State s;
     init_state(fr, request, s);
+    s.phase = phase_;
     st.seconds_frames = seconds_since(t0);
     t0 = Clock::now();
     level_stats(st);
     std::vector<double> V;
     const double a = s.amplitude;
+    check_cancel();
     if (a == 0.0) {
       // No detail: every prism is flat, which the clean configuration solves exactly.
       s.P = s.Q;
@@ -278,6 +282,7 @@ class VolumeReconstructor::Impl {
       auto retry = [&](int volume_iterations, int mg_iterations) {
         std::vector<Vec3> kept = s.P;
         ++st.retries;
+        s.phase = "retry";
         s.gn.damping = kMinDamping;
         s.gn.mg_iterations = mg_iterations;
         clean_start(s, a, volume_iterations, st, V);
@@ -377,6 +382,7 @@ class VolumeReconstructor::Impl {
     s.P0.assign(n, Vec3::Zero());
     s.gn.cg_max_iterations = warm.cg_max_iterations;
     for (int l = 0; l < nl; ++l) {
+      check_cancel();
       const Level& L = levels_[l];
       const std::vector<Vec3>& start = ds.level[l];
       std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
@@ -735,6 +741,22 @@ class VolumeReconstructor::Impl {
     if (opt_.progress) opt_.progress(phase, f);
   }
 
+  // ReconstructOptions::cancel, read between steps.
+  void check_cancel() const {
+    if (opt_.cancel && opt_.cancel->load(std::memory_order_relaxed))
+      throw Cancelled("reconstruction cancelled (ReconstructOptions::cancel)");
+  }
+
+  // A level's share of a clean start's work (ReconstructOptions::progress): its prisms, three
+  // times the finest level's at the full scale (the cycles and the polish), a tenth where it is
+  // only regularized.
+  double level_work(int l, bool full_scale, bool coarse_only) const {
+    const bool finest = l + 1 == static_cast<int>(levels_.size());
+    const double prisms = static_cast<double>(levels_[l].faces.size());
+    if (finest && coarse_only && levels_.size() > 1) return 0.1 * prisms;
+    return finest && full_scale ? 3.0 * prisms : prisms;
+  }
+
   // Relative volume errors this small are rounding: solves driven to a tolerance below reach (the
   // tests' folding rings at 1e-15) end at 4e-14 to 6e-14 of the mean volume.
   static constexpr double kRoundingError = 1e-12;
@@ -829,6 +851,7 @@ class VolumeReconstructor::Impl {
       o.tolerance = opt_.tolerance;
       o.threads = opt_.threads;
       o.progress = opt_.progress;
+      o.cancel = opt_.cancel;
       o.fallback_schedule = false;
       // An encoding built by hand may lack the base's rest frames, which the preset's rest
       // Laplacian needs: it then falls back to the preset with rest offsets, not to an error.
@@ -842,6 +865,7 @@ class VolumeReconstructor::Impl {
         o.final_max_cycles = 3;
       }
       fallback_ = std::make_unique<Impl>(enc_, std::move(o));
+      fallback_->phase_ = "fallback";
     }
     // The rest detail's pairs, counted already (first.counted), are the same for it.
     if (!fallback_->rest_pairs_ && rest_pairs_)
@@ -882,6 +906,7 @@ class VolumeReconstructor::Impl {
     std::vector<Vec3> smoothed, local_result;
     int stalled = 0;  // rounds since the best result last improved
     for (int round = 0; round < opt_.fold_repair_rounds; ++round) {
+      check_cancel();
       grow_rings(seeds, opt_.fold_repair_rings + round, in, subset, next);
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
       st.regularization_sweeps += opt_.fold_repair_sweeps;
@@ -997,6 +1022,7 @@ class VolumeReconstructor::Impl {
       return std::make_pair(rr, scale > 0 ? mx / scale : 0.0);
     };
     for (int step = 0; step <= max_steps; ++step) {
+      check_cancel();
       const auto [rr0, err] = residual(true);
       if (err <= tol) return true;
       if (step == max_steps) break;
@@ -1101,6 +1127,10 @@ class VolumeReconstructor::Impl {
     s.cycle_volume_iterations = volume_iterations;
     s.clean_start = true;
     const int k = std::max(1, opt_.volume_scales);
+    s.work_done = s.work_total = 0.0;
+    for (int sc = 0; sc < k; ++sc)
+      for (int l = 0; l < static_cast<int>(levels_.size()); ++l)
+        s.work_total += level_work(l, sc + 1 == k, !opt_.finest_intermediate_solves && sc + 1 < k);
     for (int sc = 0; sc < k; ++sc) {
       const double t = static_cast<double>(sc + 1) / k, h = a * t;
       // The pinned vertices' displacements follow the volume scale, so that the layer is scaled
@@ -1112,9 +1142,9 @@ class VolumeReconstructor::Impl {
       multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, coarse_only, st,
                      V);
       if (coarse_only) st.finest_cycles_per_scale.push_back(0);
-      report("reconstruct", static_cast<double>(sc + 1) / k);
     }
     s.clean_start = false;
+    s.work_total = 0.0;
   }
 
   // Listing 1 for one volume scale h: every level from the coarsest to the finest, each solved by
@@ -1126,13 +1156,21 @@ class VolumeReconstructor::Impl {
     s.P0 = s.P;
     const int nl = static_cast<int>(levels_.size());
     for (int l = 0; l < nl; ++l) {
+      check_cancel();
       const Level& L = levels_[l];
       std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
       if (l > 0) prolongate(L, levels_[l - 1], s);
       const bool finest = l + 1 == nl;
+      // After the level (solved, or regularized only), a clean start reports its progress.
+      auto level_done = [&] {
+        if (s.work_total <= 0) return;
+        s.work_done += level_work(l, full_scale, coarse_only);
+        report(s.phase, std::min(1.0, s.work_done / s.work_total));
+      };
       if (finest && coarse_only && nl > 1) {
         // Section 5: the finest level follows by regularization only.
         regularize_sweeps(L, s, st);
+        level_done();
         continue;
       }
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
@@ -1146,6 +1184,7 @@ class VolumeReconstructor::Impl {
           polish(L, s, final_tol, st, V);
         }
       }
+      level_done();
     }
   }
 
@@ -1167,6 +1206,7 @@ class VolumeReconstructor::Impl {
     }
     int c = 0;
     for (;; ++c) {
+      check_cancel();
       project(L, s, h, tol, st, V);
       ++st.cycles;
       if (c + 1 >= max_cycles || sweeps == 0) break;
@@ -1407,6 +1447,7 @@ class VolumeReconstructor::Impl {
                          std::vector<double>& V) const {
     // Exact steps (the polish, or factorized ones) are undone when they do not help, and adapt
     // the Levenberg-Marquardt damping; inexact ones are kept, as the cycles' regularization expects.
+    check_cancel();
     const bool direct = how != StepSolve::Cycle;
     const bool use_mg = how == StepSolve::Exact
                             ? opt_.polish_solver == VolumeStepSolver::Multigrid
@@ -1429,6 +1470,7 @@ class VolumeReconstructor::Impl {
     const double rr0 = rr;
     if (use_mg) {
       solve_multigrid(L, w, how == StepSolve::Exact, st);
+      check_cancel();  // the solve stops early on a cancel; its step is not taken
     } else if (direct) {
       solve_direct(L, w, rr, st);
     } else {
@@ -1535,6 +1577,7 @@ class VolumeReconstructor::Impl {
     sys.fixed = L.fixed.empty() ? nullptr : &L.fixed;
     sys.eps = (exact ? std::max(mo.polish_damping, w.damping) : mo.damping) * diag;
     sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
+    sys.stop = opt_.cancel;
     const internal::VertexStepResult res =
         L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
                     exact                 ? mo.polish_iterations
@@ -1566,6 +1609,7 @@ class VolumeReconstructor::Impl {
     int it = 0;
     const int max_it = w.cg_max_iterations > 0 ? w.cg_max_iterations : opt_.cg_max_iterations;
     for (; it < max_it && rr > stop; ++it) {
+      check_cancel();
       apply(w.p, w.Ap);
       double pAp = 0.0;
       for (std::size_t j = 0; j < m; ++j) pAp += w.p[j] * w.Ap[j];
@@ -1696,6 +1740,7 @@ class VolumeReconstructor::Impl {
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
   // The other preset's solver (ReconstructOptions::fallback_schedule), built on first use.
   mutable std::unique_ptr<Impl> fallback_;
+  const char* phase_ = "reconstruct";  // "fallback" in the fallback's Impl
   double setup_seconds_ = 0.0;
   double rest_diagonal_ = 0.0;  // the rest detail's bounding-box diagonal
   // The solver's threads (ReconstructOptions::threads); null: the calling thread only.

@@ -23,11 +23,12 @@ void Log::phase(const std::string& text) const {
 
 ProgressCallback Log::progress(const std::string& label) const {
   if (quiet_) return {};
-  auto last = std::make_shared<int>(-1);
+  // The last line's phase and percentage: a new phase (a retry) starts its lines again.
+  auto last = std::make_shared<std::pair<std::string, int>>(std::string(), -1);
   return [label = prefix_ + label, last](const std::string& phase, double fraction) {
     const int percent = static_cast<int>(std::lround(100.0 * std::clamp(fraction, 0.0, 1.0)));
-    if (percent == *last) return;
-    *last = percent;
+    if (percent == last->second && phase == last->first) return;
+    *last = {phase, percent};
     std::cerr << "strata: " << label << ": " << phase << " " << percent << "%" << std::endl;
   };
 }

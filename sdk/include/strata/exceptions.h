@@ -32,4 +32,11 @@ class SolverError : public Error {
   using Error::Error;
 };
 
+//! The caller asked a long operation to stop (ReconstructOptions::cancel). Nothing is wrong with
+//! the input; the object that threw stays usable.
+class Cancelled : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace strata

@@ -3,6 +3,7 @@
 //! so that every prism regains its target volume.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
@@ -294,8 +295,23 @@ struct ReconstructOptions {
   //! calling thread). 0: as many as TBB allows the caller; 1: the calling thread only. Every sum
   //! is taken in the same order whatever the count, so results are identical for any value.
   int threads = 0;
-  //! Optional progress reports (phase, fraction).
+  //! Optional progress reports (phase, fraction), on the calling thread: during a clean-start
+  //! reconstruction after every level of every volume scale, the fraction weighted by the levels'
+  //! prisms (the finest level's full-scale solve and polish three times its size), phase
+  //! "reconstruct"; a retry from the clean start reports "retry", the fallback to the other
+  //! preset "fallback", each from 0 to 1 again.
   ProgressCallback progress;
+  //! Optional: a flag another thread may set to stop a reconstruction (a modeling tool's cancel
+  //! button). Read between the solver's steps (every Gauss-Newton step and conjugate-gradient
+  //! iteration, regularization round, local-end and fold-repair round, level and volume scale):
+  //! once it reads true, the call throws Cancelled. Measured (the multigrid preset, one thread,
+  //! the flag set at tenths of the solve, with another build running): at most 0.06 s later at
+  //! 100k prisms and 0.27 s at 1M; a factorization (a factorized step) and the final count of
+  //! intersecting pairs (0.8 s at 1M) are not interrupted, and a call past its last check returns
+  //! its result. The VolumeReconstructor keeps its hierarchy and stays usable (clear the flag before
+  //! the next call). A drag step cancelled midway leaves its DragState valid for the next step. The
+  //! flag must outlive every call that reads it; layered models do not keep it.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 //! The options of a reconstruction by VolumeStepSolver::Multigrid in the cycles and the polish,
@@ -472,7 +488,8 @@ class VolumeReconstructor {
   //! \pre edited_base has the encoding's base connectivity (same vertex count); over a subdivision
   //! base it holds the edited cage's control points.
   //! \throw InvalidInput on a vertex-count mismatch or non-finite coordinates; SolverError if the
-  //! iteration produces non-finite positions.
+  //! iteration produces non-finite positions; Cancelled once ReconstructOptions::cancel is set
+  //! (every reconstruct(), reconstruct_from() and drag_step()).
   ReconstructResult reconstruct(const std::vector<Vec3>& edited_base) const;
 
   //! The same over base frames evaluated by the caller (e.g. evaluate_base_frames() on a

@@ -514,6 +514,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   const double stop = tolerance * tolerance * rr0;
   ws.jp.resize(m);
   for (int it = 0; it < max_iterations; ++it) {
+    if (sys.stop && sys.stop->load(std::memory_order_relaxed)) break;
     fine_product(ws.p, ws.kp, &ws.jp);
     clear_fixed(ws.kp);
     const double pkp = dot(ws.p, ws.kp);

@@ -19,6 +19,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <atomic>
 #include <vector>
 
 #include "strata/mesh.h"
@@ -51,6 +52,9 @@ struct VertexStepSystem {
   const std::vector<char>* fixed = nullptr;  //!< optional: vertices whose delta is 0
   double eps = 0.0;                          //!< > 0: weight of ||delta||^2 (Levenberg-Marquardt)
   double eps_lap = 0.0;                      //!< >= 0: weight of the smoothness term delta^T L delta
+  //! Optional: once it reads true the iterations stop (ReconstructOptions::cancel; the caller
+  //! then throws without using the step).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 //! Outcome of one solve.

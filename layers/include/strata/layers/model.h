@@ -46,7 +46,8 @@ namespace strata::layers {
 struct ModelOptions {
   //! Detail rebuilt by displacement volumes (the paper) or vectors (the baseline, for comparison).
   EditOptions::Method method = EditOptions::Method::Volumes;
-  //! The volume reconstruction of every band (the progress callback is not stored).
+  //! The volume reconstruction of every band (its progress callback and cancel flag are not
+  //! stored: a model outlives the calls that set them).
   ReconstructOptions reconstruct;
   //! Edits of triangle bands (RegionEditor): the region's cut-off wavelength relative to its
   //! bounding-box diagonal, and the handle's solved rings (see EditOptions).
