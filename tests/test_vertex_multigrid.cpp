@@ -20,6 +20,15 @@ using namespace strata;
 
 namespace {
 
+// The paper's cylinder case of \p kind at about \p triangles prisms (jitter 0: the regular grid).
+cases::CylinderCase cylinder_case(cases::DetailKind kind, int triangles, double jitter) {
+  cases::CylinderCaseOptions o;
+  o.detail = kind;
+  o.target_detail_triangles = triangles;
+  o.jitter = jitter;
+  return cases::make_cylinder_case(o);
+}
+
 // One step's system over a paper case: the prism gradients and residuals of the detail placed by
 // displacement vectors over the bent base (a configuration the solver meets), with the encoding's
 // regularization neighbours and the vertex -> (face, corner) lists.
@@ -55,11 +64,7 @@ struct StepSystem {
 };
 
 StepSystem make_system(cases::DetailKind kind, int triangles, double jitter) {
-  cases::CylinderCaseOptions o;
-  o.detail = kind;
-  o.target_detail_triangles = triangles;
-  o.jitter = jitter;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  const cases::CylinderCase c = cylinder_case(kind, triangles, jitter);
   StepSystem s;
   s.enc = encode_detail(c.detail, c.base);
   const BaseFrames fr = evaluate_base_frames(s.enc, c.edited_base.vertices);
@@ -258,11 +263,7 @@ TEST(VertexMultigrid, TheSameStepOnOneThreadAndThree) {
 class MultigridBend : public ::testing::TestWithParam<cases::DetailKind> {};
 
 TEST_P(MultigridBend, ConvergesWithoutFoldsOrFactorizations) {
-  cases::CylinderCaseOptions o;
-  o.detail = GetParam();
-  o.target_detail_triangles = 12000;
-  o.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  const cases::CylinderCase c = cylinder_case(GetParam(), 12000, 0.4);
   const DetailEncoding e = encode_detail(c.detail, c.base);
   ReconstructOptions ro = multigrid_reconstruct_options();
   ro.threads = 1;
@@ -296,11 +297,7 @@ TEST(MultigridPreset, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
   for (auto [kind, jitter] :
        {std::pair{cases::DetailKind::Cuboid, 0.0}, std::pair{cases::DetailKind::Bumps, 0.4},
         std::pair{cases::DetailKind::Rings, 0.4}}) {
-    cases::CylinderCaseOptions o;
-    o.detail = kind;
-    o.target_detail_triangles = 20000;
-    o.jitter = jitter;
-    const cases::CylinderCase c = cases::make_cylinder_case(o);
+    const cases::CylinderCase c = cylinder_case(kind, 20000, jitter);
     const DetailEncoding e = encode_detail(c.detail, c.base);
     ReconstructOptions ro = multigrid_reconstruct_options();
     ro.threads = 1;
@@ -317,11 +314,7 @@ TEST(MultigridPreset, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
 // unedited base, and that local end, allowed up to 0.5%, moved the detail 0.36% of the diagonal
 // off (measured); with the default it is undone and the whole-level steps end 0.19% off.
 TEST(MultigridPreset, UneditedRoundTripKeepsItsMarginOnTheScanLikeCuboid) {
-  cases::CylinderCaseOptions o;
-  o.detail = cases::DetailKind::Cuboid;
-  o.target_detail_triangles = 30000;
-  o.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(o);
+  const cases::CylinderCase c = cylinder_case(cases::DetailKind::Cuboid, 30000, 0.4);
   const DetailEncoding e = encode_detail(c.detail, c.base);
   const double diag = bbox_diagonal(c.detail.vertices);
   ReconstructOptions ro = multigrid_reconstruct_options();
@@ -342,20 +335,12 @@ TEST(MultigridPreset, UneditedRoundTripKeepsItsMarginOnTheScanLikeCuboid) {
 namespace {
 struct ScanLikeBumps {
   explicit ScanLikeBumps(int triangles = 12000)
-      : c(make(triangles)),
+      : c(cylinder_case(cases::DetailKind::Bumps, triangles, 0.4)),
         e(encode_detail(c.detail, c.base)),
         fr(evaluate_base_frames(e, c.edited_base.vertices)) {}
   cases::CylinderCase c;
   DetailEncoding e;
   BaseFrames fr;
-
-  static cases::CylinderCase make(int triangles) {
-    cases::CylinderCaseOptions o;
-    o.detail = cases::DetailKind::Bumps;
-    o.target_detail_triangles = triangles;
-    o.jitter = 0.4;
-    return cases::make_cylinder_case(o);
-  }
 };
 
 // ReconstructOptions::local_polish_max_motion: a local end whose rounds move a vertex farther than
@@ -367,11 +352,7 @@ struct ScanLikeBumps {
 // trip, where the polish ends locally before any whole-level step (measured: 1 local end, which
 // moved 0.10% of the diagonal).
 TEST(MultigridPreset, ALocalEndThatMovesTooFarIsUndone) {
-  cases::CylinderCaseOptions co;
-  co.detail = cases::DetailKind::Cuboid;
-  co.target_detail_triangles = 20000;
-  co.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(co);
+  const cases::CylinderCase c = cylinder_case(cases::DetailKind::Cuboid, 20000, 0.4);
   const DetailEncoding e = encode_detail(c.detail, c.base);
   ReconstructOptions ro = multigrid_reconstruct_options();
   ro.threads = 1;
@@ -414,16 +395,10 @@ TEST(MultigridPreset, ALocalEndMovingLessThanTheWholeLevelStepIsKept) {
 // The paper's cuboid over its regular triangulation, at about \p triangles prisms, encoded: the
 // cases where the preset's polish stalls or its first attempt folds.
 struct RegularCuboid {
-  explicit RegularCuboid(int triangles) : c(make(triangles)), e(encode_detail(c.detail, c.base)) {}
+  explicit RegularCuboid(int triangles)
+      : c(cylinder_case(cases::DetailKind::Cuboid, triangles, 0.0)), e(encode_detail(c.detail, c.base)) {}
   cases::CylinderCase c;
   DetailEncoding e;
-
-  static cases::CylinderCase make(int triangles) {
-    cases::CylinderCaseOptions o;
-    o.detail = cases::DetailKind::Cuboid;
-    o.target_detail_triangles = triangles;
-    return cases::make_cylinder_case(o);
-  }
 };
 }  // namespace
 

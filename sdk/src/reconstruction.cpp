@@ -102,7 +102,7 @@ struct GnScratch {
   double damping = kMinDamping;  // of the exact steps, adapted step by step
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   int mg_iterations = 0;         // multigrid cycle steps' iterations; 0: MultigridStepOptions::iterations
-  double motion = 0.0;           // the last step's largest vertex move (0 if it was undone)
+  double motion = 0.0;           // the last exact step's largest vertex move (0: undone, or inexact)
   std::vector<std::array<Vec3, 3>> grad;
   std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag;
@@ -1521,8 +1521,9 @@ class VolumeReconstructor::Impl {
       for (int i : L.verts) s.P[i] -= alpha * w.delta[i];
       ++st.step_halvings;
     }
+    // The step's largest vertex move, for the polish's local end (exact steps only).
     double motion2 = 0.0;
-    if (!undone)
+    if (direct && !undone)
       for (int i : L.verts) motion2 = std::max(motion2, w.delta[i].squaredNorm());
     w.motion = alpha * std::sqrt(motion2);
     // Levenberg-Marquardt: after an exact step that had to be undone (the constraints are only
