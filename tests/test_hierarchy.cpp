@@ -1,6 +1,8 @@
 // The multigrid hierarchy by decimation (internal::build_hierarchy, paper section 4.3): its
 // levels must be nested, manifold and of the input's topology, and the prolongation's insertion
-// records must be complete, on regular and scan-like triangulations.
+// records must be complete, on regular and scan-like triangulations; they must be the levels of
+// the OpenMesh decimation it replaced (reference_hierarchy); and input a half-edge mesh cannot hold
+// must neither crash it nor reach the coarse levels.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +12,8 @@
 
 #include "internal/hierarchy.h"
 #include "paper_cases.h"
+#include "reference_hierarchy.h"
+#include "strata/mesh_io.h"
 
 namespace strata {
 namespace {
@@ -155,6 +159,123 @@ TEST(Hierarchy, ClosedSurfaceKeepsItsTopology) {
   internal::HierarchyOptions o;
   o.coarsest_vertices = 50;
   check_hierarchy(m, o);
+}
+
+// The flat-array decimation against the OpenMesh one it replaced: the same collapses in the same
+// order, so the same vertices, faces (corner order included), insertion order and rings. Only a
+// ring's first vertex may differ (which outgoing half-edge a vertex keeps after OpenMesh's add_face
+// is not reproduced; the prolongation averages the ring, so only the order of a sum changes).
+void expect_same_as_reference(const TriMesh& mesh, const internal::HierarchyOptions& o) {
+  const Hierarchy h = internal::build_hierarchy(mesh.vertices, mesh.faces, o);
+  const Hierarchy r = testing::reference_hierarchy(mesh.vertices, mesh.faces, o);
+  ASSERT_EQ(h.levels.size(), r.levels.size());
+  ASSERT_GE(h.levels.size(), 3u);
+  for (std::size_t l = 0; l < h.levels.size(); ++l) {
+    SCOPED_TRACE("level " + std::to_string(l));
+    const Hierarchy::Level &a = h.levels[l], &b = r.levels[l];
+    EXPECT_EQ(a.vertices, b.vertices);
+    EXPECT_EQ(a.faces, b.faces);
+    EXPECT_EQ(a.inserted, b.inserted);
+    ASSERT_EQ(a.ring_offsets, b.ring_offsets);
+    int reordered = 0;
+    for (std::size_t k = 0; k + 1 < a.ring_offsets.size(); ++k) {
+      const auto first = static_cast<std::ptrdiff_t>(a.ring_offsets[k]),
+                 last = static_cast<std::ptrdiff_t>(a.ring_offsets[k + 1]);
+      std::vector<int> ra(a.ring_vertices.begin() + first, a.ring_vertices.begin() + last),
+          rb(b.ring_vertices.begin() + first, b.ring_vertices.begin() + last);
+      reordered += ra != rb;
+      // The same ring in the same turning order, from another first vertex.
+      const auto pos = std::find(ra.begin(), ra.end(), rb.empty() ? -1 : rb.front());
+      if (pos != ra.end()) std::rotate(ra.begin(), pos, ra.end());
+      EXPECT_EQ(ra, rb) << "the ring of inserted vertex " << a.inserted[k];
+    }
+    ::testing::Test::RecordProperty("rings_reordered_level_" + std::to_string(l), reordered);
+  }
+}
+
+TEST(HierarchyReference, RegularAndScanLikeTubesGiveTheOpenMeshLevels) {
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 100;
+  for (double jitter : {0.0, 0.4}) {
+    SCOPED_TRACE("jitter " + std::to_string(jitter));
+    expect_same_as_reference(tube(jitter, 12000), o);
+  }
+}
+
+TEST(HierarchyReference, TheCuboidAndTheReconstructorsDefaultsGiveTheOpenMeshLevels) {
+  cases::CylinderCaseOptions c;
+  c.detail = cases::DetailKind::Cuboid;
+  c.target_detail_triangles = 8000;
+  c.jitter = 0.4;
+  expect_same_as_reference(cases::make_cylinder_case(c).detail, internal::HierarchyOptions{});
+}
+
+// Real scans (closed, irregular, with vertices of high valence): the same levels.
+TEST(HierarchyReference, ScansGiveTheOpenMeshLevels) {
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 100;
+  for (const char* name : {"camel.off", "bear.off"}) {
+    SCOPED_TRACE(name);
+    expect_same_as_reference(read_mesh(std::string(STRATA_ASSETS_DIR) + "/scans/" + name), o);
+  }
+}
+
+// Two tubes glued at one vertex (a non-manifold vertex, which validate_mesh() lets through): the
+// vertex is split into one copy per fan and kept, so every input face stays in the hierarchy and
+// every level is still manifold along its edges and of the input's Euler characteristic (OpenMesh
+// left a face out there).
+TEST(Hierarchy, ANonManifoldVertexIsKeptAndNoFaceIsLost) {
+  TriMesh m = tube(0.4, 3000);
+  const int n = static_cast<int>(m.vertices.size());
+  const std::size_t nf = m.faces.size();
+  for (int v = 0; v < n; ++v) m.vertices.push_back(m.vertices[v] + Vec3(0.0, 0.0, 10.0));
+  const int shared = m.faces[nf / 2][0];  // an interior vertex of the first tube
+  for (std::size_t f = 0; f < nf; ++f) {
+    Face g = m.faces[f];
+    for (int& v : g) v = v == shared ? shared : v + n;  // the second tube's copy of it is the first's
+    m.faces.push_back(g);
+  }
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 100;
+  const Hierarchy h = internal::build_hierarchy(m.vertices, m.faces, o);
+  ASSERT_GE(h.levels.size(), 3u);
+  const auto input_edges = edge_faces(m.faces);
+  const long long euler = static_cast<long long>(n + n - 1) - static_cast<long long>(input_edges.size()) +
+                          static_cast<long long>(m.faces.size());
+  for (const Hierarchy::Level& L : h.levels) {
+    EXPECT_TRUE(std::binary_search(L.vertices.begin(), L.vertices.end(), shared));
+    std::set<int> used;
+    for (const Face& f : L.faces) used.insert(f.begin(), f.end());
+    const auto edges = edge_faces(L.faces);
+    for (const auto& [e, k] : edges) EXPECT_LE(k, 2);
+    EXPECT_EQ(static_cast<long long>(used.size()) - static_cast<long long>(edges.size()) +
+                  static_cast<long long>(L.faces.size()),
+              euler);
+  }
+  EXPECT_LT(h.levels.front().vertices.size(), m.vertices.size() / 8) << "both tubes decimated";
+}
+
+// Faces a half-edge mesh cannot hold (a repeated corner; a directed edge used twice, as a third
+// face on an edge or a face turned over makes) are left out of the coarse levels, without a crash;
+// the rest decimates to manifold levels.
+TEST(Hierarchy, FacesAHalfEdgeMeshCannotHoldAreLeftOutOfTheCoarseLevels) {
+  TriMesh m = tube(0.4, 3000);
+  const Face f0 = m.faces[10];
+  m.faces.push_back(Face{f0[0], f0[0], f0[1]});  // degenerate
+  m.faces.push_back(f0);                         // the same face twice
+  m.faces.push_back(Face{f0[0], f0[2], f0[1]});  // turned over
+  m.vertices.push_back(m.vertices[f0[0]] + Vec3(0.0, 0.0, 0.1));
+  m.faces.push_back(Face{f0[0], f0[1], static_cast<int>(m.vertices.size()) - 1});  // a third face on an edge
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 50;
+  const Hierarchy h = internal::build_hierarchy(m.vertices, m.faces, o);
+  ASSERT_GE(h.levels.size(), 3u);
+  EXPECT_EQ(h.levels.back().faces, m.faces) << "the finest level is the input";
+  for (std::size_t l = 0; l + 1 < h.levels.size(); ++l) {
+    SCOPED_TRACE("level " + std::to_string(l));
+    const auto edges = edge_faces(h.levels[l].faces);
+    for (const auto& [e, k] : edges) EXPECT_LE(k, 2);
+  }
 }
 
 }  // namespace

@@ -33,6 +33,9 @@ struct HierarchyOptions {
 //! manifold, boundaries in place and face normals from flipping; equally long edges in a fixed
 //! pseudo-random order. Each level keeps about `ratio` of the finer level's vertices; it stops at
 //! max_levels, below coarsest_vertices, or when the collapses stall. Deterministic.
+//! Any faces with indices in range are accepted: a face with a repeated corner, or one that uses
+//! a directed edge an earlier face uses, stays on the finest level only; a vertex where several
+//! fans of faces meet is kept on every level. Linear memory, flat arrays (no OpenMesh).
 Hierarchy build_hierarchy(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
                           const HierarchyOptions& options);
 
