@@ -532,6 +532,15 @@ TEST(ReconstructionProgress, ReportsEveryLevelOfEveryScaleInOrder) {
   o.threads = 1;
   o.progress = [&](const std::string& phase, double f) { reports.emplace_back(phase, f); };
   const VolumeReconstructor rec(e, o);
+  // The construction: "setup" from 0 to 1, never backwards, once per level at least.
+  ASSERT_GE(reports.size(), rec.level_vertex_counts().size() + 1);
+  EXPECT_EQ(reports.front(), std::make_pair(std::string("setup"), 0.0));
+  for (std::size_t k = 1; k < reports.size(); ++k) {
+    EXPECT_EQ(reports[k].first, "setup");
+    EXPECT_GE(reports[k].second, reports[k - 1].second);
+  }
+  EXPECT_DOUBLE_EQ(reports.back().second, 1.0);
+  reports.clear();
   const ReconstructResult r = rec.reconstruct(c.edited_base.vertices);
   ASSERT_TRUE(r.stats.converged);
   ASSERT_EQ(r.stats.retries, 0);  // so that every report is the first schedule's
@@ -561,8 +570,8 @@ TEST(ReconstructionCancel, StopsTheSolveAndLeavesTheReconstructorUsable) {
     ReconstructOptions o = multigrid ? multigrid_reconstruct_options() : ReconstructOptions{};
     o.threads = 1;
     o.cancel = &stop;
-    o.progress = [&](const std::string&, double) {
-      if (++reports == 2) stop = true;  // after the second level of the first scale
+    o.progress = [&](const std::string& phase, double) {
+      if (phase != "setup" && ++reports == 2) stop = true;  // after the second level of the first scale
     };
     const VolumeReconstructor rec(e, o);
     EXPECT_THROW(rec.reconstruct(c.edited_base.vertices), Cancelled);
@@ -586,4 +595,40 @@ TEST(ReconstructionCancel, StopsTheSolveAndLeavesTheReconstructorUsable) {
     stop = false;
     EXPECT_NO_THROW(rec.drag_step(c.edited_base.vertices, drag, warm));
   }
+}
+
+// The construction (the hierarchy's decimation and levels) reads the flag too: set before it, it
+// stops in the decimation; set once the first level is decimated, before the next level ends.
+// Cleared, the same options build a reconstructor that solves as one built without the flag.
+TEST(ReconstructionCancel, StopsTheSetup) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 4000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  std::atomic<bool> stop{true};
+  std::vector<double> setup;
+  ReconstructOptions o;
+  o.threads = 1;
+  o.cancel = &stop;
+  o.progress = [&](const std::string& phase, double f) {
+    if (phase == "setup") setup.push_back(f);
+  };
+  EXPECT_THROW(VolumeReconstructor(e, o), Cancelled);
+  EXPECT_EQ(setup, std::vector<double>{0.0});  // no level was finished
+  stop = false;
+  setup.clear();
+  o.progress = [&](const std::string& phase, double f) {
+    if (phase != "setup") return;
+    setup.push_back(f);
+    if (f > 0.0) stop = true;
+  };
+  EXPECT_THROW(VolumeReconstructor(e, o), Cancelled);
+  ASSERT_EQ(setup.size(), 2u);
+  EXPECT_GT(setup[1], 0.0);
+  EXPECT_LT(setup[1], 1.0);
+  stop = false;
+  o.progress = nullptr;
+  const ReconstructResult with_flag = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+  o.cancel = nullptr;
+  const ReconstructResult without = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+  EXPECT_TRUE(with_flag.stats.converged);
+  EXPECT_EQ(with_flag.positions, without.positions);
 }

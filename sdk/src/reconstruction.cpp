@@ -217,10 +217,23 @@ class VolumeReconstructor::Impl {
     ho.max_levels = opt_.max_levels;
     ho.coarsest_vertices = opt_.coarsest_vertices;
     ho.ratio = opt_.coarsening_ratio;
+    // Progress "setup": the decimation about 60% of it (the 1M bumps: 2 of 3.2 s), then the
+    // levels by their prisms.
+    constexpr double kDecimation = 0.6;
+    ho.cancel = opt_.cancel;
+    if (opt_.progress) ho.progress = [this](double f) { report("setup", kDecimation * f); };
+    report("setup", 0.0);
     internal::Hierarchy h = internal::build_hierarchy(enc_.detail_rest, enc_.detail_faces, ho);
     const int nl = static_cast<int>(h.levels.size());
+    double prisms = 0.0, done = 0.0;
+    for (const auto& hl : h.levels) prisms += static_cast<double>(hl.faces.size());
     levels_.resize(nl);
-    for (int l = 0; l < nl; ++l) make_level(h.levels[l], l == nl - 1, levels_[l]);
+    for (int l = 0; l < nl; ++l) {
+      check_cancel();
+      done += static_cast<double>(h.levels[l].faces.size());
+      make_level(h.levels[l], l == nl - 1, levels_[l]);
+      report("setup", kDecimation + (1.0 - kDecimation) * done / prisms);
+    }
     if (enc_.over_limit_surface()) {
       std::vector<Vec3> rest(enc_.base_num_vertices, Vec3::Zero());
       limit_ = std::make_unique<SubdivSurface>(limit_surface_for(enc_, rest));

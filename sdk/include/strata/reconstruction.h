@@ -299,7 +299,8 @@ struct ReconstructOptions {
   //! reconstruction after every level of every volume scale, the fraction weighted by the levels'
   //! prisms (the finest level's full-scale solve and polish three times its size), phase
   //! "reconstruct"; a retry from the clean start reports "retry", the fallback to the other
-  //! preset "fallback", each from 0 to 1 again.
+  //! preset "fallback", each from 0 to 1 again. The VolumeReconstructor's construction reports
+  //! "setup" (during the decimation and after each level is made).
   ProgressCallback progress;
   //! Optional: a flag another thread may set to stop a reconstruction (a modeling tool's cancel
   //! button). Read between the solver's steps (every Gauss-Newton step and conjugate-gradient
@@ -309,8 +310,10 @@ struct ReconstructOptions {
   //! 100k prisms and 0.27 s at 1M; a factorization (a factorized step) and the final count of
   //! intersecting pairs (0.8 s at 1M) are not interrupted, and a call past its last check returns
   //! its result. The VolumeReconstructor keeps its hierarchy and stays usable (clear the flag before
-  //! the next call). A drag step cancelled midway leaves its DragState valid for the next step. The
-  //! flag must outlive every call that reads it; layered models do not keep it.
+  //! the next call). A drag step cancelled midway leaves its DragState valid for the next step.
+  //! The VolumeReconstructor's construction reads it too (every 1024 collapses of the decimation
+  //! and between levels) and throws Cancelled. The flag must outlive every call that reads it
+  //! (copies of these options keep the pointer); layered models do not keep it.
   const std::atomic<bool>* cancel = nullptr;
 };
 
@@ -477,7 +480,8 @@ class DragState {
 //! used from two threads at once (use one object per thread).
 class VolumeReconstructor {
  public:
-  //! \throw InvalidInput if the encoding is inconsistent or options are out of range.
+  //! \throw InvalidInput if the encoding is inconsistent or options are out of range; Cancelled
+  //! once options.cancel reads true (the setup of a 1M-prism encoding takes seconds).
   VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options = {});
   ~VolumeReconstructor();
   VolumeReconstructor(VolumeReconstructor&&) noexcept;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "strata/exceptions.h"
+
 namespace strata::internal {
 namespace {
 
@@ -56,8 +58,11 @@ class Decimator {
   // Collapses until at most `target` vertices are live or nothing more can collapse. Appends the
   // removed vertices and their rings.
   void decimate_to(int target, std::vector<int>& removed, std::vector<int>& ring_offsets,
-                   std::vector<int>& rings) {
-    while (live_ > target && !heap_.empty()) {
+                   std::vector<int>& rings, const HierarchyOptions& o) {
+    for (unsigned pops = 1; live_ > target && !heap_.empty(); ++pops) {
+      if ((pops & 1023u) == 0 && o.cancel && o.cancel->load(std::memory_order_relaxed))
+        throw Cancelled("reconstruction setup cancelled (ReconstructOptions::cancel)");
+      if ((pops & 65535u) == 0 && o.progress) o.progress(1.0 - static_cast<double>(live_) / n_);
       // A live edge has one current entry (rarely a duplicate): about 3 per live vertex. The rest
       // are deleted edges' and stale lengths' entries, which are dropped once they would double the heap:
       // popping them one by one from a heap of millions took longer than the collapses.
@@ -454,7 +459,9 @@ Hierarchy build_hierarchy(const std::vector<Vec3>& x, const std::vector<Face>& f
       const int target = static_cast<int>(std::ceil(dec.live_vertices() * o.ratio));
       if (target < o.coarsest_vertices) break;
       std::vector<int> removed, offsets{0}, rings;
-      dec.decimate_to(target, removed, offsets, rings);
+      dec.decimate_to(target, removed, offsets, rings, o);
+      if (o.progress)
+        o.progress(1.0 - static_cast<double>(dec.live_vertices()) / static_cast<double>(x.size()));
       // Not enough progress (e.g. everything left is locked by the checks): stop here.
       if (removed.size() < 0.25 * (dec.live_vertices() + removed.size()) * (1.0 - o.ratio)) break;
       // The finer level inserts these vertices in reverse removal order.

@@ -1,6 +1,8 @@
 // Internal: the multigrid hierarchy of a detail mesh, built by decimation (paper, section 4.3).
 #pragma once
 
+#include <atomic>
+#include <functional>
 #include <vector>
 
 #include "strata/mesh.h"
@@ -27,6 +29,11 @@ struct HierarchyOptions {
   int max_levels = 10;
   int coarsest_vertices = 200;
   double ratio = 0.25;
+  //! Optional: read every 1024 collapses; once true, build_hierarchy() throws Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
+  //! Optional: the fraction of the input's vertices removed so far, every 65536 collapses and at
+  //! each level's end (about 1 - ratio after the first level, which takes most of the time).
+  std::function<void(double)> progress;
 };
 
 //! Decimates (positions, faces) by shortest-edge-first half-edge collapses that keep the mesh
@@ -36,6 +43,7 @@ struct HierarchyOptions {
 //! Any faces with indices in range are accepted: a face with a repeated corner, or one that uses
 //! a directed edge an earlier face uses, stays on the finest level only; a vertex where several
 //! fans of faces meet is kept on every level. Linear memory, flat arrays (no OpenMesh).
+//! \throw Cancelled once options.cancel reads true (nothing is kept).
 Hierarchy build_hierarchy(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
                           const HierarchyOptions& options);
 
