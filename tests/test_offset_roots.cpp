@@ -1,9 +1,10 @@
-// The encoding's root finding (internal/offset_roots.h): the two-stage bisection against one
-// uninterrupted bisection, and the coarse brackets' "outside" verdicts against the refined roots.
+// The encoding's root finding (internal/offset_roots.h): the bracketed Newton roots against an
+// independent bisection, and the brackets' "outside" verdicts against the roots.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "internal/offset_roots.h"
@@ -119,13 +120,14 @@ Sample random_sample(std::mt19937& rng, Kind kind) {
 
 }  // namespace
 
-// Refining a coarse bracket goes on with the same bisection: the roots are the same numbers as one
-// uninterrupted bisection gives, bit for bit, on offset cubics and on cubics with vanishing
-// leading coefficients.
-TEST(OffsetRoots, RefinedRootsAreThoseOfOneUninterruptedBisection) {
+// The roots against an independent bisection of each monotone piece to kFullRootWidth * T: the
+// same roots, as accurate, each inside its bracket, on offset cubics and on cubics with vanishing
+// leading coefficients; and Newton's steps are few (a bisection takes about 51).
+TEST(OffsetRoots, RootsAreThoseOfABisectionToFullWidth) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  int compared = 0;
+  int compared = 0, agree = 0;
+  long long steps = 0;
   for (int trial = 0; trial < 20000; ++trial) {
     double c[4];
     const double T = 0.1 + 3.0 * std::abs(u(rng));
@@ -146,15 +148,33 @@ TEST(OffsetRoots, RefinedRootsAreThoseOfOneUninterruptedBisection) {
     ASSERT_EQ(n, nref) << "trial " << trial;
     for (int r = 0; r < n; ++r) {
       EXPECT_LE(b[r].hi - b[r].lo, kCoarseRootWidth * T);
-      EXPECT_EQ(refine_root(c, T, b[r]), ref[r]) << "trial " << trial << " root " << r;
+      EXPECT_TRUE(b[r].lo <= b[r].root && b[r].root <= b[r].hi) << "trial " << trial << " root " << r;
+      // Where the cubic is ill-conditioned (near a double root, as at the base's focal points) no
+      // method pins the root below its evaluation's rounding: there both must be roots to within
+      // that rounding (a backward error of a few ulps of the terms' sum).
+      const double t = b[r].root;
+      const double terms =
+          std::abs(c[0]) +
+          std::abs(t) * (std::abs(c[1]) + std::abs(t) * (std::abs(c[2]) + std::abs(t) * std::abs(c[3])));
+      const double residual = std::abs(c[0] + t * (c[1] + t * (c[2] + t * c[3])));
+      const bool same = std::abs(t - ref[r]) <= 2 * kFullRootWidth * T;
+      EXPECT_TRUE(same || residual <= 16 * std::numeric_limits<double>::epsilon() * terms)
+          << "trial " << trial << " root " << r << ": " << t << " against " << ref[r] << ", residual "
+          << residual;
+      agree += same;
+      steps += b[r].iterations;
       ++compared;
     }
   }
   EXPECT_GT(compared, 10000);
+  ::testing::Test::RecordProperty("roots", compared);
+  ::testing::Test::RecordProperty("roots_within_2e-15_T_of_the_bisection", agree);
+  ::testing::Test::RecordProperty("steps", static_cast<int>(steps));
+  EXPECT_LT(static_cast<double>(steps) / compared, 12.0);
 }
 
-// A root that root_outside() drops is outside once refined, on generic triangles and on focal ones
-// (see random_sample()), where the point's own root is inside and must not be dropped.
+// A root that root_outside() drops is outside the triangle at the root, on generic triangles and on focal
+// ones (see random_sample()), where the point's own root is inside and must not be dropped.
 TEST(OffsetRoots, AnOutsideVerdictHoldsAtTheRefinedRoot) {
   const double tol = 1e-7, T = 3.0;
   std::mt19937 rng(11);
@@ -168,8 +188,7 @@ TEST(OffsetRoots, AnOutsideVerdictHoldsAtTheRefinedRoot) {
     const int n = cubic_root_brackets(c, T, b);
     for (int r = 0; r < n; ++r) {
       const bool outside = root_outside(s.tri, s.p, b[r], tol);
-      RootBracket copy = b[r];
-      const double t = refine_root(c, T, copy);
+      const double t = b[r].root;
       const Vec3 bary = offset_barycentric(s.tri, s.p, t);
       if (outside) {
         ++dropped;

@@ -110,10 +110,10 @@ class Encoder {
     internal::RootBracket brackets[3];
     const int nr = internal::cubic_root_brackets(c, T, brackets);
     for (int r = 0; r < nr; ++r) {
-      // Most faces of the rings are far from holding the projection: their roots are dropped from
-      // the coarse brackets, and only the others refined.
+      // Most faces of the rings are far from holding the projection: their roots are dropped on
+      // their brackets' ends, before the triangle is evaluated at the root.
       if (internal::root_outside(tri, p, brackets[r], opt_.barycentric_tolerance)) continue;
-      const double t = internal::refine_root(c, T, brackets[r]);
+      const double t = brackets[r].root;
       // A root where the offset triangle collapses (the base's focal points) is no projection;
       // counted as one, such roots made vertices ambiguous and at times won as the nearest.
       if (internal::offset_collapsed(tri, t)) continue;

@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace strata::internal {
 namespace {
+
+// Horner's rounding error on a cubic is below 6 ulps of the sum of its terms' magnitudes.
+constexpr double kRounding = 8.0 * std::numeric_limits<double>::epsilon();
 
 double det3(const Vec3& a, const Vec3& b, const Vec3& c) {
   return a.dot(b.cross(c));
@@ -14,17 +18,31 @@ double cubic_at(const double c[4], double t) {
   return c[0] + t * (c[1] + t * (c[2] + t * c[3]));
 }
 
-void bisect(const double c[4], double T, double width, RootBracket& b) {
-  for (; b.iterations < 200 && b.hi - b.lo > width * T; ++b.iterations) {
-    const double mid = 0.5 * (b.lo + b.hi);
-    const double fm = cubic_at(c, mid);
-    if (fm == 0.0)
-      b.lo = b.hi = mid;
-    else if ((fm < 0) == (b.flo < 0))
-      b.lo = mid, b.flo = fm;
+// The root in [lo, hi], where the cubic changes sign (flo = its value at lo): Newton's method from
+// the middle, a step that would leave the bracket (or a zero derivative) replaced by the bracket's
+// midpoint, until the cubic is zero to within its rounding or a step is below kFullRootWidth * T. On a
+// monotone piece near a simple root it converges quadratically; a double root at a piece's end slows it to
+// linear, and the bracket, halved or shrunk by every step, bounds it.
+double solve_piece(const double c[4], double T, double lo, double hi, double flo, int& iterations) {
+  double t = 0.5 * (lo + hi);
+  for (iterations = 1; iterations <= 200; ++iterations) {
+    const double f = cubic_at(c, t);
+    // A root to within the evaluation's rounding: further steps would follow the rounding noise
+    // (near a double root, as at the base's focal points, for many steps).
+    const double at = std::abs(t);
+    if (std::abs(f) <=
+        kRounding * (std::abs(c[0]) + at * (std::abs(c[1]) + at * (std::abs(c[2]) + at * std::abs(c[3])))))
+      return t;
+    if ((f < 0) == (flo < 0))
+      lo = t, flo = f;
     else
-      b.hi = mid;
+      hi = t;
+    double next = t - f / (c[1] + t * (2.0 * c[2] + 3.0 * c[3] * t));
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - t) <= kFullRootWidth * T || hi - lo <= kFullRootWidth * T) return next;
+    t = next;
   }
+  return t;
 }
 
 Vec3 area_vector(const OffsetTriangle& tri, double t) {
@@ -74,24 +92,21 @@ int cubic_root_brackets(const double c[4], double T, RootBracket out[3]) {
     const double flo = cubic_at(c, lo), fhi = cubic_at(c, hi);
     if (flo == 0.0) {
       // A cut that is a root starts this piece and may have ended the one before.
-      if (nr == 0 || out[nr - 1].hi != lo) out[nr++] = RootBracket{lo, lo, 0.0, 0};
+      if (nr == 0 || out[nr - 1].root != lo) out[nr++] = RootBracket{lo, lo, lo, 0};
       continue;
     }
     if (fhi == 0.0) {
-      if (i + 2 == nc) out[nr++] = RootBracket{hi, hi, 0.0, 0};
+      if (i + 2 == nc) out[nr++] = RootBracket{hi, hi, hi, 0};
       continue;
     }
     if ((flo < 0) == (fhi < 0)) continue;
-    out[nr] = RootBracket{lo, hi, flo, 0};
-    bisect(c, T, kCoarseRootWidth, out[nr]);
-    ++nr;
+    RootBracket& b = out[nr++];
+    b.root = solve_piece(c, T, lo, hi, flo, b.iterations);
+    const double half = 0.499 * kCoarseRootWidth * T;  // rounded, the width stays below it
+    b.lo = std::max(lo, b.root - half);
+    b.hi = std::min(hi, b.root + half);
   }
   return nr;
-}
-
-double refine_root(const double c[4], double T, RootBracket& b) {
-  bisect(c, T, kFullRootWidth, b);
-  return 0.5 * (b.lo + b.hi);
 }
 
 Vec3 offset_barycentric(const OffsetTriangle& tri, const Vec3& p, double t, bool* degenerate) {
