@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -395,6 +396,26 @@ TEST(IntersectLimit, MaxPairsStopsTheSearch) {
     EXPECT_EQ(exact.num_pairs, all.size());
     EXPECT_FALSE(exact.truncated);
     EXPECT_EQ(exact.pairs, all);
+  }
+}
+
+// IntersectionOptions::cancel: set, the search throws Cancelled, on one thread and on many;
+// cleared, the same options give the full result.
+TEST(IntersectCancel, ASetFlagStopsTheSearch) {
+  const TriMesh a = icosphere(4);
+  const TriMesh m = concatenate(a, translated(a, Vec3(0.5, 0.0, 0.0)));
+  for (bool parallel : {false, true}) {
+    std::atomic<bool> stop{true};
+    IntersectionOptions o;
+    o.parallel = parallel;
+    o.collect_pairs = true;
+    o.cancel = &stop;
+    EXPECT_THROW(find_self_intersections(m.vertices, m.faces, o), Cancelled);
+    stop = false;
+    const IntersectionResult r = find_self_intersections(m.vertices, m.faces, o);
+    o.cancel = nullptr;
+    EXPECT_EQ(r.pairs, find_self_intersections(m.vertices, m.faces, o).pairs);
+    EXPECT_GT(r.num_pairs, 0u);
   }
 }
 

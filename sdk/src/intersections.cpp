@@ -231,7 +231,8 @@ class SelfIntersectionSearch {
         nodes_(nodes),
         prims_(prims),
         collect_(options.collect_pairs),
-        max_pairs_(options.max_pairs) {}
+        max_pairs_(options.max_pairs),
+        cancel_(options.cancel) {}
 
   void run() {
     if (!prims_.empty()) self(0, prims_.size());
@@ -248,7 +249,10 @@ class SelfIntersectionSearch {
   }
 
  private:
-  bool stopped() const { return truncated_.load(std::memory_order_relaxed); }
+  bool stopped() const {
+    return truncated_.load(std::memory_order_relaxed) ||
+           (cancel_ && cancel_->load(std::memory_order_relaxed));
+  }
 
   template <class F, class G>
   static void fork(bool parallel, const F& f, const G& g) {
@@ -332,6 +336,7 @@ class SelfIntersectionSearch {
   const std::vector<Prim>& prims_;
   const bool collect_;
   const std::size_t max_pairs_;
+  const std::atomic<bool>* cancel_;
   std::atomic<std::size_t> found_{0};
   std::atomic<bool> truncated_{false};
   tbb::enumerable_thread_specific<std::vector<Pair>> pairs_;
@@ -422,15 +427,23 @@ IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, co
   result.num_faces = faces.size();
   result.connectivity_hash = fingerprint(faces);
 
+  auto check_cancel = [&] {
+    if (options.cancel && options.cancel->load(std::memory_order_relaxed))
+      throw Cancelled("intersection search cancelled");
+  };
   auto work = [&] {
+    check_cancel();
     std::vector<Item> items = make_items(vertices, faces);
+    check_cancel();
     std::vector<Node> nodes;
     BvhBuilder(items, nodes).build();
+    check_cancel();
     const std::vector<Prim> prims = make_prims(vertices, faces, items);
     std::vector<Item>().swap(items);  // keep the peak memory down on big meshes
     fit_boxes(nodes, prims);
     SelfIntersectionSearch search(vertices, nodes, prims, options);
     search.run();
+    check_cancel();  // the search stopped at a node, and its count is short
     const std::size_t found = search.found();
     result.truncated = search.truncated();
     result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;

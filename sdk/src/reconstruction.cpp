@@ -818,6 +818,7 @@ class VolumeReconstructor::Impl {
       IntersectionOptions io;
       io.collect_pairs = true;
       io.parallel = false;  // the solver stays on the calling thread
+      io.cancel = opt_.cancel;
       if (!rest_pairs_)
         rest_pairs_ = std::make_unique<IntersectionResult>(
             find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));

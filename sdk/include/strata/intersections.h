@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -22,6 +23,9 @@ struct IntersectionOptions {
   //! Run on the TBB thread pool; false runs on the calling thread only. The result is the same
   //! either way, except which pairs are kept when max_pairs cuts the search short.
   bool parallel = true;
+  //! Optional: a flag another thread may set to stop the search (read at every node of the
+  //! hierarchy the search visits); once it reads true, find_self_intersections() throws Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 //! What find_self_intersections() found.
@@ -59,7 +63,7 @@ struct IntersectionResult {
 //!
 //! \pre Every face index is in [0, vertices.size()); every vertex used by a face has finite coordinates.
 //! \throw InvalidInput if a face index is out of range, a used vertex has a non-finite coordinate,
-//!        or there are more faces than fit in an int.
+//!        or there are more faces than fit in an int; Cancelled once options.cancel reads true.
 IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                                            const IntersectionOptions& options = {});
 
