@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 #include <utility>
@@ -276,6 +277,54 @@ TEST(Hierarchy, FacesAHalfEdgeMeshCannotHoldAreLeftOutOfTheCoarseLevels) {
     const auto edges = edge_faces(h.levels[l].faces);
     for (const auto& [e, k] : edges) EXPECT_LE(k, 2);
   }
+}
+
+// Tiny and degenerate inputs decimate without a crash (the checks refuse what would break the
+// surface): an empty face list, one triangle, a pillow (two faces on three vertices), a
+// tetrahedron, a ring of faces around a triangular hole; each level stays manifold along its edges.
+TEST(Hierarchy, TinyInputsAreSafe) {
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 1;
+  o.ratio = 0.5;
+  // A, B, C (an outer triangle), a, b, c (an inner one, the hole), an apex above.
+  const std::vector<Vec3> x = {Vec3(0, 0, 0),   Vec3(4, 0, 0), Vec3(2, 4, 0), Vec3(1.5, 1, 0),
+                               Vec3(2.5, 1, 0), Vec3(2, 2, 0), Vec3(1, 1, 3)};
+  const std::vector<std::vector<Face>> cases = {
+      {},
+      {{0, 1, 2}},
+      {{0, 1, 2}, {0, 2, 1}},
+      {{0, 2, 1}, {0, 1, 6}, {1, 2, 6}, {2, 0, 6}},
+      {{0, 1, 4}, {0, 4, 3}, {1, 2, 5}, {1, 5, 4}, {2, 0, 3}, {2, 3, 5}},  // around the hole a b c
+  };
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    SCOPED_TRACE("case " + std::to_string(k));
+    const Hierarchy h = internal::build_hierarchy(x, cases[k], o);
+    ASSERT_GE(h.levels.size(), 1u);
+    EXPECT_EQ(h.levels.back().faces, cases[k]);
+    for (const Hierarchy::Level& L : h.levels)
+      for (const auto& [e, n] : edge_faces(L.faces)) EXPECT_LE(n, 2);
+  }
+}
+
+// A soup of triangles that share vertices but no edges (every vertex split into one copy per
+// triangle, so nothing can collapse, and most queued edges stay current after a prune): the
+// decimation stops at once with the input as its only level. A prune at every pop made this
+// quadratic (minutes at this size).
+TEST(Hierarchy, ATriangleSoupSharingOnlyVerticesEndsAtOnce) {
+  const int n = 601;  // triples {i, j, k} with i + j + k = 0 mod n: each pair in one triple at most
+  TriMesh m;
+  for (int i = 0; i < n; ++i) m.vertices.emplace_back(std::cos(0.01 * i), std::sin(0.01 * i), 0.001 * i);
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) {
+      const int k = (2 * n - i - j) % n;
+      if (k > j) m.faces.push_back(Face{i, j, k});
+    }
+  ASSERT_GT(m.faces.size(), 50000u);
+  internal::HierarchyOptions o;
+  o.coarsest_vertices = 10;
+  const Hierarchy h = internal::build_hierarchy(m.vertices, m.faces, o);
+  ASSERT_EQ(h.levels.size(), 1u);
+  EXPECT_EQ(h.levels.back().faces, m.faces);
 }
 
 }  // namespace

@@ -66,8 +66,12 @@ class Decimator {
       // A live edge has one current entry (rarely a duplicate): about 3 per live vertex. The rest
       // are deleted edges' and stale lengths' entries, which are dropped once they would double the heap:
       // popping them one by one from a heap of millions took longer than the collapses.
-      if (heap_.size() > 6 * static_cast<std::size_t>(live_)) {
+      // Once more only after the heap has doubled since: where most edges cannot collapse (their
+      // vertices split and locked, as in a soup of triangles sharing only vertices) the heap stays
+      // above that size after pruning, and a prune at every pop would be quadratic.
+      if (heap_.size() > 6 * static_cast<std::size_t>(live_) && heap_.size() > 2 * pruned_size_) {
         prune();
+        pruned_size_ = heap_.size();
         if (heap_.empty()) break;
       }
       const Entry e = heap_.front();
@@ -436,8 +440,9 @@ class Decimator {
   std::vector<char> vertex_deleted_;
   std::vector<int> tag_;  // per input vertex: the link condition's stamp
   int stamp_ = 0;
-  std::vector<Entry> heap_;     // a min-heap on (length2, edge), 4-ary
-  std::vector<double> queued_;  // per edge: the length2 of its current entry, -1 if none (or deleted)
+  std::vector<Entry> heap_;      // a min-heap on (length2, edge), 4-ary
+  std::vector<double> queued_;   // per edge: the length2 of its current entry, -1 if none (or deleted)
+  std::size_t pruned_size_ = 0;  // the heap's size after the last prune
   int live_ = 0;
 };
 
