@@ -312,7 +312,7 @@ struct ReconstructOptions {
   //! A factorization (a factorized step) is not interrupted, and a call past its last check
   //! returns its result. The VolumeReconstructor keeps its hierarchy and stays usable (clear the
   //! flag before the next call). A drag step cancelled midway leaves its DragState valid for the
-  //! next step. The VolumeReconstructor's construction reads it too (every 1024 collapses of the
+  //! next step. The VolumeReconstructor's construction reads it too (every 1024 queued edges of the
   //! decimation and between levels: at 1M prisms at most 0.19 s later) and throws Cancelled. The
   //! flag must outlive every call that reads it (copies of these options keep the pointer);
   //! layered models do not keep it.

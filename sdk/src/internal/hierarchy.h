@@ -29,10 +29,11 @@ struct HierarchyOptions {
   int max_levels = 10;
   int coarsest_vertices = 200;
   double ratio = 0.25;
-  //! Optional: read every 1024 collapses; once true, build_hierarchy() throws Cancelled.
+  //! Optional: read every 1024 edges taken from the queue (collapsed or not); once true, build_hierarchy()
+  //! throws Cancelled.
   const std::atomic<bool>* cancel = nullptr;
-  //! Optional: the fraction of the input's vertices removed so far, every 65536 collapses and at
-  //! each level's end (about 1 - ratio after the first level, which takes most of the time).
+  //! Optional: the fraction of the input's vertices removed so far, every 65536 edges taken from the queue
+  //! and at each level's end (about 1 - ratio after the first level, which takes most of the time).
   std::function<void(double)> progress;
 };
 
