@@ -427,6 +427,9 @@ TEST(Reconstruction, RejectsBadInput) {
   bad.coarsening_ratio = 1.5;
   EXPECT_THROW(VolumeReconstructor(e, bad), InvalidInput);
   bad = ReconstructOptions{};
+  bad.coarsest_vertices = 0;
+  EXPECT_THROW(VolumeReconstructor(e, bad), InvalidInput);
+  bad = ReconstructOptions{};
   bad.fold_repair_rounds = -1;
   EXPECT_THROW(VolumeReconstructor(e, bad), InvalidInput);
   bad = ReconstructOptions{};

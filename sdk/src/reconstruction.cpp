@@ -501,6 +501,7 @@ class VolumeReconstructor::Impl {
     const MultigridStepOptions& mo = o.multigrid;
     check(o.volume_scales >= 1, "volume_scales", o.volume_scales, "at least 1");
     check(o.max_levels >= 1, "max_levels", o.max_levels, "at least 1");
+    check(o.coarsest_vertices >= 1, "coarsest_vertices", o.coarsest_vertices, "at least 1");
     check(o.coarsening_ratio > 0 && o.coarsening_ratio < 1, "coarsening_ratio", o.coarsening_ratio,
           "between 0 and 1");
     check(o.volume_iterations >= 1, "volume_iterations", o.volume_iterations, "at least 1");

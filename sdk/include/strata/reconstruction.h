@@ -99,7 +99,7 @@ struct ReconstructOptions {
   int volume_scales = 5;
   //! g: multigrid levels at most, the finest included (section 4.3).
   int max_levels = 10;
-  //! Decimation stops when a level would have fewer vertices than this.
+  //! Decimation stops when a level would have fewer vertices than this (at least 1).
   int coarsest_vertices = 200;
   //! Vertex count of a level relative to the next finer one.
   double coarsening_ratio = 0.25;
