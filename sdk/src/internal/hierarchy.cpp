@@ -154,17 +154,16 @@ class Decimator {
       return it != last && it->first == b ? static_cast<int>(it - out_corners.begin()) : -1;
     };
     // Faces in order; one is kept if no kept face uses one of its directed edges.
-    std::vector<char> taken(out_corners.size(), 0);  // per run head
-    std::vector<int> kept_corner(out_corners.size(), -1);
+    std::vector<int> kept_corner(out_corners.size(), -1);  // per run head: the kept face's corner
     std::vector<int> kept_faces;
     for (int f = 0; f < nf; ++f) {
       const Face& t = faces[f];
       if (degenerate(t)) continue;
       int heads[3];
       bool ok = true;
-      for (int c = 0; c < 3 && ok; ++c) ok = !taken[heads[c] = find(t[c], t[(c + 1) % 3])];
+      for (int c = 0; c < 3 && ok; ++c) ok = kept_corner[heads[c] = find(t[c], t[(c + 1) % 3])] < 0;
       if (!ok) continue;
-      for (int c = 0; c < 3; ++c) taken[heads[c]] = 1, kept_corner[heads[c]] = 3 * f + c;
+      for (int c = 0; c < 3; ++c) kept_corner[heads[c]] = 3 * f + c;
       kept_faces.push_back(f);
     }
     // Edges in order of first use; the half-edge of each kept corner.
@@ -194,25 +193,23 @@ class Decimator {
       }
       face_halfedge_[i] = he[2];  // OpenMesh's add_face: the face's last half-edge
     }
-    orig_.resize(n);
-    for (int v = 0; v < n; ++v) orig_[v] = v;
     locked_.assign(n, 0);
     split_fans(out_corners, start, corner_he, n);
     // Boundary half-edges: each runs into the boundary half-edge leaving its end (one per vertex,
     // the fans being split).
-    std::vector<int> boundary_out(orig_.size(), -1);
+    std::vector<int> boundary_out(locked_.size(), -1);
     for (std::size_t h = 0; h < nh; ++h)
       if (face_[h] < 0) boundary_out[to_[h ^ 1]] = static_cast<int>(h);
     for (std::size_t h = 0; h < nh; ++h)
       if (face_[h] < 0) link(static_cast<int>(h), boundary_out[to_[h]]);
     // Each vertex's outgoing half-edge: a boundary one if it has one (OpenMesh's invariant, which
     // is_boundary(v) and the ring's first vertex rely on).
-    out_.assign(orig_.size(), -1);
+    out_.assign(locked_.size(), -1);
     for (std::size_t h = 0; h < nh; ++h) {
       const int v = to_[h ^ 1];
       if (out_[v] < 0 || face_[h] < 0) out_[v] = static_cast<int>(h);
     }
-    vertex_deleted_.assign(orig_.size(), 0);
+    vertex_deleted_.assign(locked_.size(), 0);
   }
 
   // Gives each fan of faces around a vertex after its first a vertex copy of its own (see the
@@ -237,8 +234,8 @@ class Decimator {
           seen[h] = 1, fan.push_back(h);
         }
         if (fans++ == 0) continue;
-        const int copy = static_cast<int>(orig_.size());
-        orig_.push_back(v);
+        const int copy = static_cast<int>(locked_.size());
+        copy_of_.push_back(v);
         locked_.push_back(1);
         locked_[v] = 1;
         for (int h : fan) to_[prev_[h]] = copy, to_[h ^ 1] = copy;
@@ -309,7 +306,7 @@ class Decimator {
   }
 
   // A vertex's input vertex: itself, or the vertex a fan's copy was split from.
-  int input(int v) const { return v < n_ ? v : orig_[v]; }
+  int input(int v) const { return v < n_ ? v : copy_of_[v - n_]; }
 
   double length2(int h) const { return (x_[input(to_[h ^ 1])] - x_[input(to_[h])]).squaredNorm(); }
 
@@ -358,11 +355,10 @@ class Decimator {
       shared = shared || (tag_[u] == stamp_ && u != vl && u != vr);
     });
     if (shared) return false;
-    const bool edge_on_boundary = face_[h] < 0 || face_[o] < 0;
-    // An interior edge between two boundary vertices would pinch the surface.
-    if (boundary_vertex(v0) && boundary_vertex(v1) && !edge_on_boundary) return false;
-    // Keep the boundary's shape: a boundary vertex may only slide along its boundary edge.
-    if (boundary_vertex(v0) && !edge_on_boundary) return false;
+    // Keep the boundary's shape: a boundary vertex may only slide along its boundary edge. (This
+    // covers OpenMesh's test against an interior edge between two boundary vertices, which would
+    // pinch the surface.)
+    if (boundary_vertex(v0) && face_[h] >= 0 && face_[o] >= 0) return false;
     // Faces that survive around v0 must not flip or degenerate when v0 moves onto v1.
     const Vec3& target = x_[input(v1)];
     const Vec3& origin = x_[input(v0)];
@@ -434,8 +430,8 @@ class Decimator {
   std::vector<int> to_, next_, prev_, face_;
   std::vector<int> face_halfedge_;  // per kept face: a half-edge (-1: deleted); its corners start at its end
   std::vector<int> out_;            // per vertex: an outgoing half-edge (-1: isolated or deleted)
-  std::vector<int> orig_;           // per vertex: its input vertex (differs for a fan's copy only)
-  int n_ = 0;                       // input vertices
+  int n_ = 0;                       // input vertices; vertices n_.. are fans' copies
+  std::vector<int> copy_of_;        // per copy (vertex n_ + k): the input vertex it was split from
   std::vector<char> locked_;        // per vertex: split (never collapsed)
   std::vector<char> vertex_deleted_;
   std::vector<int> tag_;  // per input vertex: the link condition's stamp
