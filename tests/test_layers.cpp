@@ -436,16 +436,22 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_GT(back.multigrid.retry_iterations, 0);
   EXPECT_FALSE(back.multigrid.single_precision_cycles);
 
+  EXPECT_TRUE(back.fold_repair_local_first);  // the default, written since 2026-11-27
+
   const layers::StrataContainer c = layers::read_strata_container(path);
-  // A file written before retry_other_regularization existed solves as it did then: without it.
-  {
+  // A file written before retry_other_regularization (or fold_repair_local_first) existed solves
+  // as it did then: without it.
+  for (const char* key : {"retry_other_regularization", "fold_repair_local_first"}) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
-    ASSERT_TRUE(j["options"]["reconstruct"].contains("retry_other_regularization"));
-    j["options"]["reconstruct"].erase("retry_other_regularization");
+    ASSERT_TRUE(j["options"]["reconstruct"].contains(key));
+    j["options"]["reconstruct"].erase(key);
     old.model_json = j.dump();
     layers::write_strata_container(old, tmp.file("old.strata"));
-    EXPECT_FALSE(layers::read_model(tmp.file("old.strata")).options().reconstruct.retry_other_regularization);
+    const ReconstructOptions read = layers::read_model(tmp.file("old.strata")).options().reconstruct;
+    EXPECT_FALSE(std::string(key) == "retry_other_regularization" ? read.retry_other_regularization
+                                                                  : read.fold_repair_local_first)
+        << key;
   }
   // A file written before the local end's options were stored reads the defaults, as it did then.
   {

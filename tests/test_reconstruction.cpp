@@ -269,7 +269,7 @@ TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
   repair.fold_repair_rounds = 3;
   const ReconstructResult fixed = f.solve(repair);
   EXPECT_GE(fixed.stats.fold_repairs, 1);
-  EXPECT_LE(fixed.stats.fold_repairs, 3);
+  EXPECT_LE(fixed.stats.fold_repairs, 2 * 3);  // the local pass's rounds and the whole-level ones
   EXPECT_TRUE(fixed.stats.converged);
   EXPECT_LE(fixed.stats.max_relative_error, 1e-4);
   EXPECT_LT(new_pairs(fixed.positions), p0);
@@ -285,6 +285,55 @@ TEST(Reconstruction, FoldRepairRemovesNewPairsAndKeepsTheVolumes) {
   const ReconstructResult blind = f.solve(repair);
   EXPECT_EQ(blind.stats.fold_repairs, 0);
   EXPECT_EQ(blind.positions, plain.positions);
+}
+
+// fold_repair_local_first: the repair's local pass (the smoothed vertices alone restore the
+// volumes) runs first, and the rounds with whole-level polishes only if it leaves folds; the
+// better result of the two passes is kept, so never worse than the whole-level rounds alone.
+// Measured with the multigrid preset: the regular 20k cuboid's bend folds, and five local rounds
+// remove its pairs without a whole-level polish (0.95 s against 1.12 s with the polish every
+// round); on the paper's rings (FoldingRings) the local pass does not suffice, and the result is
+// the whole-level rounds' own.
+TEST(Reconstruction, FoldRepairTriesTheLocalPassFirst) {
+  {
+    const cases::CylinderCase c = make_case(cases::DetailKind::Cuboid, 20000);
+    const DetailEncoding e = encode_detail(c.detail, c.base);
+    ReconstructOptions o = multigrid_reconstruct_options();
+    o.fallback_schedule = false;
+    o.retry_volume_iterations = 0;
+    o.retry_other_regularization = false;
+    const ReconstructResult local = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    o.fold_repair_local_first = false;
+    const ReconstructResult whole = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    ASSERT_GE(local.stats.fold_repairs, 1);  // the case: the solve folds and is repaired
+    EXPECT_EQ(local.stats.fold_repair_polishes, 0);
+    EXPECT_GE(whole.stats.fold_repair_polishes, 1);
+    for (const ReconstructResult* r : {&local, &whole}) {
+      EXPECT_TRUE(r->stats.converged);
+      EXPECT_EQ(r->stats.new_intersecting_pairs, 0);
+      IntersectionOptions all = collecting();
+      EXPECT_EQ(count_new_intersections(find_self_intersections(c.detail.vertices, c.detail.faces, all),
+                                        find_self_intersections(r->positions, c.detail.faces, all)),
+                0u);
+    }
+  }
+  {
+    const FoldingRings f;
+    ReconstructOptions o = f.none;
+    o.fold_repair_rounds = ReconstructOptions{}.fold_repair_rounds;
+    const ReconstructResult both = f.solve(o);
+    o.fold_repair_local_first = false;
+    const ReconstructResult whole = f.solve(o);
+    ASSERT_GE(both.stats.fold_repair_polishes, 1);  // the case: the local pass leaves folds
+    EXPECT_LE(f.new_pairs(both.positions), f.new_pairs(whole.positions));
+    EXPECT_EQ(both.stats.new_intersecting_pairs, static_cast<long long>(f.new_pairs(both.positions)));
+    // The local rounds come on top of the whole-level ones, which are the same as without them.
+    EXPECT_GT(both.stats.fold_repairs, whole.stats.fold_repairs);
+    EXPECT_EQ(both.stats.fold_repair_polishes, whole.stats.fold_repair_polishes);
+    if (f.new_pairs(both.positions) == f.new_pairs(whole.positions)) {
+      EXPECT_EQ(both.positions, whole.positions);
+    }
+  }
 }
 
 // fallback_schedule: a solve left with new pairs is solved once more with the other preset, at

@@ -70,6 +70,7 @@ json options_json(const ModelOptions& o) {
             {"fallback_schedule", r.fallback_schedule},
             {"retry_other_regularization", r.retry_other_regularization},
             {"fold_repair_rounds", r.fold_repair_rounds},
+            {"fold_repair_local_first", r.fold_repair_local_first},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
             {"fold_repair_max_fraction", r.fold_repair_max_fraction},
@@ -201,6 +202,9 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
     return r.contains(key) ? static_cast<int>(h.integer(r, key, wr, 0, 100000)) : fallback;
   };
   ro.fold_repair_rounds = optional_count("fold_repair_rounds", 0);
+  // Files written before 2026-11-27 (thirteenth session) polished the whole level in every round.
+  ro.fold_repair_local_first =
+      r.contains("fold_repair_local_first") && h.boolean(r, "fold_repair_local_first", wr);
   ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
   ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
   if (r.contains("fold_repair_max_fraction"))

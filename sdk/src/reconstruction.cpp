@@ -901,18 +901,50 @@ class VolumeReconstructor::Impl {
   }
 
   // Local fold repair (ReconstructOptions::fold_repair_rounds): rounds of regularization around
-  // the new pairs' triangles at full weight, each followed by exact steps on the whole finest
-  // level (whose minimum-norm corrections stay near the smoothed part, where the volumes moved).
-  // \p best is the outcome of s.P on entry; on return s.P is the best result and \p best its outcome.
+  // the new pairs' triangles at full weight, each followed by exact steps that restore the
+  // volumes. \p best is the outcome of s.P on entry; on return s.P is the best result and \p best
+  // its outcome. Two passes of rounds from the entry positions: first the volumes are restored by
+  // moving the smoothed vertices alone (a small system per round); only if folds remain, the
+  // rounds again with the whole finest level polished too, whose minimum-norm correction spreads
+  // wider and unfolds more (the rings), at a whole-level solve a round (0.9 s on the scan-like
+  // 100k cuboid, where two local rounds alone leave no new pairs). The second pass is the repair
+  // as it was before the first existed, so a result is never worse than it would have been.
   void repair_folds(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& best) const {
     if (!best.counted || best.new_pairs == 0 || opt_.fold_repair_rounds <= 0) return;
-    // An unconverged result (checked by fold_checked()) has its rounds' results counted too.
-    const bool count = !best.converged;
     // Many pairs are a global self-contact (a limb bent into the body: the armadillo's top in a
     // layered model had 10-12% of its prisms' triangles in new pairs), which local smoothing
     // cannot undo; local folds touch far fewer (the 100k rings: 246 pairs, 0.25%).
     if (static_cast<double>(best.new_pairs) > opt_.fold_repair_max_fraction * levels_.back().faces.size())
       return;
+    if (!opt_.fold_repair_local_first) {
+      repair_rounds(s, a, st, V, best, /*whole_level=*/true);
+      return;
+    }
+    const std::vector<Vec3> entry = s.P;
+    Outcome local = best;
+    repair_rounds(s, a, st, V, local, /*whole_level=*/false);
+    if (local.converged && local.new_pairs == 0) {
+      best = std::move(local);
+      return;
+    }
+    std::vector<Vec3> local_positions;
+    local_positions.swap(s.P);
+    s.P = entry;
+    repair_rounds(s, a, st, V, best, /*whole_level=*/true);
+    if (local.better_than(best)) {
+      s.P.swap(local_positions);
+      best = std::move(local);
+    }
+  }
+
+  // The rounds of repair_folds(), from s.P with outcome \p best; on return s.P is the best result
+  // and \p best its outcome. \p whole_level: a round whose local restoration leaves folds (or
+  // does not converge) also polishes the whole finest level from the smoothed positions, and keeps
+  // the better of the two.
+  void repair_rounds(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& best,
+                     bool whole_level) const {
+    // An unconverged result (checked by fold_checked()) has its rounds' results counted too.
+    const bool count = !best.converged;
     const Level& F = levels_.back();
     std::vector<Vec3> kept = s.P;
     std::vector<int> seeds = best.new_pair_faces;
@@ -926,20 +958,19 @@ class VolumeReconstructor::Impl {
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
       st.regularization_sweeps += opt_.fold_repair_sweeps;
       // Only the prisms around the smoothed vertices lost their volumes: first restore them by
-      // moving those vertices alone (a small system, nearly free). If folds remain, the whole
-      // level's polish from the smoothed positions, whose minimum-norm correction spreads wider
-      // (it unfolds more on the rings, at a factorization a step), and the better of the two.
+      // moving those vertices alone (a small system, nearly free).
       smoothed = s.P;
       Outcome o;
       double damping = kMinDamping;
       const bool local_done =
           local_polish(local_set(subset), s, a, opt_.tolerance, st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
-      if (!o.converged || o.new_pairs > 0) {
+      if (whole_level && (!o.converged || o.new_pairs > 0)) {
         local_result.swap(s.P);
         s.P = smoothed;
         s.gn.damping = kMinDamping;
         polish(F, s, opt_.tolerance, st, V, /*local_end=*/false);
+        ++st.fold_repair_polishes;
         Outcome global = outcome(s, a, V, count);
         if (global.better_than(o))
           o = std::move(global);

@@ -304,6 +304,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"fallbacks", s.fallbacks},
               {"fallback_kept", s.fallback_kept},
               {"fold_repairs", s.fold_repairs},
+              {"fold_repair_polishes", s.fold_repair_polishes},
               {"solver_new_intersecting_pairs", s.new_intersecting_pairs},
               {"final_sweeps", s.final_sweeps},
               {"constraint_updates", s.constraint_updates},
