@@ -818,12 +818,16 @@ class VolumeReconstructor::Impl {
     if ((o.converged || count_unconverged) && opt_.retry_on_new_intersections) {
       IntersectionOptions io;
       io.collect_pairs = true;
-      io.parallel = false;  // the solver stays on the calling thread
       io.cancel = opt_.cancel;
-      if (!rest_pairs_)
-        rest_pairs_ = std::make_unique<IntersectionResult>(
-            find_self_intersections(enc_.detail_rest, enc_.detail_faces, io));
-      const IntersectionResult now = find_self_intersections(s.P, enc_.detail_faces, io);
+      // On the solver's threads (ReconstructOptions::threads): the count is the same on any
+      // number of them (the pairs are sorted).
+      io.parallel = arena_ != nullptr;
+      auto search = [&](const std::vector<Vec3>& p) {
+        if (!arena_) return find_self_intersections(p, enc_.detail_faces, io);
+        return arena_->execute([&] { return find_self_intersections(p, enc_.detail_faces, io); });
+      };
+      if (!rest_pairs_) rest_pairs_ = std::make_unique<IntersectionResult>(search(enc_.detail_rest));
+      const IntersectionResult now = search(s.P);
       o.new_pairs = count_new_intersections(*rest_pairs_, now);
       o.counted = true;
       std::vector<std::pair<int, int>> fresh;

@@ -118,8 +118,9 @@ struct ReconstructOptions {
   //! cage where 2 left none; 2 steps also failed to converge on the armadillo's top bent 90 degrees
   //! in a layered model (strata_bench_layers; max error 2.2), which 5 steps solve.
   int retry_volume_iterations = 5;
-  //! Count the new intersecting pairs of a converged clean-start solve (exactly, one thread; at
-  //! 100k prisms 0.05 s per count, the rest detail counted once) and retry if there are any.
+  //! Count the new intersecting pairs of a converged clean-start solve (exactly, on the solver's
+  //! `threads`; at 100k prisms 0.05 s per count on one, the rest detail counted once) and retry
+  //! if there are any.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! With TangentialRegularization::RestLaplacian: a clean-start solve that ends unconverged or
