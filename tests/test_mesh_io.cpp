@@ -610,6 +610,20 @@ TEST(MeshIoErrors, OutOfRangeIndex) {
   write_bytes(fx.dir.file("big.ply"), ply);
   EXPECT_TRUE(
       throws_with<InvalidInput>([&] { read_mesh(fx.dir.file("big.ply")); }, {"4000000000 out of range"}));
+  // A vertex element without properties holds no coordinates: its count must not admit the
+  // faces' indices (a quad's fan apex read the missing vertices: a crash before 2026-11-27),
+  // ascii or binary.
+  const std::string header =
+      "element vertex 4\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  write_bytes(fx.dir.file("noxyz.ply"), "ply\nformat ascii 1.0\n" + header + "4 0 1 2 3\n");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(fx.dir.file("noxyz.ply")); },
+                                   {fx.dir.file("noxyz.ply"), "vertex element has no property x"}));
+  std::string bin = "ply\nformat binary_little_endian 1.0\n" + header;
+  put(bin, static_cast<uint8_t>(4));
+  for (int32_t i : {0, 1, 2, 3}) put(bin, i);
+  write_bytes(fx.dir.file("noxyz_bin.ply"), bin);
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(fx.dir.file("noxyz_bin.ply")); },
+                                   {"vertex element has no property x"}));
 }
 
 TEST(MeshIoErrors, NonFiniteCoordinate) {

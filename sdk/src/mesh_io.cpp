@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -832,7 +833,9 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   std::vector<long long> corners;
   PlyValue value;
   for (const PlyElement& e : h.elements) {
-    if (e.props.empty()) continue;  // holds no data, whatever its count
+    // An element without properties holds no data, whatever its count; but vertices must have
+    // coordinates (faces are checked against the vertex count).
+    if (e.props.empty() && !(e.name == "vertex" && e.count > 0)) continue;
     const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
     std::array<int, 3> xyz{-1, -1, -1};
     int index_prop = -1;
@@ -885,6 +888,9 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   }
   const std::string rest = src.leftover();
   if (!rest.empty()) fail_io(name, rest + " (wrong counts in the header?)");
+  // The faces' indices were checked against the declared count, which is what was read: the
+  // header names one vertex element, and one with a count has coordinates.
+  assert(static_cast<long long>(mesh.vertices.size()) == num_vertices);
   mesh.faces = faces.finish(mesh.vertices);
   return mesh;
 }
