@@ -83,6 +83,24 @@ expect_fail "cage fit output dir"   nodir/cage.obj   cage fit $G/base.obj -o out
 expect_fail "cage, no subcommand"   "subcommand is required" cage
 expect_fail "generate unknown case" sphere           generate --case sphere --out-dir out/case
 expect_fail "generate bad bend"     bend-degrees     generate --case bumps --bend-degrees 400 --out-dir out/case
+# A PLY vertex element without coordinates (a quad's fan read the missing vertices: a crash).
+printf 'ply\nformat ascii 1.0\nelement vertex 4\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n4 0 1 2 3\n' >noxyz.ply
+expect_fail "PLY without x"         "noxyz.ply: vertex element has no property x" stats noxyz.ply
+expect_fail "PLY without x, rec"    noxyz.ply        $(rec noxyz.ply $G/base.obj $G/edited_base.obj)
+# A report that cannot be written: the mesh must not land either (the outputs are committed
+# together), and the command fails.
+expect_fail "report unwritable"     /proc/strata_report.json reconstruct -q --detail $G/detail.obj --base $G/base.obj \
+  --edited-base $G/edited_base.obj -o out/result.obj --report /proc/strata_report.json
+expect_fail "cage report unwritable" /proc/strata_report.json cage fit $G/base.obj -o out/cage.obj \
+  --report /proc/strata_report.json
+# An output that would replace an input is refused before anything is read or written.
+cp $G/detail.obj mine.obj
+expect_fail "output = input"        "would replace the input" reconstruct -q --detail mine.obj --base $G/base.obj \
+  --edited-base $G/edited_base.obj -o mine.obj
+expect_fail "report = input"        "would replace the input" reconstruct -q --detail mine.obj --base $G/base.obj \
+  --edited-base $G/edited_base.obj -o out/result.obj --report ./mine.obj
+cmp -s mine.obj $G/detail.obj || { echo "FAIL [output = input]: the input was changed" >&2; failures=$((failures + 1)); }
+expect_fail "cage output = scan"    "would replace the input" cage fit mine.obj -o ./mine.obj
 
 if [ "$failures" -ne 0 ]; then
   echo "bad_input: $failures check(s) failed" >&2

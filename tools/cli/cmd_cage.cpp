@@ -21,7 +21,7 @@ struct CageFitCmdOptions {
 };
 
 int run_cage_fit(const CageFitCmdOptions& o) {
-  check_outputs(o.output, {}, o.report);
+  check_outputs(o.output, {}, o.report, {o.scan});
   const Log log(o.quiet);
   Stopwatch sw;
   log.phase("reading " + o.scan);
@@ -36,7 +36,8 @@ int run_cage_fit(const CageFitCmdOptions& o) {
     }
   }();
   sw.restart();
-  write_cage(fit.cage, o.output);
+  StagedOutputs staged;  // the cage lands only with its report
+  staged.write(o.output, [&](const std::string& p) { write_cage(fit.cage, p); });
   const double write_seconds = sw.seconds();
   const json r{{"scan", mesh_json(scan.mesh, scan.name)},
                {"cage",
@@ -60,7 +61,8 @@ int run_cage_fit(const CageFitCmdOptions& o) {
                  {"decimate", fit.seconds_decimate},
                  {"fit", fit.seconds_fit},
                  {"write", write_seconds}}}};
-  if (!o.report.empty()) write_json_report(r, o.report);
+  if (!o.report.empty()) staged.write(o.report, [&](const std::string& p) { write_json_report(r, p); });
+  staged.commit();
   std::cout << "cage                 " << o.output << " (" << fit.cage.num_faces() << " faces, "
             << fit.cage.num_vertices() << " vertices, Loop)\n"
             << "fit to smoothed scan rms " << sci(fit.rms_error) << ", max " << sci(fit.max_error)

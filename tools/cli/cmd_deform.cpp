@@ -68,7 +68,7 @@ json edit_json(const EditFacts& editor, Method method, const EditResult& r, doub
 int run_deform(const DeformCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
-  check_outputs(o.output, {o.base_output}, o.report);
+  check_outputs(o.output, {o.base_output}, o.report, {o.input, o.edit, o.cage, o.cage_tags});
   const bool subdiv = o.base == "subdiv";
   if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
     throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
@@ -191,12 +191,13 @@ int run_deform(const DeformCmdOptions& o) {
 
   log.phase("writing " + o.output);
   sw.restart();
-  write_mesh(current, o.output);
+  StagedOutputs staged;  // the outputs land together, or none does
+  staged.write(o.output, [&](const std::string& p) { write_mesh(current, p); });
   if (!o.base_output.empty()) {
     if (subdiv)
-      write_cage(cage, o.base_output);
+      staged.write(o.base_output, [&](const std::string& p) { write_cage(cage, p); });
     else
-      write_mesh(base_out, o.base_output);
+      staged.write(o.base_output, [&](const std::string& p) { write_mesh(base_out, p); });
   }
   const double write_seconds = sw.seconds();
 
@@ -223,8 +224,9 @@ int run_deform(const DeformCmdOptions& o) {
   if (!o.base_output.empty()) report["base_output"] = o.base_output;
   if (!o.report.empty()) {
     report["report"] = o.report;
-    write_json_report(report, o.report);
+    staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
+  staged.commit();
   std::cout << "method         " << to_string(method) << "\n"
             << "input          " << input.name << ": " << input.mesh.num_vertices() << " vertices, "
             << input.mesh.num_faces() << " faces\n";

@@ -89,8 +89,20 @@ int run_build(const BuildCmdOptions& o) {
   if (!o.output.empty() && !o.out_dir.empty()) throw InvalidInput("give either -o or --out-dir, not both");
   if (o.output.empty() && o.out_dir.empty()) throw InvalidInput("give -o MODEL.strata or --out-dir DIR");
   if (!o.out_dir.empty()) ensure_directory(o.out_dir);
-  if (!o.output.empty()) check_output_path(o.output);
-  if (!o.report.empty()) check_output_path(o.report);
+  if (!o.output.empty()) {
+    check_output_path(o.output);
+    check_not_an_input(o.output, o.scans);
+  }
+  if (!o.report.empty()) {
+    check_output_path(o.report);
+    check_not_an_input(o.report, o.scans);
+    if (!o.output.empty() && same_file_name(o.output, o.report))
+      throw InvalidInput(o.report +
+                         ": two outputs would be written to the same file; give them different names");
+  }
+  // With -o, the model lands only with its report; with --out-dir each model is written as it is
+  // built (a batch keeps what it built), the report at the end.
+  StagedOutputs staged;
   const Log log(o.quiet);
   ProgressBar bar(static_cast<int>(o.scans.size()), o.quiet);
   json results = json::array();
@@ -118,14 +130,21 @@ int run_build(const BuildCmdOptions& o) {
         }
       }();
       const double build_seconds = sw.seconds();
-      write_model(model, out);
+      std::string written = out;
+      if (o.output.empty())
+        write_model(model, out);
+      else
+        staged.write(out, [&](const std::string& p) {
+          write_model(model, p);
+          written = p;
+        });
       r["ok"] = true;
       r["faces"] = scan.mesh.num_faces();
       r["vertices"] = scan.mesh.num_vertices();
       r["bands"] = band_summary_json(model);
       r["build_seconds"] = build_seconds;
       r["seconds"] = sw.seconds();
-      r["bytes"] = fs::file_size(out);
+      r["bytes"] = fs::file_size(written);
     } catch (const Error& e) {
       ++failed;
       r["ok"] = false;
@@ -151,7 +170,14 @@ int run_build(const BuildCmdOptions& o) {
       std::cout << name << "  FAILED: " << r["error"].get<std::string>() << "\n";
   }
   std::cout << results.size() - failed << " built, " << failed << " failed" << std::endl;
-  if (!o.report.empty()) write_json_report(json{{"command", "build"}, {"models", results}}, o.report);
+  const json report{{"command", "build"}, {"models", results}};
+  if (o.output.empty() || failed) {
+    if (!o.report.empty()) write_json_report(report, o.report);
+  } else {
+    if (!o.report.empty())
+      staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
+    staged.commit();
+  }
   return failed ? 1 : 0;
 }
 
@@ -250,7 +276,14 @@ void print_cascade(const layers::CascadeReport& r) {
 int run_change(const EditCmdOptions& o, const std::string& command,
                const std::function<json(LayeredModel&, const Log&)>& change) {
   check_output_path(o.output);
-  if (!o.report.empty()) check_output_path(o.report);
+  check_not_an_input(o.output, {o.model, o.edit});
+  if (!o.report.empty()) {
+    check_output_path(o.report);
+    check_not_an_input(o.report, {o.model, o.edit});
+    if (same_file_name(o.output, o.report))
+      throw InvalidInput(o.report +
+                         ": two outputs would be written to the same file; give them different names");
+  }
   const Log log(o.quiet);
   Stopwatch sw;
   log.phase("reading " + o.model);
@@ -274,9 +307,11 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   }
   sw.restart();
   log.phase("writing " + o.output);
-  write_model(model, o.output);
+  StagedOutputs staged;  // the model lands only with its report
+  staged.write(o.output, [&](const std::string& p) { write_model(model, p); });
   r["write_seconds"] = sw.seconds();
-  if (!o.report.empty()) write_json_report(r, o.report);
+  if (!o.report.empty()) staged.write(o.report, [&](const std::string& p) { write_json_report(r, p); });
+  staged.commit();
   std::cout << "wrote " << o.output << std::endl;
   return 0;
 }
@@ -328,6 +363,7 @@ struct ExportCmdOptions {
 
 int run_export(const ExportCmdOptions& o) {
   check_mesh_output_path(o.output);
+  check_not_an_input(o.output, {o.model});
   const LayeredModel model = layers::read_model(o.model);
   const int k = o.band < 0 ? model.num_bands() - 1 : o.band;
   if (k >= model.num_bands())

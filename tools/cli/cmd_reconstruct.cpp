@@ -65,7 +65,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
   // Fail on an unwritable destination before the (possibly long) computation.
-  check_outputs(o.output, {}, o.report);
+  check_outputs(o.output, {}, o.report, {o.detail, o.base, o.edited_base});
 
   PhaseTimes times;
   log.phase("reading " + o.detail + ", " + o.base + ", " + o.edited_base);
@@ -95,7 +95,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   TriMesh result;
   result.vertices = std::move(outcome.positions);
   result.faces = detail.mesh.faces;
-  write_mesh(result, o.output);
+  StagedOutputs staged;  // the mesh lands only with its report
+  staged.write(o.output, [&](const std::string& p) { write_mesh(result, p); });
   times.write = sw.seconds();
 
   json report{{"command", "reconstruct"},
@@ -116,8 +117,9 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
               {"solve_phases_seconds", solve_phases_json(outcome.stats)}};
   if (!o.report.empty()) {
     report["report"] = o.report;
-    write_json_report(report, o.report);
+    staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
+  staged.commit();
   print_summary(std::cout, report);
   return 0;
 }

@@ -1,10 +1,14 @@
 #include "common.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cassert>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <utility>
@@ -94,8 +98,17 @@ bool same_file_name(const std::string& a, const std::string& b) {
   return pa.lexically_normal() == pb.lexically_normal();
 }
 
+void check_not_an_input(const std::string& output, const std::vector<std::string>& inputs) {
+  for (const std::string& in : inputs) {
+    if (in.empty()) continue;
+    std::error_code ec;
+    if (same_file_name(output, in) || fs::equivalent(output, in, ec))
+      throw InvalidInput(output + ": would replace the input " + in + "; write the output to another file");
+  }
+}
+
 void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes,
-                   const std::string& report) {
+                   const std::string& report, const std::vector<std::string>& inputs) {
   std::vector<std::string> all{output};
   check_mesh_output_path(output);
   for (const std::string& m : extra_meshes)
@@ -112,6 +125,46 @@ void check_outputs(const std::string& output, const std::vector<std::string>& ex
       if (same_file_name(all[a], all[b]))
         throw InvalidInput(all[b] +
                            ": two outputs would be written to the same file; give them different names");
+  for (const std::string& out : all) check_not_an_input(out, inputs);
+}
+
+StagedOutputs::~StagedOutputs() {
+  for (const auto& [staging, target] : staged_) {
+    std::error_code ec;
+    fs::remove(staging, ec);  // may not exist (not written yet, or renamed); nothing to report
+  }
+}
+
+void StagedOutputs::write(const std::string& target,
+                          const std::function<void(const std::string& path)>& writer) {
+  const fs::path t(target);
+  const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  const std::string name = "." + t.filename().string() + ".staged." + std::to_string(::getpid()) + "." +
+                           std::to_string(staged_.size()) + t.extension().string();
+  const std::string staging = (dir / name).string();
+  staged_.emplace_back(staging, target);
+  // The writers name the file they write; the user named the target.
+  auto named = [&](const char* what) {
+    std::string m = what;
+    for (std::size_t at = m.find(staging); at != std::string::npos; at = m.find(staging, at + target.size()))
+      m.replace(at, staging.size(), target);
+    return m;
+  };
+  try {
+    writer(staging);
+  } catch (const IoError& e) {
+    throw IoError(named(e.what()));
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(named(e.what()));
+  }
+}
+
+void StagedOutputs::commit() {
+  for (const auto& [staging, target] : staged_)
+    if (::rename(staging.c_str(), target.c_str()) != 0)
+      throw IoError(target + ": cannot replace it with the staged file " + staging + ": " +
+                    std::strerror(errno));
+  staged_.clear();
 }
 
 void check_mesh_output_path(const std::string& path) {

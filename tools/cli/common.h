@@ -101,10 +101,38 @@ bool same_file_name(const std::string& a, const std::string& b);
 void check_mesh_output_path(const std::string& path);
 
 //! check_mesh_output_path for \p output and each non-empty path of \p extra_meshes, and
-//! check_output_path for \p report unless empty; all of them must name different files.
+//! check_output_path for \p report unless empty; all of them must name different files, and none
+//! may name one of \p inputs (InvalidInput: an output would replace an input the command reads).
 //! Called before a long computation so that a typo fails at once.
 void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes,
-                   const std::string& report);
+                   const std::string& report, const std::vector<std::string>& inputs = {});
+
+//! Throws InvalidInput if \p output names one of \p inputs (the same file, by name or, for
+//! existing files, by identity: a link to it).
+void check_not_an_input(const std::string& output, const std::vector<std::string>& inputs);
+
+//! A command's outputs, committed together: each is written to a staging file beside its target
+//! (a hidden name ending in the target's extension, so that the writers choose the format by it)
+//! and renamed into place only by commit(), once every output is written. If the command fails
+//! before (a report that cannot be written, a full disk), the destructor removes the staging
+//! files and no target changes. A rename in commit() can still fail after others succeeded; the
+//! targets renamed before it then hold the new files.
+class StagedOutputs {
+ public:
+  StagedOutputs() = default;
+  StagedOutputs(const StagedOutputs&) = delete;
+  StagedOutputs& operator=(const StagedOutputs&) = delete;
+  ~StagedOutputs();
+  //! Calls \p writer(path) to write \p target's contents to its staging file (atomically, as
+  //! write_mesh() does). An IoError or InvalidInput it throws names \p target, not the staging file.
+  void write(const std::string& target, const std::function<void(const std::string& path)>& writer);
+  //! Renames every staged file over its target, in staging order.
+  //! \throw IoError naming the target whose rename failed.
+  void commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;  // (staging file, target)
+};
 
 //! Creates \p dir (and its parents) if needed; throws IoError if that fails or it is not a directory.
 void ensure_directory(const std::string& dir);
