@@ -691,6 +691,37 @@ TEST(MeshIoErrors, ZeroAreaFace) {
   }
 }
 
+// The size that "zero area" is relative to is the faces': a vertex in no face, however far away,
+// does not make them small (a vertex at 1e6 made a unit tetrahedron's faces "zero area").
+TEST(MeshIoErrors, AFarVertexInNoFaceDoesNotMakeTheFacesZeroArea) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  write_bytes(dir.file("far.obj"),
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1e9 1e9 1e9\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const TriMesh m = read_mesh(dir.file("far.obj"));
+  EXPECT_EQ(m.num_vertices(), 5);
+  EXPECT_EQ(m.num_faces(), 4);
+  // A face that is small for the faces' own size still is zero area.
+  write_bytes(dir.file("thin.obj"),
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0.5 0.5 1e-15\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+              "f 2 5 3\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(dir.file("thin.obj")); }, {"face 4 has zero area"}));
+}
+
+// A UTF-8 byte order mark (as some Windows editors write) is skipped in the text formats; it
+// hid the first line's keyword, and an OBJ then lost its first vertex silently.
+TEST(MeshIoRoundTrip, AUtf8ByteOrderMarkIsSkipped) {
+  Fixture fx;
+  const Soup s = tetra();
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii, Fmt::StlAscii}) {
+    const std::string path = fx.put(s, fmt);
+    const TriMesh plain = read_mesh(path);
+    write_bytes(path, "\xEF\xBB\xBF" + read_bytes(path));
+    const TriMesh bom = read_mesh(path);
+    EXPECT_TRUE(identical(plain, bom)) << fmt_name(fmt);
+    EXPECT_EQ(bom.num_vertices(), 4) << fmt_name(fmt);
+  }
+}
+
 TEST(MeshIoErrors, RepeatedIndexIsNotSilentlyRemoved) {
   Fixture fx;
   Soup s = tetra();

@@ -35,6 +35,8 @@
 namespace strata {
 namespace {
 
+constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+
 namespace fs = std::filesystem;
 
 constexpr long long kMaxIndexCount = std::numeric_limits<int>::max();  // TriMesh indexes with int
@@ -1026,11 +1028,11 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
   const unsigned long long expected = 84ull + 50ull * count;
   if (data.size() >= 84 && data.size() == expected) return read_stl_binary(name, data, count);
 
-  size_t start = 0;
+  size_t start = data.substr(0, 3) == kUtf8Bom ? 3 : 0;
   while (start < data.size() && (is_blank(data[start]) || data[start] == '\n')) ++start;
   const bool looks_ascii = data.size() - start >= 5 && iequals(data.substr(start, 5), "solid") &&
                            data.find('\0') == std::string_view::npos;
-  if (looks_ascii) return read_stl_ascii(name, data);
+  if (looks_ascii) return read_stl_ascii(name, data.substr(data.substr(0, 3) == kUtf8Bom ? 3 : 0));
   if (data.size() < 84)
     fail_io(name, "not an STL file: " + std::to_string(data.size()) +
                       " bytes is too short for a binary STL and it does not start with 'solid'");
@@ -1064,16 +1066,22 @@ std::string find_mesh_problem(const TriMesh& mesh) {
   }
   // Zero area relative to the model's size, so the test does not depend on units. Coordinates
   // are scaled by a power of two (exact) so squares neither overflow nor underflow at 1e+-200.
+  // The size is the faces' (a vertex in no face, however far, does not make them small).
+  std::vector<char> used(static_cast<size_t>(nv), 0);
+  for (const Face& t : mesh.faces)
+    for (int i : t) used[static_cast<size_t>(i)] = 1;
   double max_abs = 0.0;
-  for (const Vec3& p : mesh.vertices) max_abs = std::max(max_abs, p.cwiseAbs().maxCoeff());
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) max_abs = std::max(max_abs, mesh.vertices[v].cwiseAbs().maxCoeff());
   int exponent = 0;
   std::frexp(max_abs, &exponent);
   const double scale = max_abs > 0.0 ? std::ldexp(1.0, std::min(-exponent, 1000)) : 1.0;  // 2^1000 < DBL_MAX
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Vec3& p : mesh.vertices) {
-    lo = lo.cwiseMin(p * scale);
-    hi = hi.cwiseMax(p * scale);
-  }
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) {
+      lo = lo.cwiseMin(mesh.vertices[v] * scale);
+      hi = hi.cwiseMax(mesh.vertices[v] * scale);
+    }
   const double diag = (hi - lo).norm();  // bbox_diagonal(vertices) * scale
   const double min_double_area = 2e-14 * diag * diag;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -1356,7 +1364,11 @@ TriMesh read_mesh(const std::string& path) {
 
 TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons) {
   const Format format = format_of(path);
-  const std::string data = internal::read_whole_file(path);
+  const std::string file = internal::read_whole_file(path);
+  // A UTF-8 byte order mark, as some Windows editors write, starts no keyword: skipped in the
+  // text formats (a binary STL's header may hold any bytes; read_stl() skips it if ascii).
+  std::string_view data = file;
+  if (format != Format::Stl && data.substr(0, 3) == kUtf8Bom) data.remove_prefix(3);
   TriMesh mesh;
   if (polygons) polygons->clear();
   switch (format) {
