@@ -437,11 +437,24 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_FALSE(back.multigrid.single_precision_cycles);
 
   EXPECT_TRUE(back.fold_repair_local_first);  // the default, written since 2026-11-27
+  EXPECT_EQ(back.fold_repair_local_rings, ReconstructOptions{}.fold_repair_local_rings);
+  {  // and the values other than the defaults
+    layers::ModelOptions other = o;
+    other.reconstruct.fold_repair_local_first = false;
+    other.reconstruct.fold_repair_local_rings = 7;
+    model.set_options(other);
+    layers::write_model(model, tmp.file("other.strata"));
+    const ReconstructOptions read = layers::read_model(tmp.file("other.strata")).options().reconstruct;
+    EXPECT_FALSE(read.fold_repair_local_first);
+    EXPECT_EQ(read.fold_repair_local_rings, 7);
+    model.set_options(o);
+  }
 
   const layers::StrataContainer c = layers::read_strata_container(path);
   // A file written before retry_other_regularization (or fold_repair_local_first) existed solves
-  // as it did then: without it.
-  for (const char* key : {"retry_other_regularization", "fold_repair_local_first"}) {
+  // as it did then: without it (fold_repair_local_rings, written with it, reads 0 when absent).
+  for (const char* key :
+       {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings"}) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
     ASSERT_TRUE(j["options"]["reconstruct"].contains(key));
@@ -449,9 +462,13 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     old.model_json = j.dump();
     layers::write_strata_container(old, tmp.file("old.strata"));
     const ReconstructOptions read = layers::read_model(tmp.file("old.strata")).options().reconstruct;
-    EXPECT_FALSE(std::string(key) == "retry_other_regularization" ? read.retry_other_regularization
-                                                                  : read.fold_repair_local_first)
-        << key;
+    const std::string k = key;
+    if (k == "fold_repair_local_rings")
+      EXPECT_EQ(read.fold_repair_local_rings, 0);
+    else
+      EXPECT_FALSE(k == "retry_other_regularization" ? read.retry_other_regularization
+                                                     : read.fold_repair_local_first)
+          << key;
   }
   // A file written before the local end's options were stored reads the defaults, as it did then.
   {

@@ -71,6 +71,7 @@ json options_json(const ModelOptions& o) {
             {"retry_other_regularization", r.retry_other_regularization},
             {"fold_repair_rounds", r.fold_repair_rounds},
             {"fold_repair_local_first", r.fold_repair_local_first},
+            {"fold_repair_local_rings", r.fold_repair_local_rings},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
             {"fold_repair_max_fraction", r.fold_repair_max_fraction},
@@ -205,6 +206,7 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   // Files written before 2026-11-27 (thirteenth session) polished the whole level in every round.
   ro.fold_repair_local_first =
       r.contains("fold_repair_local_first") && h.boolean(r, "fold_repair_local_first", wr);
+  ro.fold_repair_local_rings = optional_count("fold_repair_local_rings", 0);
   ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
   ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
   if (r.contains("fold_repair_max_fraction"))

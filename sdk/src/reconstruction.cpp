@@ -507,6 +507,7 @@ class VolumeReconstructor::Impl {
     check(o.volume_iterations >= 1, "volume_iterations", o.volume_iterations, "at least 1");
     check(o.retry_volume_iterations >= 0, "retry_volume_iterations", o.retry_volume_iterations, "at least 0");
     check(o.fold_repair_rounds >= 0, "fold_repair_rounds", o.fold_repair_rounds, "at least 0");
+    check(o.fold_repair_local_rings >= 0, "fold_repair_local_rings", o.fold_repair_local_rings, "at least 0");
     check(o.fold_repair_max_fraction >= 0, "fold_repair_max_fraction", o.fold_repair_max_fraction,
           "at least 0");
     check(o.fold_repair_rings >= 0, "fold_repair_rings", o.fold_repair_rings, "at least 0");
@@ -808,7 +809,17 @@ class VolumeReconstructor::Impl {
   // unconverged one only if \p count_unconverged: during the solve an unconverged result is
   // retried, or compared by its error, regardless; the result kept in the end is checked either
   // way (fold_checked()).
+  // A solve driven out of range (e.g. a regularization weight of 1e308) is named as such, not as
+  // the non-finite coordinates that a count or a writer would meet next.
+  static void check_finite(const State& s) {
+    for (std::size_t i = 0; i < s.P.size(); ++i)
+      if (!s.P[i].allFinite())
+        throw SolverError("reconstruction produced non-finite positions (detail vertex " + std::to_string(i) +
+                          "); are the reconstruction options within a workable range?");
+  }
+
   Outcome outcome(const State& s, double a, std::vector<double>& V, bool count_unconverged = false) const {
+    check_finite(s);
     Outcome o;
     const Level& F = levels_.back();
     compute_volumes(F, s, V);
@@ -869,6 +880,8 @@ class VolumeReconstructor::Impl {
                                  : multigrid_reconstruct_options();
       o.tolerance = opt_.tolerance;
       o.threads = opt_.threads;
+      o.fold_repair_local_first = opt_.fold_repair_local_first;  // a .strata file's, as it repaired
+      o.fold_repair_local_rings = opt_.fold_repair_local_rings;
       o.progress = opt_.progress;
       o.cancel = opt_.cancel;
       o.fallback_schedule = false;
@@ -953,7 +966,7 @@ class VolumeReconstructor::Impl {
     std::vector<Vec3> kept = s.P;
     std::vector<int> seeds = best.new_pair_faces;
     std::vector<char> in;
-    std::vector<int> subset, next;
+    std::vector<int> subset, moving, next;
     std::vector<Vec3> smoothed, local_result;
     int stalled = 0;  // rounds since the best result last improved
     for (int round = 0; round < opt_.fold_repair_rounds; ++round) {
@@ -962,12 +975,17 @@ class VolumeReconstructor::Impl {
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
       st.regularization_sweeps += opt_.fold_repair_sweeps;
       // Only the prisms around the smoothed vertices lost their volumes: first restore them by
-      // moving those vertices alone (a small system, nearly free).
+      // moving those vertices alone (a small system, nearly free), and in the local pass
+      // fold_repair_local_rings rings more, so that the correction spreads beyond the smoothed
+      // patch as a whole-level polish's does.
       smoothed = s.P;
+      if (!whole_level && opt_.fold_repair_local_rings > 0)
+        grow_rings(seeds, opt_.fold_repair_rings + round + opt_.fold_repair_local_rings, in, moving, next);
       Outcome o;
       double damping = kMinDamping;
       const bool local_done =
-          local_polish(local_set(subset), s, a, opt_.tolerance, st, opt_.max_final_steps, damping);
+          local_polish(local_set(whole_level || opt_.fold_repair_local_rings == 0 ? subset : moving), s, a,
+                       opt_.tolerance, st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
       if (whole_level && (!o.converged || o.new_pairs > 0)) {
         local_result.swap(s.P);
@@ -1157,8 +1175,7 @@ class VolumeReconstructor::Impl {
     compute_volumes(F, s, V);
     st.max_relative_error = relative_error(F, s.amplitude, V, &st.rms_relative_error);
     st.converged = st.max_relative_error <= tol;
-    for (const Vec3& p : s.P)
-      if (!p.allFinite()) throw SolverError("reconstruction produced non-finite positions");
+    check_finite(s);
     st.seconds_solve = seconds_since(t0);
     res.positions = std::move(s.P);
   }
