@@ -17,6 +17,23 @@ for m in volumes vectors; do
   "$STRATA" stats --json "$TMP/$m.obj" >"$TMP/$m.stats.json"
 done
 
+# A detail far from its base (another placement) is not a displacement of it: a warning says so
+# (the solve still runs; its report counts the fallbacks), and a detail over its base gets none.
+grep -q "warning" "$TMP/volumes.stderr" && { echo "FAIL: a warning on the paper's case" >&2; exit 1; }
+python3 - "$TMP/case/detail.obj" "$TMP/far.obj" <<'PY'
+import sys
+out = open(sys.argv[2], "w")
+for line in open(sys.argv[1]):
+    if line.startswith("v "):
+        x, y, z = map(float, line.split()[1:4])
+        line = "v %r %r %r\n" % (x + 100.0, y, z)
+    out.write(line)
+PY
+"$STRATA" reconstruct -q --detail "$TMP/far.obj" --base "$TMP/case/base.obj" --edited-base "$TMP/case/base.obj" \
+  --method vectors -o "$TMP/far_out.obj" >/dev/null 2>"$TMP/far.stderr"
+grep -q "far.obj does not look like a displacement of" "$TMP/far.stderr" ||
+  { echo "FAIL: no warning for a detail far from its base:" >&2; cat "$TMP/far.stderr" >&2; exit 1; }
+
 python3 - "$TMP" <<'PY'
 import json, math, sys
 tmp = sys.argv[1]

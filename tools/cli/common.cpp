@@ -250,6 +250,12 @@ TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const s
   return t;
 }
 
+// A warning when more than this fraction of the detail's vertices fell back to the closest point,
+// or its median normal offset exceeds this fraction of the base's diagonal (the paper's bends:
+// no fallbacks, median offsets below 2% of the diagonal).
+constexpr double kFallbackWarningFraction = 0.1;
+constexpr double kOffsetWarningFraction = 0.25;
+
 EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const NamedMesh& edited,
                           const Log& log) {
   check_same_connectivity(base, edited);
@@ -259,6 +265,25 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
   Stopwatch sw;
   e.encoding = encode_detail(detail.mesh, base.mesh);
   e.encode_seconds = sw.seconds();
+  // A detail that is not a displacement of this base (another object, units or placement) gives a
+  // meaningless result; a warning says so up front. Its signs: many closest-point fallbacks, or
+  // displacements as long as the base is large (a scan's detail is small against its base).
+  const EncodeReport& er = e.encoding.report;
+  std::vector<double> lengths;
+  for (double f : e.encoding.normal_offsets) lengths.push_back(std::abs(f));
+  double median = 0.0;
+  if (!lengths.empty()) {
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    median = lengths[lengths.size() / 2];
+  }
+  const double base_size = bbox_diagonal(base.mesh.vertices);
+  if (er.num_vertices > 0 && (er.num_fallback > kFallbackWarningFraction * er.num_vertices ||
+                              median > kOffsetWarningFraction * base_size))
+    std::cerr << "strata: warning: " << detail.name << " does not look like a displacement of " << base.name
+              << ": " << er.num_fallback << " of " << er.num_vertices
+              << " vertices have no base point along its normals, and the median offset is " << median
+              << " against a base diagonal of " << base_size << "; the result may be meaningless"
+              << std::endl;
   log.phase("counting self-intersections of the input detail");
   e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
   return e;
