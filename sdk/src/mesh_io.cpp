@@ -1028,11 +1028,12 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
   const unsigned long long expected = 84ull + 50ull * count;
   if (data.size() >= 84 && data.size() == expected) return read_stl_binary(name, data, count);
 
-  size_t start = data.substr(0, 3) == kUtf8Bom ? 3 : 0;
+  const size_t bom = data.substr(0, 3) == kUtf8Bom ? 3 : 0;
+  size_t start = bom;
   while (start < data.size() && (is_blank(data[start]) || data[start] == '\n')) ++start;
   const bool looks_ascii = data.size() - start >= 5 && iequals(data.substr(start, 5), "solid") &&
                            data.find('\0') == std::string_view::npos;
-  if (looks_ascii) return read_stl_ascii(name, data.substr(data.substr(0, 3) == kUtf8Bom ? 3 : 0));
+  if (looks_ascii) return read_stl_ascii(name, data.substr(bom));
   if (data.size() < 84)
     fail_io(name, "not an STL file: " + std::to_string(data.size()) +
                       " bytes is too short for a binary STL and it does not start with 'solid'");

@@ -805,10 +805,6 @@ class VolumeReconstructor::Impl {
     }
   };
 
-  // The new pairs are counted (retry_on_new_intersections) for a converged result, and for an
-  // unconverged one only if \p count_unconverged: during the solve an unconverged result is
-  // retried, or compared by its error, regardless; the result kept in the end is checked either
-  // way (fold_checked()).
   // A solve driven out of range (e.g. a regularization weight of 1e308) is named as such, not as
   // the non-finite coordinates that a count or a writer would meet next.
   static void check_finite(const State& s) {
@@ -818,6 +814,10 @@ class VolumeReconstructor::Impl {
                           "); are the reconstruction options within a workable range?");
   }
 
+  // The new pairs are counted (retry_on_new_intersections) for a converged result, and for an
+  // unconverged one only if \p count_unconverged: during the solve an unconverged result is
+  // retried, or compared by its error, regardless; the result kept in the end is checked either
+  // way (fold_checked()).
   Outcome outcome(const State& s, double a, std::vector<double>& V, bool count_unconverged = false) const {
     check_finite(s);
     Outcome o;
@@ -921,11 +921,12 @@ class VolumeReconstructor::Impl {
   // the new pairs' triangles at full weight, each followed by exact steps that restore the
   // volumes. \p best is the outcome of s.P on entry; on return s.P is the best result and \p best
   // its outcome. Two passes of rounds from the entry positions: first the volumes are restored by
-  // moving the smoothed vertices alone (a small system per round); only if folds remain, the
-  // rounds again with the whole finest level polished too, whose minimum-norm correction spreads
-  // wider and unfolds more (the rings), at a whole-level solve a round (0.9 s on the scan-like
-  // 100k cuboid, where two local rounds alone leave no new pairs). The second pass is the repair
-  // as it was before the first existed, so a result is never worse than it would have been.
+  // moving the smoothed vertices and fold_repair_local_rings rings around them (a small system per
+  // round); unless that ends converged without new pairs, the rounds again with the whole finest
+  // level polished too, whose minimum-norm correction spreads wider and unfolds more (the rings),
+  // at a whole-level solve a round (0.9 s on the scan-like 100k cuboid, where the local pass alone
+  // leaves no new pairs). The second pass is the repair as it was before the first existed, so
+  // the outcome is never worse by Outcome::better_than's order.
   void repair_folds(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& best) const {
     if (!best.counted || best.new_pairs == 0 || opt_.fold_repair_rounds <= 0) return;
     // Many pairs are a global self-contact (a limb bent into the body: the armadillo's top in a
@@ -979,13 +980,12 @@ class VolumeReconstructor::Impl {
       // fold_repair_local_rings rings more, so that the correction spreads beyond the smoothed
       // patch as a whole-level polish's does.
       smoothed = s.P;
-      if (!whole_level && opt_.fold_repair_local_rings > 0)
-        grow_rings(seeds, opt_.fold_repair_rings + round + opt_.fold_repair_local_rings, in, moving, next);
+      const int more_rings = whole_level ? 0 : opt_.fold_repair_local_rings;
+      if (more_rings > 0) grow_rings(seeds, opt_.fold_repair_rings + round + more_rings, in, moving, next);
       Outcome o;
       double damping = kMinDamping;
-      const bool local_done =
-          local_polish(local_set(whole_level || opt_.fold_repair_local_rings == 0 ? subset : moving), s, a,
-                       opt_.tolerance, st, opt_.max_final_steps, damping);
+      const bool local_done = local_polish(local_set(more_rings > 0 ? moving : subset), s, a, opt_.tolerance,
+                                           st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
       if (whole_level && (!o.converged || o.new_pairs > 0)) {
         local_result.swap(s.P);

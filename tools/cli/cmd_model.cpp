@@ -89,17 +89,9 @@ int run_build(const BuildCmdOptions& o) {
   if (!o.output.empty() && !o.out_dir.empty()) throw InvalidInput("give either -o or --out-dir, not both");
   if (o.output.empty() && o.out_dir.empty()) throw InvalidInput("give -o MODEL.strata or --out-dir DIR");
   if (!o.out_dir.empty()) ensure_directory(o.out_dir);
-  if (!o.output.empty()) {
-    check_output_path(o.output);
-    check_not_an_input(o.output, o.scans);
-  }
-  if (!o.report.empty()) {
-    check_output_path(o.report);
-    check_not_an_input(o.report, o.scans);
-    if (!o.output.empty() && same_file_name(o.output, o.report))
-      throw InvalidInput(o.report +
-                         ": two outputs would be written to the same file; give them different names");
-  }
+  if (!o.output.empty()) check_output_path(o.output);
+  if (!o.report.empty()) check_output_path(o.report);
+  check_output_names({o.output, o.report}, o.scans);
   // With -o, the model lands only with its report; with --out-dir each model is written as it is
   // built (a batch keeps what it built), the report at the end.
   StagedOutputs staged;
@@ -276,14 +268,8 @@ void print_cascade(const layers::CascadeReport& r) {
 int run_change(const EditCmdOptions& o, const std::string& command,
                const std::function<json(LayeredModel&, const Log&)>& change) {
   check_output_path(o.output);
-  check_not_an_input(o.output, {o.model, o.edit});
-  if (!o.report.empty()) {
-    check_output_path(o.report);
-    check_not_an_input(o.report, {o.model, o.edit});
-    if (same_file_name(o.output, o.report))
-      throw InvalidInput(o.report +
-                         ": two outputs would be written to the same file; give them different names");
-  }
+  if (!o.report.empty()) check_output_path(o.report);
+  check_output_names({o.output, o.report}, {o.model, o.edit});
   const Log log(o.quiet);
   Stopwatch sw;
   log.phase("reading " + o.model);
@@ -363,7 +349,7 @@ struct ExportCmdOptions {
 
 int run_export(const ExportCmdOptions& o) {
   check_mesh_output_path(o.output);
-  check_not_an_input(o.output, {o.model});
+  check_output_names({o.output}, {o.model});
   const LayeredModel model = layers::read_model(o.model);
   const int k = o.band < 0 ? model.num_bands() - 1 : o.band;
   if (k >= model.num_bands())

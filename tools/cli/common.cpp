@@ -98,12 +98,19 @@ bool same_file_name(const std::string& a, const std::string& b) {
   return pa.lexically_normal() == pb.lexically_normal();
 }
 
-void check_not_an_input(const std::string& output, const std::vector<std::string>& inputs) {
-  for (const std::string& in : inputs) {
-    if (in.empty()) continue;
-    std::error_code ec;
-    if (same_file_name(output, in) || fs::equivalent(output, in, ec))
-      throw InvalidInput(output + ": would replace the input " + in + "; write the output to another file");
+void check_output_names(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
+  for (std::size_t a = 0; a < outputs.size(); ++a) {
+    if (outputs[a].empty()) continue;
+    for (std::size_t b = a + 1; b < outputs.size(); ++b)
+      if (!outputs[b].empty() && same_file_name(outputs[a], outputs[b]))
+        throw InvalidInput(outputs[b] +
+                           ": two outputs would be written to the same file; give them different names");
+    for (const std::string& in : inputs) {
+      std::error_code ec;
+      if (!in.empty() && (same_file_name(outputs[a], in) || fs::equivalent(outputs[a], in, ec)))
+        throw InvalidInput(outputs[a] + ": would replace the input " + in +
+                           "; write the output to another file");
+    }
   }
 }
 
@@ -120,12 +127,7 @@ void check_outputs(const std::string& output, const std::vector<std::string>& ex
     check_output_path(report);
     all.push_back(report);
   }
-  for (std::size_t a = 0; a < all.size(); ++a)
-    for (std::size_t b = a + 1; b < all.size(); ++b)
-      if (same_file_name(all[a], all[b]))
-        throw InvalidInput(all[b] +
-                           ": two outputs would be written to the same file; give them different names");
-  for (const std::string& out : all) check_not_an_input(out, inputs);
+  check_output_names(all, inputs);
 }
 
 StagedOutputs::~StagedOutputs() {

@@ -107,9 +107,9 @@ void check_mesh_output_path(const std::string& path);
 void check_outputs(const std::string& output, const std::vector<std::string>& extra_meshes,
                    const std::string& report, const std::vector<std::string>& inputs = {});
 
-//! Throws InvalidInput if \p output names one of \p inputs (the same file, by name or, for
-//! existing files, by identity: a link to it).
-void check_not_an_input(const std::string& output, const std::vector<std::string>& inputs);
+//! Throws InvalidInput if two of \p outputs name the same file, or one names one of \p inputs (by
+//! name or, for existing files, by identity: a link to it). Empty paths are skipped.
+void check_output_names(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
 
 //! A command's outputs, committed together: each is written to a staging file beside its target
 //! (a hidden name ending in the target's extension, so that the writers choose the format by it)

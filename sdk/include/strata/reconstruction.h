@@ -163,12 +163,13 @@ struct ReconstructOptions {
   //! paper's resolution 3 rounds left 10 new pairs and 4 rounds none; at 100k prisms 3
   //! rounds left 28 (after a retry) and 6 none, so the retry did not run. 0: no repair.
   int fold_repair_rounds = 6;
-  //! The repair's rounds first restore the volumes by moving the smoothed vertices alone, and run
-  //! again with whole-level polishes only if folds remain (the better result of the two passes is
-  //! kept, so never worse than without this). On the scan-like 100k cuboid bend the local pass
-  //! removed the solve's new pair in two rounds, where a whole-level polish took 0.9 s of the 2.5 s
-  //! solve. false: the whole-level polish in every round (the repair before 2026-11-27, and that
-  //! of .strata files written before).
+  //! The repair's rounds first restore the volumes locally (the smoothed vertices and
+  //! fold_repair_local_rings rings around them), and run again with whole-level polishes only if
+  //! folds remain; the better result of the two passes is kept (converged first, then fewer new
+  //! pairs), so the outcome is never worse by that order. On the scan-like 100k cuboid bend the
+  //! local pass removed the solve's new pair in two rounds (one with fold_repair_local_rings 4),
+  //! where a whole-level polish took 0.9 s of the 2.5 s solve. false: the whole-level polish in
+  //! every round (the repair before 2026-11-27, and that of .strata files written before).
   bool fold_repair_local_first = true;
   //! In the local pass (fold_repair_local_first), the restoration moves the smoothed vertices and
   //! this many rings of vertices around them, so that the correction spreads beyond the smoothed
