@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -23,6 +24,7 @@
 
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
+#include "strata/intersections.h"
 #include "strata/mesh_io.h"
 #include "test_files.h"
 
@@ -497,6 +499,94 @@ TEST(MeshIoTriangulate, NonConvexQuadGetsNoFlippedTriangle) {
   }
 }
 
+// Polygons that no corner sees whole, and polygons of many corners: n - 2 triangles that tile
+// the polygon (each faces its normal, their areas sum to its area, no two non-adjacent ones meet)
+// and form a valid disk (read_mesh validates: no zero area, every edge manifold and consistently
+// oriented). Each polygon lies in a tilted plane and is read in both orientations.
+TEST(MeshIoTriangulate, PolygonsAFanCannotCoverAreCutIntoTrianglesThatTileThem) {
+  Fixture fx;
+  using Ring = std::vector<std::array<double, 2>>;
+  std::vector<std::pair<std::string, Ring>> cases;
+  cases.push_back({"U", {{0, 0}, {3, 0}, {3, 3}, {2, 3}, {2, 1}, {1, 1}, {1, 3}, {0, 3}}});
+  Ring comb;  // 12 teeth: no corner sees more than its own tooth
+  for (int t = 0; t < 12; ++t) {
+    const double x = 2.0 * t;
+    for (const auto& c : Ring{{x, 0}, {x, 10}, {x + 1, 10}, {x + 1, 1}}) comb.push_back(c);
+  }
+  for (const auto& c : Ring{{24, 1}, {24, -1}, {0, -1}}) comb.push_back(c);
+  std::reverse(comb.begin(), comb.end());  // counter-clockwise
+  cases.push_back({"comb", comb});
+  Ring spiral, inner;  // a band wound twice around the origin
+  for (int k = 0; k < 200; ++k) {
+    const double a = 4 * kPi * k / 199, r = 1 + a;
+    spiral.push_back({r * std::cos(a), r * std::sin(a)});
+    inner.push_back({(r - 0.6) * std::cos(a), (r - 0.6) * std::sin(a)});
+  }
+  spiral.insert(spiral.end(), inner.rbegin(), inner.rend());
+  cases.push_back({"spiral", spiral});
+  Ring star, circle;
+  for (int k = 0; k < 64; ++k)
+    star.push_back(
+        {(1 + 0.5 * (k % 2)) * std::cos(2 * kPi * k / 64), (1 + 0.5 * (k % 2)) * std::sin(2 * kPi * k / 64)});
+  cases.push_back({"star", star});
+  for (int k = 0; k < 2000; ++k)
+    circle.push_back({std::cos(2 * kPi * k / 2000), std::sin(2 * kPi * k / 2000)});
+  cases.push_back({"circle", circle});
+  // The tilted plane: x' = R (x, y, 0) + offset.
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized())).toRotationMatrix();
+  for (const auto& [name, ring] : cases)
+    for (bool reversed : {false, true}) {
+      Soup s;
+      double area2 = 0.0;  // shoelace: twice the signed area in the plane
+      const std::size_t n = ring.size();
+      for (std::size_t k = 0; k < n; ++k) {
+        const auto& a = ring[k];
+        const auto& b = ring[(k + 1) % n];
+        area2 += a[0] * b[1] - a[1] * b[0];
+        const Vec3 x = R * Vec3(a[0], a[1], 0) + Vec3(0.25, -3, 7);
+        s.v.push_back({x[0], x[1], x[2]});
+      }
+      std::vector<long long> f(n);
+      for (std::size_t k = 0; k < n; ++k) f[k] = static_cast<long long>(reversed ? n - 1 - k : k);
+      s.f.push_back(f);
+      ASSERT_GT(area2, 0.0) << name;
+      const Vec3 normal = R * Vec3(0, 0, reversed ? -1 : 1);
+      const std::string label = name + (reversed ? " reversed" : "");
+      const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, name + (reversed ? "_r" : "")));
+      ASSERT_EQ(r.num_faces(), static_cast<int>(n) - 2) << label;
+      double sum = 0.0;
+      for (const Face& t : r.faces) {
+        const double a =
+            triangle_area_normal(r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]]).dot(normal);
+        EXPECT_GT(a, 0.0) << label;
+        sum += a;
+      }
+      EXPECT_NEAR(sum, area2, 1e-9 * area2) << label;
+      EXPECT_EQ(find_self_intersections(r.vertices, r.faces).num_pairs, 0u) << label;
+    }
+}
+
+// A polygon of many corners is not fanned from one corner: a fan's apex would be in all of its
+// 19,998 slivers, and an intersection count over them quadratic in their number.
+TEST(MeshIoTriangulate, APolygonOfManyCornersHasNoApexOfAllItsTriangles) {
+  Fixture fx;
+  Soup s;
+  std::vector<long long> f;
+  for (int k = 0; k < 20000; ++k) {
+    s.v.push_back({std::cos(2 * kPi * k / 20000), std::sin(2 * kPi * k / 20000), 0});
+    f.push_back(k);
+  }
+  s.f.push_back(f);
+  const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, "circle"));
+  ASSERT_EQ(r.num_faces(), 19998);
+  std::vector<int> degree(r.vertices.size(), 0);
+  for (const Face& t : r.faces)
+    for (int i : t) ++degree[i];
+  // Cut in rounds of the smallest ears, the triangles nest: about log2(20000) ~ 15 at a corner.
+  EXPECT_LE(*std::max_element(degree.begin(), degree.end()), 40);
+  EXPECT_NEAR(total_area(r), 10000 * std::sin(2 * kPi / 20000), 1e-9);
+}
+
 TEST(MeshIoPolygons, ReadKeepsPolygonsAsListedInEveryFormat) {
   Fixture fx;
   Soup s;
@@ -677,6 +767,20 @@ TEST(MeshIoErrors, ZeroAreaFace) {
   for (Fmt fmt : kAllFormats) {
     const std::string path = fx.put(s, fmt);
     EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {path + ": face 4 has zero area"}))
+        << fmt_name(fmt);
+  }
+  // A polygon of corners on one line is cut into zero-area triangles: the message says which of
+  // the file's faces they come from, the mesh's face numbers counting triangles.
+  s = tetra();
+  s.v.push_back({0.25, 0.75, 0.0});
+  s.v.push_back({0.75, 0.25, 0.0});
+  s.f.insert(s.f.begin() + 1, {1, 5, 4, 2});
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+    const std::string path = fx.put(s, fmt, "line");
+    EXPECT_TRUE(throws_with<InvalidInput>(
+        [&] { read_mesh(path); },
+        {path + ": face 1 has zero area (face numbers count triangles: face 1 is one of the 2 triangles cut "
+                "from the file's 2nd face, a polygon of 4 corners)"}))
         << fmt_name(fmt);
   }
   // STL: a facet with two corners at the same position collapses to a repeated vertex.

@@ -28,6 +28,7 @@
 #include <system_error>
 #include <unordered_map>
 
+#include "internal/polygon.h"
 #include "internal/read_file.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
@@ -328,36 +329,10 @@ class FaceBuilder {
   std::vector<long long> sorted_;
 };
 
-//! Fan apex for polygon \p c: the corner whose fan has the largest smallest triangle, measured
-//! along the polygon's (Newell) normal, so flipped or sliver triangles are avoided where a fan
-//! allows it. For a convex polygon every apex gives the polygon's exact area.
-size_t choose_fan_apex(const std::vector<Vec3>& v, const int* c, size_t n) {
-  if (n > 32) return 0;  // keeps the search O(n^2) on small polygons only
-  Vec3 normal = Vec3::Zero();
-  for (size_t i = 0; i < n; ++i) normal += v[c[i]].cross(v[c[(i + 1) % n]]);
-  size_t best = 0;
-  double best_score = -std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < n; ++k) {
-    double score = std::numeric_limits<double>::infinity();
-    for (size_t i = 1; i + 1 < n; ++i) {
-      const Vec3& a = v[c[k]];
-      const double s = triangle_area_normal(a, v[c[(k + i) % n]], v[c[(k + i + 1) % n]]).dot(normal);
-      score = std::min(score, s);
-    }
-    if (score > best_score) {
-      best_score = score;
-      best = k;
-    }
-  }
-  return best;
-}
-
 std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
   for (const Pending& p : pending_) {
-    const int* c = pending_corners_.data() + p.first_corner;
-    const size_t k = choose_fan_apex(vertices, c, p.n);
-    for (size_t i = 1; i + 1 < p.n; ++i)
-      faces_[p.first_face + i - 1] = {c[k], c[(k + i) % p.n], c[(k + i + 1) % p.n]};
+    internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n,
+                                  faces_.data() + p.first_face);
   }
   pending_.clear();
   pending_corners_.clear();
@@ -1048,8 +1023,12 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
-//! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid.
-std::string find_mesh_problem(const TriMesh& mesh) {
+//! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid; in
+//! \p face (if given) the face it names first, or -1.
+std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
+  long long ignored = -1;
+  long long& at = face ? *face : ignored;
+  at = -1;
   if (mesh.faces.empty()) return "no faces";
   const long long nv = static_cast<long long>(mesh.vertices.size());
   if (nv > kMaxIndexCount) return "too many vertices";
@@ -1057,6 +1036,7 @@ std::string find_mesh_problem(const TriMesh& mesh) {
     if (!mesh.vertices[v].allFinite()) return "vertex " + std::to_string(v) + " has a non-finite coordinate";
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& t = mesh.faces[f];
+    at = static_cast<long long>(f);
     for (int i : t)
       if (i < 0 || i >= nv)
         return "face " + std::to_string(f) + " has vertex index " + std::to_string(i) +
@@ -1065,6 +1045,7 @@ std::string find_mesh_problem(const TriMesh& mesh) {
       return "face " + std::to_string(f) + " has repeated vertex index " +
              std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]);
   }
+  at = -1;
   // Zero area relative to the model's size, so the test does not depend on units. Coordinates
   // are scaled by a power of two (exact) so squares neither overflow nor underflow at 1e+-200.
   // The size is the faces' (a vertex in no face, however far, does not make them small).
@@ -1090,8 +1071,10 @@ std::string find_mesh_problem(const TriMesh& mesh) {
     const Vec3 a = mesh.vertices[t[0]] * scale, b = mesh.vertices[t[1]] * scale,
                c = mesh.vertices[t[2]] * scale;
     const double double_area = triangle_area_normal(a, b, c).norm();
-    if (double_area == 0.0 || double_area <= min_double_area)
+    if (double_area == 0.0 || double_area <= min_double_area) {
+      at = static_cast<long long>(f);
       return "face " + std::to_string(f) + " has zero area";
+    }
   }
 
   // Edge uses bucketed by their smaller vertex (a counting sort): linear time, 8 bytes per use.
@@ -1144,7 +1127,37 @@ std::string find_mesh_problem(const TriMesh& mesh) {
       g = h;
     }
   }
+  if (!problem.empty()) at = static_cast<long long>(best_face);
   return problem;
+}
+
+//! " (...)": which of the file's faces \p face of the triangulated mesh comes from, where the file
+//! has polygons of more than 3 corners, so that face numbers differ from the file's; "" otherwise.
+//! \p listed: the file's polygons as listed.
+std::string file_face_note(long long face, const Polygons& listed) {
+  if (face < 0) return "";
+  bool cut = false;
+  for (const auto& p : listed) cut = cut || p.size() > 3;
+  if (!cut) return "";
+  long long first = 0;  // the first triangle of polygon k
+  for (size_t k = 0; k < listed.size(); ++k) {
+    const long long count = static_cast<long long>(listed[k].size()) - 2;
+    if (face < first + count) {
+      const size_t n = k + 1, tens = n % 100;
+      const char* suffix = tens >= 11 && tens <= 13 ? "th"
+                           : n % 10 == 1            ? "st"
+                           : n % 10 == 2            ? "nd"
+                           : n % 10 == 3            ? "rd"
+                                                    : "th";
+      const std::string where = "the file's " + std::to_string(n) + suffix + " face";
+      const std::string head = " (face numbers count triangles: face " + std::to_string(face) + " is ";
+      if (count == 1) return head + where + ")";
+      return head + "one of the " + std::to_string(count) + " triangles cut from " + where +
+             ", a polygon of " + std::to_string(listed[k].size()) + " corners)";
+    }
+    first += count;
+  }
+  return "";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1370,25 +1383,33 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
   // text formats (a binary STL's header may hold any bytes; read_stl() skips it if ascii).
   std::string_view data = file;
   if (format != Format::Stl && data.substr(0, 3) == kUtf8Bom) data.remove_prefix(3);
-  TriMesh mesh;
-  if (polygons) polygons->clear();
-  switch (format) {
-    case Format::Obj:
-      mesh = read_obj(path, data, polygons);
-      break;
-    case Format::Off:
-      mesh = read_off(path, data, polygons);
-      break;
-    case Format::Ply:
-      mesh = read_ply(path, data, polygons);
-      break;
-    case Format::Stl:
-      mesh = read_stl(path, data);
-      if (polygons)
-        for (const Face& f : mesh.faces) polygons->push_back({f[0], f[1], f[2]});
-      break;
+  auto parse = [&](Polygons* listed) {
+    if (listed) listed->clear();
+    switch (format) {
+      case Format::Obj:
+        return read_obj(path, data, listed);
+      case Format::Off:
+        return read_off(path, data, listed);
+      case Format::Ply:
+        return read_ply(path, data, listed);
+      case Format::Stl:
+        break;
+    }
+    TriMesh mesh = read_stl(path, data);
+    if (listed)
+      for (const Face& f : mesh.faces) listed->push_back({f[0], f[1], f[2]});
+    return mesh;
+  };
+  TriMesh mesh = parse(polygons);
+  long long face = -1;
+  const std::string problem = find_mesh_problem(mesh, &face);
+  if (!problem.empty()) {
+    // Which polygon of the file a face came from: the file is parsed again for its polygons, as
+    // listed, unless the caller asked for them (not kept otherwise: they cost memory).
+    Polygons again;
+    if (!polygons && face >= 0) parse(&again);
+    fail_input(path, problem + file_face_note(face, polygons ? *polygons : again));
   }
-  validate_mesh(mesh, path);
   return mesh;
 }
 
