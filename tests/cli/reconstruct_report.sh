@@ -34,6 +34,43 @@ PY
 grep -q "far.obj does not look like a displacement of" "$TMP/far.stderr" ||
   { echo "FAIL: no warning for a detail far from its base:" >&2; cat "$TMP/far.stderr" >&2; exit 1; }
 
+# --strict: exit 3 once the result misses a target (the report's "warnings"), outputs written;
+# 0 when it holds them. A run stopped short (one cycle, no polish, no retry) misses two.
+strict() {  # strict <expected status> <stem> <reconstruct arguments...>
+  local want=$1 stem=$2 got=0
+  shift 2
+  "$STRATA" reconstruct -q --strict "$@" -o "$TMP/$stem.obj" --report "$TMP/$stem.json" \
+    >/dev/null 2>"$TMP/$stem.stderr" || got=$?
+  [ "$got" = "$want" ] || { echo "FAIL: --strict $stem exited $got, expected $want" >&2; cat "$TMP/$stem.stderr" >&2; exit 1; }
+  [ -s "$TMP/$stem.obj" ] && [ -s "$TMP/$stem.json" ] || { echo "FAIL: --strict $stem wrote no output" >&2; exit 1; }
+}
+strict 0 strict_ok --detail "$TMP/case/detail.obj" --base "$TMP/case/base.obj" --edited-base "$TMP/case/edited_base.obj"
+strict 3 strict_far --detail "$TMP/far.obj" --base "$TMP/case/base.obj" --edited-base "$TMP/case/base.obj" \
+  --method vectors
+grep -q "strata: error: --strict: .*far.obj does not look like a displacement of" "$TMP/strict_far.stderr" ||
+  { echo "FAIL: --strict does not name the far detail" >&2; exit 1; }
+strict 3 strict_short --detail "$TMP/case/detail.obj" --base "$TMP/case/base.obj" \
+  --edited-base "$TMP/case/edited_base.obj" --set max_cycles=1 --set final_max_cycles=1 --set max_final_steps=0 \
+  --set fallback_schedule=false --set retry_on_new_intersections=false
+python3 - "$TMP" <<'PY'
+import json, sys
+tmp = sys.argv[1]
+ok = json.load(open(tmp + "/strict_ok.json"))["warnings"]
+far = json.load(open(tmp + "/strict_far.json"))["warnings"]
+short = json.load(open(tmp + "/strict_short.json"))["warnings"]
+err = open(tmp + "/strict_short.stderr").read()
+problems = []
+if ok != []: problems.append("warnings on the paper's case: %r" % ok)
+if len(far) != 1 or "does not look like a displacement" not in far[0]: problems.append("far: %r" % far)
+if len(short) != 2 or not short[0].startswith("not converged") or "new intersecting pairs" not in short[1]:
+    problems.append("short: %r" % short)
+for w in short:
+    if "--strict: " + w not in err: problems.append("stderr lacks %r" % w)
+if problems:
+    print("FAIL (--strict):\n  " + "\n  ".join(problems), file=sys.stderr)
+    sys.exit(1)
+PY
+
 python3 - "$TMP" <<'PY'
 import json, math, sys
 tmp = sys.argv[1]

@@ -20,7 +20,11 @@ struct ReconstructCmdOptions {
   std::string report;               // empty: no report
   SolverChoice solver{"auto", {}};  // --solver, --set: solver_options()
   bool quiet = false;
+  bool strict = false;  // exit 3 when the result misses a target (the report's "warnings")
 };
+
+// Exit status of --strict when the result misses a target; errors exit 1, usage errors 2.
+constexpr int kStrictExit = 3;
 
 void print_summary(std::ostream& os, const json& r) {
   const json& in = r["inputs"];
@@ -115,12 +119,28 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
               {"iterations", iterations_json(outcome.stats)},
               {"timing_seconds", timing_json(times)},
               {"solve_phases_seconds", solve_phases_json(outcome.stats)}};
+  // What makes the result miss a target, for pipelines (--strict exits 3 on any).
+  json warnings = json::array();
+  if (!in.warning.empty()) warnings.push_back(in.warning + "; the result may be meaningless");
+  if (method == Method::Volumes) {
+    if (outcome.stats && !outcome.stats->converged)
+      warnings.push_back("not converged: the max relative prism volume error " +
+                         json(outcome.stats->max_relative_error).dump() + " is above the tolerance " +
+                         json(options.tolerance).dump());
+    if (outcome.new_pairs > 0)
+      warnings.push_back(std::to_string(outcome.new_pairs) + " new intersecting pairs of triangles");
+  }
+  report["warnings"] = warnings;
   if (!o.report.empty()) {
     report["report"] = o.report;
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
   staged.commit();
   print_summary(std::cout, report);
+  if (o.strict && !warnings.empty()) {
+    for (const json& w : warnings) std::cerr << "strata: error: --strict: " << w.get<std::string>() << "\n";
+    return kStrictExit;
+  }
   return 0;
 }
 
@@ -142,6 +162,10 @@ Subcommand register_reconstruct(CLI::App& parent) {
   app->add_option("--report", o->report, "Also write a JSON report (metrics, timings, iterations) here");
   add_solver_option(app, o->solver, /*with_auto=*/true);
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+  app->add_flag(
+      "--strict", o->strict,
+      "Exit with 3 (outputs written) when the result misses a target: the volumes not converged, new "
+      "intersecting pairs, or a detail that does not look like a displacement of its base");
   app->footer(
       "Example:\n  strata reconstruct --detail detail.obj --base base.obj --edited-base edited_base.obj \\\n"
       "      --method volumes -o out.obj --report report.json");

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <utility>
 
 #include "strata/atomic_file.h"
@@ -280,12 +281,15 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
   }
   const double base_size = bbox_diagonal(base.mesh.vertices);
   if (er.num_vertices > 0 && (er.num_fallback > kFallbackWarningFraction * er.num_vertices ||
-                              median > kOffsetWarningFraction * base_size))
-    std::cerr << "strata: warning: " << detail.name << " does not look like a displacement of " << base.name
-              << ": " << er.num_fallback << " of " << er.num_vertices
-              << " vertices have no base point along its normals, and the median offset is " << median
-              << " against a base diagonal of " << base_size << "; the result may be meaningless"
-              << std::endl;
+                              median > kOffsetWarningFraction * base_size)) {
+    std::ostringstream w;
+    w << detail.name << " does not look like a displacement of " << base.name << ": " << er.num_fallback
+      << " of " << er.num_vertices
+      << " vertices have no base point along its normals, and the median offset is " << median
+      << " against a base diagonal of " << base_size;
+    e.warning = w.str();
+    std::cerr << "strata: warning: " << e.warning << "; the result may be meaningless" << std::endl;
+  }
   log.phase("counting self-intersections of the input detail");
   e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
   return e;

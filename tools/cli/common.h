@@ -181,6 +181,9 @@ struct EncodedInput {
   DetailEncoding encoding;
   TimedIntersections input;
   double encode_seconds = 0.0;
+  //! Non-empty when the detail does not look like a displacement of its base (printed as a
+  //! warning on stderr too): its result is then meaningless.
+  std::string warning;
 };
 //! Checks that \p edited has \p base's connectivity, encodes \p detail over \p base and counts
 //! the detail's self-intersections, logging each phase.
