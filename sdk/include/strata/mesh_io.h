@@ -19,8 +19,9 @@
 //! A text file cut inside its last number can still go unnoticed (e.g. "3 0 1 12" -> "3 0 1 1").
 //!
 //! Face and vertex numbers in error messages from validate_mesh are 0-based mesh indices (after
-//! triangulation); reader errors name the line (text formats) or element number in the file, with
-//! indices as written in the file (1-based for OBJ).
+//! triangulation; read_mesh then adds which of the file's faces a triangle was cut from); reader
+//! errors name the line (text formats) or element number in the file, with indices as written in
+//! the file (1-based for OBJ).
 #pragma once
 
 #include <string>
@@ -33,9 +34,11 @@ namespace strata {
 //! Reads a triangle mesh from \p path; the format is chosen by the extension (.obj, .off, .ply,
 //! .stl in any letter case). PLY may be ascii, binary_little_endian or binary_big_endian; STL
 //! may be ASCII or binary (told apart by content, not by name). Polygons with more than three
-//! corners are split into triangles, stored consecutively in file order: a fan from the corner
-//! whose smallest triangle is largest (for up to 32 corners; else from the first corner), so
-//! convex polygons keep their exact area and simple non-convex ones get no flipped triangle.
+//! corners are split into n - 2 triangles, stored consecutively in file order and oriented as the
+//! polygon: a polygon of up to 32 corners that one corner sees whole gets the fan from the corner
+//! whose smallest triangle is largest; any other (a U-shaped face, a hole's cap of many corners)
+//! is cut by ear clipping in the plane of its Newell normal, smallest ears first. A simple polygon
+//! is thus covered exactly, without flipped or overlapping triangles.
 //! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
 //! data (normals, colors, texture coordinates, materials) is ignored. The result has passed
 //! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a
@@ -47,7 +50,7 @@ TriMesh read_mesh(const std::string& path);
 
 //! As read_mesh(path), and also returns the faces as the file lists them, before triangulation
 //! (polygons of 3 or more corners, 0-based; triangles for STL) in \p polygons (if not null). The
-//! triangles of the result are those polygons' fans, in the same order.
+//! triangles of the result are those polygons' triangulations, in the same order.
 //! \throw as read_mesh(path).
 TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons);
 
@@ -71,7 +74,7 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
 //! gives back the same vertices and polygons. STL takes triangles only.
-//! \pre the triangulated polygons (the fans read_mesh makes) pass validate_mesh().
+//! \pre the triangulated polygons (the triangles read_mesh makes) pass validate_mesh().
 //! \throw InvalidInput if a face has fewer than 3 corners, an index out of range or repeated,
 //!        the triangulation fails validation, a face is not a triangle for STL or has more than
 //!        255 corners for PLY, or \p encoding is Binary for OBJ or OFF; IoError as write_mesh().
