@@ -566,6 +566,27 @@ TEST(MeshIoTriangulate, PolygonsAFanCannotCoverAreCutIntoTrianglesThatTileThem) 
     }
 }
 
+// The polygon's normal is taken from its corners relative to one of them: from their positions,
+// a U-shaped face 3 cm wide at 1e7 lost its area to rounding and was read as zero-area triangles.
+TEST(MeshIoTriangulate, AFaceFarFromTheOriginIsCutAsNearIt) {
+  Fixture fx;
+  const std::vector<std::array<double, 2>> u{{0, 0}, {3, 0}, {3, 3}, {2, 3}, {2, 1}, {1, 1}, {1, 3}, {0, 3}};
+  for (double offset : {0.0, 1e5, 1e7}) {
+    Soup s;
+    for (const auto& c : u) s.v.push_back({offset + 0.01 * c[0], offset + 0.01 * c[1], 0});
+    s.f.push_back({0, 1, 2, 3, 4, 5, 6, 7});
+    const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, "far"));
+    ASSERT_EQ(r.num_faces(), 6) << offset;
+    double area = 0.0;
+    for (const Face& t : r.faces) {
+      const double a = triangle_area_normal(r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]])[2] / 2;
+      EXPECT_GT(a, 0.0) << offset;
+      area += a;
+    }
+    EXPECT_NEAR(area, 7e-4, 1e-9) << offset;  // the corners are rounded to 2e-9 at 1e7
+  }
+}
+
 // A polygon of many corners is not fanned from one corner: a fan's apex would be in all of its
 // 19,998 slivers, and an intersection count over them quadratic in their number.
 TEST(MeshIoTriangulate, APolygonOfManyCornersHasNoApexOfAllItsTriangles) {

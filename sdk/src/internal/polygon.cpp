@@ -169,8 +169,11 @@ class EarClipper {
 }  // namespace
 
 void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, Face* out) {
-  Vec3 normal = Vec3::Zero();  // Newell: twice the area vector
-  for (std::size_t i = 0; i < n; ++i) normal += v[c[i]].cross(v[c[(i + 1) % n]]);
+  // Newell: twice the area vector, from the corners relative to the first (the same sum): from
+  // their absolute positions, a 3 cm face at 1e7 lost its area to rounding (a flipped fan).
+  Vec3 normal = Vec3::Zero();
+  const Vec3 o = v[c[0]];
+  for (std::size_t i = 1; i + 1 < n; ++i) normal += (v[c[i]] - o).cross(v[c[i + 1]] - o);
   // Scaled to a largest component of 1, so that its square neither overflows nor underflows.
   const double largest = normal.cwiseAbs().maxCoeff();
   const bool flat = !(largest > 0) || !std::isfinite(largest);  // or overflowing, or NaN
