@@ -566,24 +566,28 @@ TEST(MeshIoTriangulate, PolygonsAFanCannotCoverAreCutIntoTrianglesThatTileThem) 
     }
 }
 
-// The polygon's normal is taken from its corners relative to one of them: from their positions,
-// a U-shaped face 3 cm wide at 1e7 lost its area to rounding and was read as zero-area triangles.
-TEST(MeshIoTriangulate, AFaceFarFromTheOriginIsCutAsNearIt) {
+// The polygon's normal is taken from its corners relative to one of them, in units of a power of
+// two near its size: from their positions, a U-shaped face 3 cm wide at 1e7 lost its area to
+// rounding, and one of size 1e200 or 1e-200 to overflow or underflow, each read as a flipped fan.
+TEST(MeshIoTriangulate, AFaceFarFromTheOriginOrOfExtremeSizeIsCutAsAUnitOne) {
   Fixture fx;
   const std::vector<std::array<double, 2>> u{{0, 0}, {3, 0}, {3, 3}, {2, 3}, {2, 1}, {1, 1}, {1, 3}, {0, 3}};
-  for (double offset : {0.0, 1e5, 1e7}) {
+  const std::pair<double, double> placements[] = {
+      {0.0, 0.01}, {1e5, 0.01}, {1e7, 0.01}, {0.0, 1e200}, {0.0, 1e-200}};
+  for (const auto& [offset, size] : placements) {
     Soup s;
-    for (const auto& c : u) s.v.push_back({offset + 0.01 * c[0], offset + 0.01 * c[1], 0});
+    for (const auto& c : u) s.v.push_back({offset + size * c[0], offset + size * c[1], 0});
     s.f.push_back({0, 1, 2, 3, 4, 5, 6, 7});
     const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, "far"));
-    ASSERT_EQ(r.num_faces(), 6) << offset;
-    double area = 0.0;
+    ASSERT_EQ(r.num_faces(), 6) << offset << " " << size;
+    double area = 0.0;  // in units of size^2
     for (const Face& t : r.faces) {
-      const double a = triangle_area_normal(r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]])[2] / 2;
-      EXPECT_GT(a, 0.0) << offset;
+      auto unit = [&](int i) { return Vec3((r.vertices[i] - r.vertices[0]) / size); };
+      const double a = triangle_area_normal(unit(t[0]), unit(t[1]), unit(t[2]))[2] / 2;
+      EXPECT_GT(a, 0.0) << offset << " " << size;
       area += a;
     }
-    EXPECT_NEAR(area, 7e-4, 1e-9) << offset;  // the corners are rounded to 2e-9 at 1e7
+    EXPECT_NEAR(area, 7.0, 1e-5) << offset << " " << size;  // the corners are rounded to 2e-9 at 1e7
   }
 }
 

@@ -330,8 +330,17 @@ class FaceBuilder {
 };
 
 std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
+  double diagonal = 0.0;  // of all vertices: at least the faces' (validation's zero area is relative to them)
+  if (!pending_.empty()) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Vec3& p : vertices) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    diagonal = (hi - lo).stableNorm();
+  }
   for (const Pending& p : pending_) {
-    internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n,
+    internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n, diagonal,
                                   faces_.data() + p.first_face);
   }
   pending_.clear();

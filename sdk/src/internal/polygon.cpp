@@ -2,8 +2,10 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <queue>
 #include <tuple>
 
@@ -12,16 +14,32 @@ namespace {
 
 using Vec2 = Eigen::Vector2d;
 
+// The polygon's corners relative to its first, in units of 2^exponent, the power of two just above
+// its largest coordinate: exact (barring subnormals), and neither the differences, their cross
+// products nor their squares overflow or underflow at 1e+-300, nor lose a small face far from the
+// origin (a 3 cm face at 1e7) to rounding. Empty if a coordinate is not finite.
+std::vector<Vec3> local_corners(const std::vector<Vec3>& v, const int* c, std::size_t n, int& exponent) {
+  double largest = 0.0;
+  for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, v[c[i]].cwiseAbs().maxCoeff());
+  if (!std::isfinite(largest)) return {};
+  std::frexp(largest, &exponent);
+  std::vector<Vec3> w(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      w[i][k] = std::ldexp(v[c[i]][k], -exponent) - std::ldexp(v[c[0]][k], -exponent);
+  return w;
+}
+
 // The fan apex whose smallest triangle, measured along \p normal, is largest; that measure in
 // \p score. O(n^2): small polygons only.
-std::size_t best_fan_apex(const std::vector<Vec3>& v, const int* c, std::size_t n, const Vec3& normal,
-                          double& score) {
+std::size_t best_fan_apex(const std::vector<Vec3>& w, const Vec3& normal, double& score) {
+  const std::size_t n = w.size();
   std::size_t best = 0;
   score = -std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < n; ++k) {
     double s = std::numeric_limits<double>::infinity();
     for (std::size_t i = 1; i + 1 < n; ++i)
-      s = std::min(s, triangle_area_normal(v[c[k]], v[c[(k + i) % n]], v[c[(k + i + 1) % n]]).dot(normal));
+      s = std::min(s, triangle_area_normal(w[k], w[(k + i) % n], w[(k + i + 1) % n]).dot(normal));
     if (s > score) {
       score = s;
       best = k;
@@ -30,22 +48,122 @@ std::size_t best_fan_apex(const std::vector<Vec3>& v, const int* c, std::size_t 
   return best;
 }
 
+// A static k-d tree over some of the corners, from which corners are removed: the clipper's
+// candidates for blocking an ear. Subtrees without live corners are skipped, so a query costs about
+// the live corners near its box, however the corners cluster (a uniform grid over a comb's base or
+// a zigzag in a large square scanned thousands of dead or distant entries per ear).
+class CornerTree {
+ public:
+  CornerTree(const std::vector<Vec2>& p, std::vector<int> items) : p_(p), order_(std::move(items)) {
+    pos_.assign(p.size(), -1);
+    dead_.assign(p.size(), 0);
+    if (!order_.empty()) {
+      nodes_.resize(1);
+      build(0, 0, static_cast<int>(order_.size()));
+    }
+    for (int k = 0; k < static_cast<int>(order_.size()); ++k) pos_[order_[k]] = k;
+  }
+
+  //! Takes corner \p i out (a no-op if it is not in the tree or already out).
+  void remove(int i) {
+    if (pos_[i] < 0 || dead_[i]) return;
+    dead_[i] = 1;
+    for (int k = 0;;) {
+      Node& nd = nodes_[k];
+      --nd.alive;
+      if (nd.left < 0) break;
+      k = pos_[i] < nodes_[nd.left].end ? nd.left : nd.left + 1;
+    }
+  }
+
+  //! Whether \p hit(i) holds for a live corner i in the box [lo, hi]; subtrees whose box
+  //! \p outside(lo, hi) rules out are skipped.
+  template <class Outside, class Hit>
+  bool any(const Vec2& lo, const Vec2& hi, Outside&& outside, Hit&& hit) const {
+    if (nodes_.empty()) return false;
+    int stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& nd = nodes_[stack[--top]];
+      if (nd.alive == 0 || (nd.lo.array() > hi.array()).any() || (nd.hi.array() < lo.array()).any() ||
+          outside(nd.lo, nd.hi))
+        continue;
+      if (nd.left < 0) {
+        for (int k = nd.begin; k < nd.end; ++k) {
+          const int i = order_[k];
+          if (!dead_[i] && hit(i)) return true;
+        }
+      } else {
+        stack[top++] = nd.left;
+        stack[top++] = nd.left + 1;
+      }
+    }
+    return false;
+  }
+
+ private:
+  struct Node {
+    Vec2 lo, hi;
+    int begin, end, alive;
+    int left = -1;  // children left, left + 1; -1 for a leaf
+  };
+  // Node \p slot over order_[b, e): split at the median of its box's longer side, down to 8
+  // corners, the children in two adjacent slots. The depth is at most log2(n / 8) + 1, well
+  // within the query's stack.
+  void build(int slot, int b, int e) {
+    Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int t = b; t < e; ++t) {
+      lo = lo.cwiseMin(p_[order_[t]]);
+      hi = hi.cwiseMax(p_[order_[t]]);
+    }
+    Node nd;
+    nd.lo = lo;
+    nd.hi = hi;
+    nd.begin = b;
+    nd.end = e;
+    nd.alive = e - b;
+    if (e - b > 8) {
+      const int axis = (hi - lo).x() >= (hi - lo).y() ? 0 : 1, m = b + (e - b) / 2;
+      std::nth_element(order_.begin() + b, order_.begin() + m, order_.begin() + e,
+                       [&](int x, int y) { return p_[x][axis] < p_[y][axis]; });
+      nd.left = static_cast<int>(nodes_.size());
+      nodes_.resize(nodes_.size() + 2);
+      build(nd.left, b, m);
+      build(nd.left + 1, m, e);
+    }
+    nodes_[slot] = nd;
+  }
+
+  const std::vector<Vec2>& p_;
+  std::vector<int> order_, pos_;
+  std::vector<char> dead_;
+  std::vector<Node> nodes_;
+};
+
 // Ear clipping of a polygon projected to the plane of its normal (counter-clockwise there), the
-// best-shaped ear first. Corners are positions 0..n-1 of the polygon, linked in a ring.
+// smallest ear first. Corners are positions 0..n-1 of the polygon, linked in a ring.
 class EarClipper {
  public:
-  EarClipper(const std::vector<Vec3>& v, const int* c, std::size_t n, const Vec3& normal)
-      : c_(c), n_(static_cast<int>(n)), p_(n), prev_(n), next_(n), version_(n, 0), removed_(n, 0) {
-    // An orthonormal basis (u, w) of the plane with u x w = normal / |normal|: the polygon's
+  //! \p w: the corners (local_corners()); \p normal: their Newell normal (not zero);
+  //! \p min_area2: a doubled area below which a triangle is a sliver (as the mesh validation's
+  //! zero area), in w's units.
+  EarClipper(const std::vector<Vec3>& w, const Vec3& normal, double min_area2)
+      : n_(static_cast<int>(w.size())),
+        p_(w.size()),
+        prev_(w.size()),
+        next_(w.size()),
+        version_(w.size(), 0),
+        removed_(w.size(), 0) {
+    // An orthonormal basis (u, t) of the plane with u x t = normal / |normal|: the polygon's
     // signed area is positive in it.
     const Vec3 nn = normal.normalized();
     int k = 0;
     nn.cwiseAbs().minCoeff(&k);
-    const Vec3 u = nn.cross(Vec3::Unit(k)).normalized(), w = nn.cross(u);
+    const Vec3 u = nn.cross(Vec3::Unit(k)).normalized(), t = nn.cross(u);
     Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (int i = 0; i < n_; ++i) {
-      const Vec3 d = v[c[i]] - v[c[0]];
-      p_[i] = Vec2(d.dot(u), d.dot(w));
+      p_[i] = Vec2(w[i].dot(u), w[i].dot(t));
       lo = lo.cwiseMin(p_[i]);
       hi = hi.cwiseMax(p_[i]);
       prev_[i] = (i + n_ - 1) % n_;
@@ -53,10 +171,15 @@ class EarClipper {
     }
     const double extent = std::max((hi - lo).maxCoeff(), std::numeric_limits<double>::min());
     eps_ = 1e-14 * extent * extent;
-    build_grid(lo, hi);
+    sliver_ = std::max(eps_, min_area2);
+    std::vector<int> items;
+    for (int i = 0; i < n_; ++i)
+      if (!convex(i)) items.push_back(i);
+    tree_ = std::make_unique<CornerTree>(p_, std::move(items));
   }
 
-  void run(Face* out) {
+  //! Writes the n - 2 triangles, as positions of the polygon's corners, to \p out.
+  void run(std::array<int, 3>* out) {
     for (int i = 0; i < n_; ++i) push(i);
     int left = n_, written = 0;
     while (left > 3) {
@@ -64,134 +187,110 @@ class EarClipper {
       queue_.pop();
       if (removed_[i] || version != version_[i]) continue;  // stale: re-pushed since
       const int a = prev_[i], b = next_[i];
-      out[written++] = {c_[a], c_[i], c_[b]};
+      out[written++] = {a, i, b};
       removed_[i] = 1;
+      tree_->remove(i);
       next_[a] = b;
       prev_[b] = a;
       --left;
-      ++version_[a];
-      ++version_[b];
-      push(a);
-      push(b);
+      for (int j : {a, b}) {
+        ++version_[j];
+        if (convex(j)) tree_->remove(j);  // a corner only turns convex as its neighbours go
+        push(j);
+      }
     }
     int i = 0;
     while (removed_[i]) ++i;
-    out[written] = {c_[prev_[i]], c_[i], c_[next_[i]]};
+    out[written] = {prev_[i], i, next_[i]};
   }
 
  private:
   // Twice the signed area of (a, b, q).
-  double orient(const Vec2& a, const Vec2& b, const Vec2& q) const {
+  static double orient(const Vec2& a, const Vec2& b, const Vec2& q) {
     return (b.x() - a.x()) * (q.y() - a.y()) - (b.y() - a.y()) * (q.x() - a.x());
   }
-  bool convex(int i) const { return orient(p_[prev_[i]], p_[i], p_[next_[i]]) > eps_; }
+  double turn(int i) const { return orient(p_[prev_[i]], p_[i], p_[next_[i]]); }
+  // Convex by more than a sliver: a corner nearly on the line of its neighbours counts as reflex,
+  // so that it is cut off by a wider triangle and can block an ear whose side it lies on.
+  bool convex(int i) const { return turn(i) > sliver_; }
 
   // Whether no other corner lies in the closed triangle (prev, i, next): only corners that are not
-  // convex can, in a simple polygon (and only they are in the grid).
+  // convex can, in a simple polygon (and only they are in the tree).
   bool clear(int i) const {
     const int a = prev_[i], b = next_[i];
     const Vec2 &pa = p_[a], &pi = p_[i], &pb = p_[b];
-    const Vec2 lo = pa.cwiseMin(pi).cwiseMin(pb), hi = pa.cwiseMax(pi).cwiseMax(pb);
-    const auto [x0, y0] = cell(lo);
-    const auto [x1, y1] = cell(hi);
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        for (int t = cell_start_[y * cells_ + x]; t < cell_start_[y * cells_ + x + 1]; ++t) {
-          const int q = cell_items_[t];
-          if (q == a || q == i || q == b || removed_[q] || convex(q)) continue;
-          const Vec2& pq = p_[q];
-          if (orient(pa, pi, pq) >= -eps_ && orient(pi, pb, pq) >= -eps_ && orient(pb, pa, pq) >= -eps_)
-            return false;
-        }
-    return true;
+    // A box all of whose corners lie outside one side of the triangle: a long thin ear (a comb's
+    // base, whose corners all fan from its two ends) skips the corners along it.
+    auto outside = [&](const Vec2& lo, const Vec2& hi) {
+      const Vec2 box[4] = {lo, hi, Vec2(lo.x(), hi.y()), Vec2(hi.x(), lo.y())};
+      for (const auto& [s, t] : {std::pair{&pa, &pi}, std::pair{&pi, &pb}, std::pair{&pb, &pa}}) {
+        bool all = true;
+        for (const Vec2& q : box) all = all && orient(*s, *t, q) < -eps_;
+        if (all) return true;
+      }
+      return false;
+    };
+    return !tree_->any(pa.cwiseMin(pi).cwiseMin(pb), pa.cwiseMax(pi).cwiseMax(pb), outside, [&](int q) {
+      if (q == a || q == i || q == b || convex(q)) return false;
+      const Vec2& pq = p_[q];
+      return orient(pa, pi, pq) >= -eps_ && orient(pi, pb, pq) >= -eps_ && orient(pb, pa, pq) >= -eps_;
+    });
   }
 
-  // Queues corner i: ears first (tier 2), the smallest first (by the octave of the longest side:
+  // Queues corner i: ears first (tier 3), the smallest first (by the octave of the longest side:
   // cut in rounds, a circle of many corners gets triangles that nest, where the largest-first
   // order or a fan makes each of them cross the whole polygon), the best-shaped first among
-  // those (4 sqrt(3) area over the sum of the squared sides: 1 for an equilateral triangle);
-  // then convex corners whose triangle holds another corner (tier 1), then the rest (tier 0),
-  // which only a polygon that is not simple reaches, so that the clipping always ends with n - 2
-  // triangles.
+  // those (4 sqrt(3) area over the sum of the squared sides: 1 for an equilateral triangle); then
+  // ears that would be slivers (tier 2), convex corners whose triangle holds another corner
+  // (tier 1) and the rest (tier 0), which only a degenerate or self-crossing polygon reaches, so
+  // that the clipping always ends with n - 2 triangles.
   void push(int i) {
     const Vec2 &pa = p_[prev_[i]], &pi = p_[i], &pb = p_[next_[i]];
-    const double area2 = orient(pa, pi, pb);
+    const double area2 = turn(i);
     const double ab = (pi - pa).squaredNorm(), bc = (pb - pi).squaredNorm(), ca = (pa - pb).squaredNorm();
     const double sides = ab + bc + ca;
     const double quality = sides > 0 ? 2.0 * std::sqrt(3.0) * area2 / sides : 0.0;
-    const int tier = area2 > eps_ ? (clear(i) ? 2 : 1) : 0;
-    const int octave = tier == 2 ? std::ilogb(std::max({ab, bc, ca})) : 0;
+    const int tier = area2 > eps_ ? (clear(i) ? (area2 > sliver_ ? 3 : 2) : 1) : 0;
+    const int octave = tier == 3 ? std::ilogb(std::max({ab, bc, ca})) : 0;
     queue_.push({tier, -octave, quality, -i, version_[i]});
   }
 
-  // A uniform grid over the corners that are not convex at the start (a corner only turns
-  // convex as ears are cut next to it), about one per cell.
-  void build_grid(const Vec2& lo, const Vec2& hi) {
-    std::vector<int> items;
-    for (int i = 0; i < n_; ++i)
-      if (!convex(i)) items.push_back(i);
-    cells_ = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(items.size()))));
-    lo_ = lo;
-    const Vec2 size = (hi - lo).cwiseMax(std::numeric_limits<double>::min());
-    inv_cell_ = Vec2(cells_ / size.x(), cells_ / size.y());
-    cell_start_.assign(static_cast<std::size_t>(cells_) * cells_ + 1, 0);
-    auto index = [&](int i) {
-      const auto [x, y] = cell(p_[i]);
-      return y * cells_ + x;
-    };
-    for (int i : items) ++cell_start_[index(i) + 1];
-    for (std::size_t k = 1; k < cell_start_.size(); ++k) cell_start_[k] += cell_start_[k - 1];
-    cell_items_.resize(items.size());
-    std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (int i : items) cell_items_[fill[index(i)]++] = i;
-  }
-  std::pair<int, int> cell(const Vec2& q) const {
-    auto clamp = [&](double t) {  // NaN and infinities (from overflowing coordinates) too, without UB
-      if (!(t >= 1.0)) return 0;
-      return t < cells_ ? static_cast<int>(t) : cells_ - 1;
-    };
-    return {clamp((q.x() - lo_.x()) * inv_cell_.x()), clamp((q.y() - lo_.y()) * inv_cell_.y())};
-  }
-
-  const int* c_;
   int n_;
   std::vector<Vec2> p_;
   std::vector<int> prev_, next_, version_;
   std::vector<char> removed_;
-  double eps_ = 0.0;
-  int cells_ = 1;
-  Vec2 lo_, inv_cell_;
-  std::vector<int> cell_start_, cell_items_;
+  double eps_ = 0.0, sliver_ = 0.0;
+  std::unique_ptr<CornerTree> tree_;
   // tier, -octave, quality, -corner, version
   std::priority_queue<std::tuple<int, int, double, int, int>> queue_;
 };
 
 }  // namespace
 
-void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, Face* out) {
-  // Newell: twice the area vector, from the corners relative to the first (the same sum): from
-  // their absolute positions, a 3 cm face at 1e7 lost its area to rounding (a flipped fan).
-  Vec3 normal = Vec3::Zero();
-  const Vec3 o = v[c[0]];
-  for (std::size_t i = 1; i + 1 < n; ++i) normal += (v[c[i]] - o).cross(v[c[i + 1]] - o);
-  // Scaled to a largest component of 1, so that its square neither overflows nor underflows.
+void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_diagonal,
+                         Face* out) {
+  int exponent = 0;
+  const std::vector<Vec3> w = local_corners(v, c, n, exponent);
+  Vec3 normal = Vec3::Zero();  // Newell: twice the area vector (w[0] = 0)
+  for (std::size_t i = 1; i + 1 < w.size(); ++i) normal += w[i].cross(w[i + 1]);
   const double largest = normal.cwiseAbs().maxCoeff();
-  const bool flat = !(largest > 0) || !std::isfinite(largest);  // or overflowing, or NaN
-  if (!flat) normal /= largest;
+  const bool flat = w.empty() || !(largest > 0) || !std::isfinite(largest);
   std::size_t apex = 0;
   if (n <= 32 || flat) {
     double score = 0.0;
-    if (n <= 32) apex = best_fan_apex(v, c, n, normal, score);
-    // A fan whose every triangle faces the normal with some area (relative to the polygon's).
-    // (score / |normal| is a triangle's doubled area along the normal, largest * |normal| the
-    // polygon's.)
-    if (flat || score > 1e-10 * largest * normal.squaredNorm()) {
+    if (n <= 32 && !flat) apex = best_fan_apex(w, normal, score);
+    // A fan whose every triangle faces the normal with some area: score / |normal| is a triangle's
+    // doubled area along the normal, |normal| the polygon's.
+    if (flat || score > 1e-10 * normal.squaredNorm()) {
       for (std::size_t i = 1; i + 1 < n; ++i)
         out[i - 1] = {c[apex], c[(apex + i) % n], c[(apex + i + 1) % n]};
       return;
     }
   }
-  EarClipper(v, c, n, normal).run(out);
+  std::vector<std::array<int, 3>> tri(n - 2);
+  const double diagonal = std::ldexp(mesh_diagonal, -exponent);  // in w's units
+  EarClipper(w, normal, std::isfinite(diagonal) ? 2e-14 * diagonal * diagonal : 0.0).run(tri.data());
+  for (std::size_t k = 0; k + 2 < n; ++k) out[k] = {c[tri[k][0]], c[tri[k][1]], c[tri[k][2]]};
 }
 
 }  // namespace strata::internal

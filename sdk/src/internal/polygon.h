@@ -20,6 +20,11 @@ namespace strata::internal {
 //!
 //! A polygon that is not simple in that plane (it crosses itself, or is degenerate: all corners
 //! on a line) still gets n - 2 triangles, which the mesh validation may then reject (zero area).
-void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, Face* out);
+//!
+//! \p mesh_diagonal: the diagonal of the bounding box of the mesh the polygon belongs to (0 if
+//! unknown). Ear clipping then avoids, where the polygon allows, triangles of doubled area at most
+//! 2e-14 mesh_diagonal^2, which the mesh validation calls zero area.
+void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_extent,
+                         Face* out);
 
 }  // namespace strata::internal
