@@ -20,6 +20,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "strata/atomic_file.h"
@@ -554,12 +555,12 @@ TEST(MeshIoTriangulate, PolygonsAFanCannotCoverAreCutIntoTrianglesThatTileThem) 
       const std::string label = name + (reversed ? " reversed" : "");
       const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, name + (reversed ? "_r" : "")));
       ASSERT_EQ(r.num_faces(), static_cast<int>(n) - 2) << label;
-      double sum = 0.0;
+      double sum = 0.0;  // of the absolute areas: overlapping or flipped triangles would add to it
       for (const Face& t : r.faces) {
         const double a =
             triangle_area_normal(r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]]).dot(normal);
         EXPECT_GT(a, 0.0) << label;
-        sum += a;
+        sum += std::abs(a);
       }
       EXPECT_NEAR(sum, area2, 1e-9 * area2) << label;
       EXPECT_EQ(find_self_intersections(r.vertices, r.faces).num_pairs, 0u) << label;
@@ -580,15 +581,34 @@ TEST(MeshIoTriangulate, AFaceFarFromTheOriginOrOfExtremeSizeIsCutAsAUnitOne) {
     s.f.push_back({0, 1, 2, 3, 4, 5, 6, 7});
     const TriMesh r = read_mesh(fx.put(s, Fmt::Obj, "far"));
     ASSERT_EQ(r.num_faces(), 6) << offset << " " << size;
-    double area = 0.0;  // in units of size^2
+    double area = 0.0;  // in units of size^2, absolute: flipped triangles would add to it
     for (const Face& t : r.faces) {
       auto unit = [&](int i) { return Vec3((r.vertices[i] - r.vertices[0]) / size); };
       const double a = triangle_area_normal(unit(t[0]), unit(t[1]), unit(t[2]))[2] / 2;
       EXPECT_GT(a, 0.0) << offset << " " << size;
-      area += a;
+      area += std::abs(a);
     }
     EXPECT_NEAR(area, 7.0, 1e-5) << offset << " " << size;  // the corners are rounded to 2e-9 at 1e7
   }
+}
+
+// A polygon that crosses itself has no triangulation without overlaps: an error names the file's
+// face (its triangles were read without one, overlapping).
+TEST(MeshIoTriangulate, APolygonThatCrossesItselfIsAnError) {
+  Fixture fx;
+  Soup bowtie{{{0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2, 3}}};
+  Soup pentagram;
+  for (int k = 0; k < 5; ++k)
+    pentagram.v.push_back({std::cos(4 * kPi * k / 5), std::sin(4 * kPi * k / 5), 0});
+  pentagram.f = {{0, 1, 2, 3, 4}};
+  for (const auto& [name, soup, n] : {std::tuple{"bowtie", bowtie, 4}, std::tuple{"pentagram", pentagram, 5}})
+    for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+      const std::string path = fx.put(soup, fmt, name);
+      EXPECT_TRUE(throws_with<InvalidInput>(
+          [&] { read_mesh(path); }, {path + ": the file's 1st face, a polygon of " + std::to_string(n) +
+                                     " corners, has no triangulation without overlapping triangles"}))
+          << name << " " << fmt_name(fmt);
+    }
 }
 
 // A polygon of many corners is not fanned from one corner: a fan's apex would be in all of its
@@ -802,10 +822,27 @@ TEST(MeshIoErrors, ZeroAreaFace) {
   s.f.insert(s.f.begin() + 1, {1, 5, 4, 2});
   for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
     const std::string path = fx.put(s, fmt, "line");
+    const std::string note = path +
+                             ": face 1 has zero area (face numbers count triangles: face 1 is one of the 2 "
+                             "triangles cut from the file's 2nd face, a polygon of 4 corners)";
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); }, {note})) << fmt_name(fmt);
+    std::vector<std::vector<int>> polygons;
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path, &polygons); }, {note})) << fmt_name(fmt);
+  }
+  // A plain triangle after a cut polygon: its number in the file, counted from 1. A square (the
+  // file's 1st face, faces 0 and 1) beside the tetrahedron (faces 2 to 5), then the zero-area
+  // triangle: face 6, the file's 6th face.
+  s = tetra();
+  for (const auto& p : std::vector<std::array<double, 3>>{{5, 0, 0}, {6, 0, 0}, {6, 1, 0}, {5, 1, 0}})
+    s.v.push_back(p);
+  s.v.push_back({0.5, 0.5, 0.0});  // vertex 8, on the segment from vertex 1 to vertex 2
+  s.f.insert(s.f.begin(), {4, 5, 6, 7});
+  s.f.push_back({1, 8, 2});
+  for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+    const std::string path = fx.put(s, fmt, "after");
     EXPECT_TRUE(throws_with<InvalidInput>(
         [&] { read_mesh(path); },
-        {path + ": face 1 has zero area (face numbers count triangles: face 1 is one of the 2 triangles cut "
-                "from the file's 2nd face, a polygon of 4 corners)"}))
+        {path + ": face 6 has zero area (face numbers count triangles: face 6 is the file's 6th face)"}))
         << fmt_name(fmt);
   }
   // STL: a facet with two corners at the same position collapses to a repeated vertex.

@@ -270,12 +270,34 @@ class TextCursor {
 
 using Polygons = std::vector<std::vector<int>>;
 
+//! What a reader records of the file's faces besides the triangles.
+struct FaceRecord {
+  Polygons* polygons = nullptr;  //!< if given, every polygon as listed (before triangulation)
+  //! Each polygon of more than 3 corners: its first triangle, its corner count, its place among
+  //! the file's faces (0-based), so that messages can name the file's face of a triangle.
+  struct Cut {
+    size_t first_face, n, ordinal;
+  };
+  std::vector<Cut> cuts;
+};
+
+//! "1st", "2nd", "3rd", "4th", .., "11th", .., "21st" for \p n >= 1.
+std::string ordinal(size_t n) {
+  const size_t tens = n % 100;
+  const char* suffix = tens >= 11 && tens <= 13 ? "th"
+                       : n % 10 == 1            ? "st"
+                       : n % 10 == 2            ? "nd"
+                       : n % 10 == 3            ? "rd"
+                                                : "th";
+  return std::to_string(n) + suffix;
+}
+
 class FaceBuilder {
  public:
   //! \param index_base added to 0-based indices when quoting them (1 for OBJ).
-  //! \param polygons if given, receives every polygon as listed (before triangulation).
-  FaceBuilder(const std::string& name, long long num_vertices, int index_base, Polygons* polygons = nullptr)
-      : name_(name), num_vertices_(num_vertices), index_base_(index_base), polygons_(polygons) {}
+  //! \param record if given, receives the polygons as listed and which were cut (FaceRecord).
+  FaceBuilder(const std::string& name, long long num_vertices, int index_base, FaceRecord* record = nullptr)
+      : name_(name), num_vertices_(num_vertices), index_base_(index_base), record_(record) {}
 
   //! Adds one polygon with 0-based corner indices; \p where() names it in messages.
   //! \throw InvalidInput for fewer than 3 corners, an index out of range or a repeated index.
@@ -302,27 +324,32 @@ class FaceBuilder {
     }
     if (static_cast<long long>(faces_.size()) + static_cast<long long>(n - 2) > kMaxIndexCount)
       fail_io(name_, "too many faces (more than " + std::to_string(kMaxIndexCount) + ")");
-    if (polygons_) polygons_->emplace_back(c.begin(), c.end());
+    if (record_ && record_->polygons) record_->polygons->emplace_back(c.begin(), c.end());
+    const size_t ordinal = count_++;
     if (n == 3) {
       faces_.push_back({static_cast<int>(c[0]), static_cast<int>(c[1]), static_cast<int>(c[2])});
       return;
     }
-    pending_.push_back({faces_.size(), pending_corners_.size(), n});
+    if (record_) record_->cuts.push_back({faces_.size(), n, ordinal});
+    pending_.push_back({faces_.size(), pending_corners_.size(), n, ordinal});
     for (long long i : c) pending_corners_.push_back(static_cast<int>(i));
     faces_.resize(faces_.size() + n - 2);  // placeholders, filled in finish()
   }
 
   //! Triangulates the pending polygons and returns all faces in file order.
+  //! \throw InvalidInput for a polygon that has no triangulation without overlaps found (it
+  //!        crosses itself, or is nearly degenerate).
   std::vector<Face> finish(const std::vector<Vec3>& vertices);
 
  private:
   struct Pending {
-    size_t first_face, first_corner, n;
+    size_t first_face, first_corner, n, ordinal;
   };
   std::string name_;
   long long num_vertices_;
   int index_base_;
-  Polygons* polygons_;
+  FaceRecord* record_;
+  size_t count_ = 0;  // faces added
   std::vector<Face> faces_;
   std::vector<Pending> pending_;
   std::vector<int> pending_corners_;
@@ -330,19 +357,33 @@ class FaceBuilder {
 };
 
 std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
-  double diagonal = 0.0;  // of all vertices: at least the faces' (validation's zero area is relative to them)
+  // The diagonal of the faces' vertices, that validation's zero area is relative to (a vertex in
+  // no face is left out: far away, it would make every ear a sliver).
+  double diagonal = 0.0;
   if (!pending_.empty()) {
     Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const Vec3& p : vertices) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
+    auto add = [&](int v) {
+      lo = lo.cwiseMin(vertices[v]);
+      hi = hi.cwiseMax(vertices[v]);
+    };
+    for (int v : pending_corners_) add(v);
+    size_t next = 0;  // the next pending polygon, whose placeholders are skipped
+    for (size_t f = 0; f < faces_.size(); ++f) {
+      if (next < pending_.size() && f == pending_[next].first_face) {
+        f += pending_[next++].n - 3;
+        continue;
+      }
+      for (int v : faces_[f]) add(v);
     }
     diagonal = (hi - lo).stableNorm();
   }
-  for (const Pending& p : pending_) {
-    internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n, diagonal,
-                                  faces_.data() + p.first_face);
-  }
+  for (const Pending& p : pending_)
+    if (!internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n, diagonal,
+                                       faces_.data() + p.first_face))
+      fail_input(name_, "the file's " + ordinal(p.ordinal + 1) + " face, a polygon of " +
+                            std::to_string(p.n) +
+                            " corners, has no triangulation without overlapping triangles that the reader "
+                            "finds: it crosses itself, or is nearly degenerate");
   pending_.clear();
   pending_corners_.clear();
   return std::move(faces_);
@@ -376,7 +417,7 @@ bool parse_obj_count_comment(std::string_view line, ObjCountComment& out) {
   return out.present;
 }
 
-TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polygons) {
+TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OBJ");
   TriMesh mesh;
   ObjCountComment declared;
@@ -420,7 +461,7 @@ TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polyg
   }
 
   // Pass 2: faces. Negative indices count back from the last vertex defined before the line.
-  FaceBuilder faces(name, mesh.num_vertices(), 1, polygons);
+  FaceBuilder faces(name, mesh.num_vertices(), 1, record);
   std::vector<long long> corners;
   LineReader lines(text);
   std::string_view raw;
@@ -462,7 +503,7 @@ TriMesh read_obj(const std::string& name, std::string_view text, Polygons* polyg
 // OFF (ASCII; optional ST/C/N prefixes, whose extra per-vertex values are ignored). One vertex or
 // face per line, as written by all common tools; '#' starts a comment.
 
-TriMesh read_off(const std::string& name, std::string_view text, Polygons* polygons) {
+TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OFF");
   LineReader lines(text);
   std::string_view raw;
@@ -530,7 +571,7 @@ TriMesh read_off(const std::string& name, std::string_view text, Polygons* polyg
     mesh.vertices.push_back(p);
   }
 
-  FaceBuilder faces(name, nv, 0, polygons);
+  FaceBuilder faces(name, nv, 0, record);
   std::vector<long long> corners;
   for (long long f = 0; f < nf; ++f) {
     if (!next_data_line(line))
@@ -808,14 +849,14 @@ std::string plural_element(const PlyElement& e) {
 }
 
 template <class Source>
-TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, Polygons* polygons) {
+TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, FaceRecord* record) {
   long long num_vertices = 0;
   for (const PlyElement& e : h.elements)
     if (e.name == "vertex") num_vertices = e.count;
   check_vertex_count(num_vertices, name);
 
   TriMesh mesh;
-  FaceBuilder faces(name, num_vertices, 0, polygons);
+  FaceBuilder faces(name, num_vertices, 0, record);
   std::vector<long long> corners;
   PlyValue value;
   for (const PlyElement& e : h.elements) {
@@ -881,16 +922,16 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   return mesh;
 }
 
-TriMesh read_ply(const std::string& name, std::string_view data, Polygons* polygons) {
+TriMesh read_ply(const std::string& name, std::string_view data, FaceRecord* record) {
   const PlyHeader h = parse_ply_header(name, data);
   const std::string_view body = data.substr(h.body_offset);
   if (h.encoding == PlyEncoding::Ascii) {
     reject_nul_bytes(body, name, "ascii PLY body");
     PlyAsciiSource src(name, body, h.body_first_line);
-    return read_ply_body(name, h, src, polygons);
+    return read_ply_body(name, h, src, record);
   }
   PlyBinarySource src(body, h.encoding == PlyEncoding::BinaryBE);
-  return read_ply_body(name, h, src, polygons);
+  return read_ply_body(name, h, src, record);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1118,17 +1159,19 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
       while (h != e && h->other == g->other) ++h;
       const size_t n = static_cast<size_t>(h - g);
       const size_t first_face = g->code / 2;
-      const std::string edge = "edge (" + std::to_string(v) + "," + std::to_string(g->other) + ")";
+      // Named only for a problem: building the name for every edge took a tenth of reading a
+      // million quads.
+      auto edge = [&] { return "edge (" + std::to_string(v) + "," + std::to_string(g->other) + ")"; };
       if (n > 2 && first_face < best_face) {
         best_face = first_face;
-        problem = edge + " is non-manifold: shared by " + std::to_string(n) + " faces (";
+        problem = edge() + " is non-manifold: shared by " + std::to_string(n) + " faces (";
         for (size_t i = 0; i < std::min<size_t>(n, 6); ++i)
           problem += (i ? ", " : "") + std::to_string(g[i].code / 2);
         problem += n > 6 ? ", ...)" : ")";
       } else if (n == 2 && (g[0].code & 1) == (g[1].code & 1) && first_face < best_face) {
         best_face = first_face;
         const bool fwd = g[0].code & 1;
-        problem = edge + " has inconsistently oriented faces: faces " + std::to_string(g[0].code / 2) +
+        problem = edge() + " has inconsistently oriented faces: faces " + std::to_string(g[0].code / 2) +
                   " and " + std::to_string(g[1].code / 2) + " both traverse it from " +
                   std::to_string(fwd ? v : static_cast<size_t>(g->other)) + " to " +
                   std::to_string(fwd ? static_cast<size_t>(g->other) : v);
@@ -1141,32 +1184,21 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
 }
 
 //! " (...)": which of the file's faces \p face of the triangulated mesh comes from, where the file
-//! has polygons of more than 3 corners, so that face numbers differ from the file's; "" otherwise.
-//! \p listed: the file's polygons as listed.
-std::string file_face_note(long long face, const Polygons& listed) {
-  if (face < 0) return "";
-  bool cut = false;
-  for (const auto& p : listed) cut = cut || p.size() > 3;
-  if (!cut) return "";
-  long long first = 0;  // the first triangle of polygon k
-  for (size_t k = 0; k < listed.size(); ++k) {
-    const long long count = static_cast<long long>(listed[k].size()) - 2;
-    if (face < first + count) {
-      const size_t n = k + 1, tens = n % 100;
-      const char* suffix = tens >= 11 && tens <= 13 ? "th"
-                           : n % 10 == 1            ? "st"
-                           : n % 10 == 2            ? "nd"
-                           : n % 10 == 3            ? "rd"
-                                                    : "th";
-      const std::string where = "the file's " + std::to_string(n) + suffix + " face";
-      const std::string head = " (face numbers count triangles: face " + std::to_string(face) + " is ";
-      if (count == 1) return head + where + ")";
-      return head + "one of the " + std::to_string(count) + " triangles cut from " + where +
-             ", a polygon of " + std::to_string(listed[k].size()) + " corners)";
-    }
-    first += count;
+//! has polygons of more than 3 corners (\p cuts, FaceRecord), so that face numbers differ from the
+//! file's; "" otherwise.
+std::string file_face_note(long long face, const std::vector<FaceRecord::Cut>& cuts) {
+  if (face < 0 || cuts.empty()) return "";
+  const size_t f = static_cast<size_t>(face);
+  const std::string head = " (face numbers count triangles: face " + std::to_string(face) + " is ";
+  size_t extra = 0;  // triangles beyond one per file face, of the cut polygons before f
+  for (const FaceRecord::Cut& c : cuts) {
+    if (f < c.first_face) break;
+    if (f < c.first_face + c.n - 2)
+      return head + "one of the " + std::to_string(c.n - 2) + " triangles cut from the file's " +
+             ordinal(c.ordinal + 1) + " face, a polygon of " + std::to_string(c.n) + " corners)";
+    extra += c.n - 3;
   }
-  return "";
+  return head + "the file's " + ordinal(f - extra + 1) + " face)";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1392,33 +1424,29 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
   // text formats (a binary STL's header may hold any bytes; read_stl() skips it if ascii).
   std::string_view data = file;
   if (format != Format::Stl && data.substr(0, 3) == kUtf8Bom) data.remove_prefix(3);
-  auto parse = [&](Polygons* listed) {
-    if (listed) listed->clear();
-    switch (format) {
-      case Format::Obj:
-        return read_obj(path, data, listed);
-      case Format::Off:
-        return read_off(path, data, listed);
-      case Format::Ply:
-        return read_ply(path, data, listed);
-      case Format::Stl:
-        break;
-    }
-    TriMesh mesh = read_stl(path, data);
-    if (listed)
-      for (const Face& f : mesh.faces) listed->push_back({f[0], f[1], f[2]});
-    return mesh;
-  };
-  TriMesh mesh = parse(polygons);
+  FaceRecord record;
+  record.polygons = polygons;
+  if (polygons) polygons->clear();
+  TriMesh mesh;
+  switch (format) {
+    case Format::Obj:
+      mesh = read_obj(path, data, &record);
+      break;
+    case Format::Off:
+      mesh = read_off(path, data, &record);
+      break;
+    case Format::Ply:
+      mesh = read_ply(path, data, &record);
+      break;
+    case Format::Stl:
+      mesh = read_stl(path, data);
+      if (polygons)
+        for (const Face& f : mesh.faces) polygons->push_back({f[0], f[1], f[2]});
+      break;
+  }
   long long face = -1;
   const std::string problem = find_mesh_problem(mesh, &face);
-  if (!problem.empty()) {
-    // Which polygon of the file a face came from: the file is parsed again for its polygons, as
-    // listed, unless the caller asked for them (not kept otherwise: they cost memory).
-    Polygons again;
-    if (!polygons && face >= 0) parse(&again);
-    fail_input(path, problem + file_face_note(face, polygons ? *polygons : again));
-  }
+  if (!problem.empty()) fail_input(path, problem + file_face_note(face, record.cuts));
   return mesh;
 }
 

@@ -35,17 +35,21 @@ namespace strata {
 //! .stl in any letter case). PLY may be ascii, binary_little_endian or binary_big_endian; STL
 //! may be ASCII or binary (told apart by content, not by name). Polygons with more than three
 //! corners are split into n - 2 triangles, stored consecutively in file order and oriented as the
-//! polygon: a polygon of up to 32 corners that one corner sees whole gets the fan from the corner
-//! whose smallest triangle is largest; any other (a U-shaped face, a hole's cap of many corners)
-//! is cut by ear clipping in the plane of its Newell normal, smallest ears first. A simple polygon
-//! is thus covered exactly, without flipped or overlapping triangles.
+//! polygon: a polygon of up to 32 corners that one corner sees whole (a fan whose every triangle
+//! has over 1e-10 of its area) gets the fan from the corner whose smallest triangle is largest;
+//! any other (a U-shaped face, a hole's cap of many corners) is cut by ear clipping in the plane of
+//! its Newell normal, smallest ears first. A simple polygon is thus covered without flipped or
+//! overlapping triangles; one that crosses itself is an error, and so is one with corners so
+//! nearly on a line through others that the clipping finds no ear. A polygon of corners all on
+//! one line is fanned, its zero-area triangles then reported by the validation.
 //! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
 //! data (normals, colors, texture coordinates, materials) is ignored. The result has passed
 //! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a
 //! crash). \throw IoError if the file is missing or unreadable, the extension is not supported, or the
 //!        contents cannot be parsed or are truncated (e.g. fewer elements than a header declares).
 //! \throw InvalidInput if the contents parse but do not form a valid mesh (see validate_mesh;
-//!        also an OBJ/OFF/PLY face with fewer than three corners).
+//!        also an OBJ/OFF/PLY face with fewer than three corners, or a polygon that crosses
+//!        itself).
 TriMesh read_mesh(const std::string& path);
 
 //! As read_mesh(path), and also returns the faces as the file lists them, before triangulation

@@ -17,17 +17,27 @@ using Vec2 = Eigen::Vector2d;
 // The polygon's corners relative to its first, in units of 2^exponent, the power of two just above
 // its largest coordinate: exact (barring subnormals), and neither the differences, their cross
 // products nor their squares overflow or underflow at 1e+-300, nor lose a small face far from the
-// origin (a 3 cm face at 1e7) to rounding. Empty if a coordinate is not finite.
-std::vector<Vec3> local_corners(const std::vector<Vec3>& v, const int* c, std::size_t n, int& exponent) {
+// origin (a 3 cm face at 1e7) to rounding. Into \p w; false (w empty) if a coordinate is not
+// finite.
+bool local_corners(const std::vector<Vec3>& v, const int* c, std::size_t n, std::vector<Vec3>& w,
+                   int& exponent) {
+  w.clear();
   double largest = 0.0;
-  for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, v[c[i]].cwiseAbs().maxCoeff());
-  if (!std::isfinite(largest)) return {};
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!v[c[i]].allFinite()) return false;
+    largest = std::max(largest, v[c[i]].cwiseAbs().maxCoeff());
+  }
   std::frexp(largest, &exponent);
-  std::vector<Vec3> w(n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-      w[i][k] = std::ldexp(v[c[i]][k], -exponent) - std::ldexp(v[c[0]][k], -exponent);
-  return w;
+  w.resize(n);
+  if (std::abs(exponent) < 1000) {  // 2^-exponent is a double: a product, not a call per coordinate
+    const double scale = std::ldexp(1.0, -exponent);
+    for (std::size_t i = 0; i < n; ++i) w[i] = v[c[i]] * scale - v[c[0]] * scale;
+  } else {
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k)
+        w[i][k] = std::ldexp(v[c[i]][k], -exponent) - std::ldexp(v[c[0]][k], -exponent);
+  }
+  return true;
 }
 
 // The fan apex whose smallest triangle, measured along \p normal, is largest; that measure in
@@ -178,14 +188,18 @@ class EarClipper {
     tree_ = std::make_unique<CornerTree>(p_, std::move(items));
   }
 
-  //! Writes the n - 2 triangles, as positions of the polygon's corners, to \p out.
-  void run(std::array<int, 3>* out) {
+  //! Writes the n - 2 triangles, as positions of the polygon's corners, to \p out. Returns
+  //! whether each was an ear (else some overlap: the polygon crosses itself or is degenerate).
+  bool run(std::array<int, 3>* out) {
     for (int i = 0; i < n_; ++i) push(i);
     int left = n_, written = 0;
+    bool ears = true;
     while (left > 3) {
       const int i = -std::get<3>(queue_.top()), version = std::get<4>(queue_.top());
+      const bool ear = std::get<0>(queue_.top()) >= 2;
       queue_.pop();
       if (removed_[i] || version != version_[i]) continue;  // stale: re-pushed since
+      ears = ears && ear;
       const int a = prev_[i], b = next_[i];
       out[written++] = {a, i, b};
       removed_[i] = 1;
@@ -202,6 +216,7 @@ class EarClipper {
     int i = 0;
     while (removed_[i]) ++i;
     out[written] = {prev_[i], i, next_[i]};
+    return ears && turn(i) > 0;
   }
 
  private:
@@ -251,7 +266,7 @@ class EarClipper {
     const double sides = ab + bc + ca;
     const double quality = sides > 0 ? 2.0 * std::sqrt(3.0) * area2 / sides : 0.0;
     const int tier = area2 > eps_ ? (clear(i) ? (area2 > sliver_ ? 3 : 2) : 1) : 0;
-    const int octave = tier == 3 ? std::ilogb(std::max({ab, bc, ca})) : 0;
+    const int octave = tier >= 2 ? std::ilogb(std::max({ab, bc, ca})) : 0;
     queue_.push({tier, -octave, quality, -i, version_[i]});
   }
 
@@ -267,10 +282,11 @@ class EarClipper {
 
 }  // namespace
 
-void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_diagonal,
+bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_diagonal,
                          Face* out) {
   int exponent = 0;
-  const std::vector<Vec3> w = local_corners(v, c, n, exponent);
+  thread_local std::vector<Vec3> w;  // reused: a file of millions of quads allocates it once
+  local_corners(v, c, n, w, exponent);
   Vec3 normal = Vec3::Zero();  // Newell: twice the area vector (w[0] = 0)
   for (std::size_t i = 1; i + 1 < w.size(); ++i) normal += w[i].cross(w[i + 1]);
   const double largest = normal.cwiseAbs().maxCoeff();
@@ -284,13 +300,19 @@ void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n
     if (flat || score > 1e-10 * normal.squaredNorm()) {
       for (std::size_t i = 1; i + 1 < n; ++i)
         out[i - 1] = {c[apex], c[(apex + i) % n], c[(apex + i + 1) % n]};
-      return;
+      if (!flat || w.empty()) return true;
+      // A zero normal with corners off a line: lobes of opposite orientation (a bow tie).
+      double spread = 0.0;
+      for (std::size_t i = 1; i + 1 < n; ++i) spread += w[i].cross(w[i + 1]).norm();
+      return !(spread > 1e-12);
     }
   }
   std::vector<std::array<int, 3>> tri(n - 2);
   const double diagonal = std::ldexp(mesh_diagonal, -exponent);  // in w's units
-  EarClipper(w, normal, std::isfinite(diagonal) ? 2e-14 * diagonal * diagonal : 0.0).run(tri.data());
+  const bool ears =
+      EarClipper(w, normal, std::isfinite(diagonal) ? 2e-14 * diagonal * diagonal : 0.0).run(tri.data());
   for (std::size_t k = 0; k + 2 < n; ++k) out[k] = {c[tri[k][0]], c[tri[k][1]], c[tri[k][2]]};
+  return ears;
 }
 
 }  // namespace strata::internal

@@ -11,20 +11,27 @@ namespace strata::internal {
 //! Splits the polygon with corners \p c[0..n) (indices into \p v, n >= 3) into n - 2 triangles
 //! written to \p out[0..n-2), each oriented as the polygon (its Newell normal).
 //!
-//! A polygon of at most 32 corners that some corner sees whole (convex, or star-shaped) gets the
-//! fan from the corner whose smallest triangle is largest, so that slivers are avoided where a fan
-//! allows it: the triangles every earlier version read. Any other polygon is cut by ear clipping in
-//! the plane of its Newell normal, the best-shaped ear first: a U-shaped face of a CAD export gets
-//! triangles that cover it without overlaps, and a hole's cap of many corners no apex of thousands
-//! of slivers (which, besides their shape, made an intersection count over them quadratic).
+//! A polygon of at most 32 corners with a fan whose every triangle faces the normal with over
+//! 1e-10 of the polygon's area (a convex or star-shaped one) gets the fan from the corner whose
+//! smallest triangle is largest, so that slivers are avoided where a fan allows it: the triangles
+//! earlier versions read, but where two corners tie. So does a polygon whose normal is zero (all
+//! corners on a line: its triangles have zero area, which the mesh validation reports; or lobes
+//! of opposite orientation, as a bow tie: then false is returned). Any other
+//! polygon is cut by ear clipping in the plane of its Newell normal, the smallest ear first (so
+//! that a circle of many corners gets triangles that nest, where a fan or the best-shaped-first
+//! order makes each cross the whole polygon, and an intersection count over them quadratic), the
+//! best-shaped first among those: a U-shaped face of a CAD export gets triangles that cover it
+//! without overlaps.
 //!
-//! A polygon that is not simple in that plane (it crosses itself, or is degenerate: all corners
-//! on a line) still gets n - 2 triangles, which the mesh validation may then reject (zero area).
+//! \p mesh_diagonal: the diagonal of the bounding box of the mesh's face vertices (0 if unknown).
+//! Ear clipping cuts last the ears of doubled area at most 2e-14 mesh_diagonal^2, which the mesh
+//! validation calls zero area.
 //!
-//! \p mesh_diagonal: the diagonal of the bounding box of the mesh the polygon belongs to (0 if
-//! unknown). Ear clipping then avoids, where the polygon allows, triangles of doubled area at most
-//! 2e-14 mesh_diagonal^2, which the mesh validation calls zero area.
-void triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_extent,
+//! Returns false if the triangles overlap: ear clipping found no ear at some point and cut a
+//! corner whose triangle overlaps the rest, or the normal is zero with corners off a line. The
+//! polygon then crosses itself, or is nearly degenerate (corners within rounding of a line through
+//! other corners can trap the clipping). The n - 2 triangles are written either way.
+bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_diagonal,
                          Face* out);
 
 }  // namespace strata::internal
