@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common.h"
@@ -94,8 +95,7 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
   } else {
     log.phase("reading " + src.detail_path + ", " + src.base_path + ", " + src.edited_base_path);
     detail = read_named_mesh(src.detail_path);
-    base = read_named_mesh(src.base_path);
-    edited = read_named_mesh(src.edited_base_path);
+    std::tie(base, edited) = read_base_pair(src.base_path, src.edited_base_path);
   }
   shared.read = sw.seconds();
   const EncodedInput in = encode_input(detail, base, edited, log);

@@ -1,6 +1,9 @@
 // `strata reconstruct`: encode a detail mesh over a base, rebuild it over an edited base.
+#include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "common.h"
@@ -25,6 +28,14 @@ struct ReconstructCmdOptions {
 
 // Exit status of --strict when the result misses a target; errors exit 1, usage errors 2.
 constexpr int kStrictExit = 3;
+
+// A number with the digits to read back the same; "nan" and "inf" as such (a JSON dump
+// prints null for them).
+std::string number_text(double x) {
+  std::ostringstream os;
+  os << std::setprecision(std::numeric_limits<double>::max_digits10) << x;
+  return os.str();
+}
 
 void print_summary(std::ostream& os, const json& r) {
   const json& in = r["inputs"];
@@ -75,8 +86,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   log.phase("reading " + o.detail + ", " + o.base + ", " + o.edited_base);
   Stopwatch sw;
   const NamedMesh detail = read_named_mesh(o.detail);
-  const NamedMesh base = read_named_mesh(o.base);
-  const NamedMesh edited = read_named_mesh(o.edited_base);
+  const auto [base, edited] = read_base_pair(o.base, o.edited_base);
   times.read = sw.seconds();
   const EncodedInput in = encode_input(detail, base, edited, log);
   const DetailEncoding& encoding = in.encoding;
@@ -125,8 +135,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   if (method == Method::Volumes) {
     if (outcome.stats && !outcome.stats->converged)
       warnings.push_back("not converged: the max relative prism volume error " +
-                         json(outcome.stats->max_relative_error).dump() + " is above the tolerance " +
-                         json(options.tolerance).dump());
+                         number_text(outcome.stats->max_relative_error) + " is above the tolerance " +
+                         number_text(options.tolerance));
     if (outcome.new_pairs > 0)
       warnings.push_back(std::to_string(outcome.new_pairs) + " new intersecting pairs of triangles");
   }
@@ -164,8 +174,8 @@ Subcommand register_reconstruct(CLI::App& parent) {
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->add_flag(
       "--strict", o->strict,
-      "Exit with 3 (outputs written) when the result misses a target: the volumes not converged, new "
-      "intersecting pairs, or a detail that does not look like a displacement of its base");
+      "Exit with 3 (outputs written) when the result misses a target: a detail that does not look like a "
+      "displacement of its base; for the volumes also a solve not converged or new intersecting pairs");
   app->footer(
       "Example:\n  strata reconstruct --detail detail.obj --base base.obj --edited-base edited_base.obj \\\n"
       "      --method volumes -o out.obj --report report.json");

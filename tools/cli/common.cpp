@@ -55,6 +55,18 @@ NamedMesh read_named_mesh(const std::string& path) {
   return m;
 }
 
+std::pair<NamedMesh, NamedMesh> read_base_pair(const std::string& base, const std::string& edited) {
+  std::vector<std::vector<int>> base_polygons, edited_polygons;
+  std::pair<NamedMesh, NamedMesh> r{{read_mesh(base, &base_polygons), base},
+                                    {read_mesh(edited, &edited_polygons), edited}};
+  if (r.second.mesh.faces != r.first.mesh.faces && edited_polygons == base_polygons &&
+      r.second.mesh.num_vertices() == r.first.mesh.num_vertices()) {
+    r.second.mesh.faces = r.first.mesh.faces;
+    validate_mesh(r.second.mesh, edited);
+  }
+  return r;
+}
+
 namespace {
 
 std::string face_text(const Face& f) {

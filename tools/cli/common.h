@@ -88,6 +88,11 @@ struct NamedMesh {
 //! read_mesh(path) with the path in the name.
 NamedMesh read_named_mesh(const std::string& path);
 
+//! A base S and its edited S2, read as read_named_mesh(). A polygon of more than 3 corners is cut
+//! into triangles by its shape, so S and S2 listing the same polygons may be cut differently: S2
+//! then takes S's triangles (validated at S2's positions), so that its connectivity is S's.
+std::pair<NamedMesh, NamedMesh> read_base_pair(const std::string& base, const std::string& edited);
+
 //! Throws InvalidInput unless \p edited has exactly \p base's connectivity (vertex count and face
 //! list), naming both meshes and the first difference.
 void check_same_connectivity(const NamedMesh& base, const NamedMesh& edited);

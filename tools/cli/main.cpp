@@ -1,5 +1,6 @@
 // The `strata` command-line tool: parses the command line, runs one subcommand and turns every
-// error into a one-line message and an exit code (0 ok, 1 error, 2 usage error).
+// error into a one-line message and an exit code (0 ok, 1 error, 2 usage error; `reconstruct
+// --strict` returns 3 for a result that misses a target).
 #include <exception>
 #include <iostream>
 #include <new>
