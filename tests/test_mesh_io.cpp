@@ -609,6 +609,15 @@ TEST(MeshIoTriangulate, APolygonThatCrossesItselfIsAnError) {
                                      " corners, has no triangulation without overlapping triangles"}))
           << name << " " << fmt_name(fmt);
     }
+  // After a quad (cut into two triangles) and a triangle, the bow tie is the file's 3rd face.
+  Soup after = bowtie;
+  for (const auto& p :
+       std::vector<std::array<double, 3>>{{5, 0, 0}, {6, 0, 0}, {6, 1, 0}, {5, 1, 0}, {7, 0, 0}})
+    after.v.push_back(p);
+  after.f.insert(after.f.begin(), {{4, 5, 6, 7}, {5, 8, 6}});
+  const std::string path = fx.put(after, Fmt::Obj, "third");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
+                                        {path + ": the file's 3rd face, a polygon of 4 corners"}));
 }
 
 // A polygon of many corners is not fanned from one corner: a fan's apex would be in all of its

@@ -273,10 +273,10 @@ using Polygons = std::vector<std::vector<int>>;
 //! What a reader records of the file's faces besides the triangles.
 struct FaceRecord {
   Polygons* polygons = nullptr;  //!< if given, every polygon as listed (before triangulation)
-  //! Each polygon of more than 3 corners: its first triangle, its corner count, its place among
-  //! the file's faces (0-based), so that messages can name the file's face of a triangle.
+  //! Each polygon of more than 3 corners: its first triangle and its corner count, so that
+  //! messages can name the file's face of a triangle.
   struct Cut {
-    size_t first_face, n, ordinal;
+    size_t first_face, n;
   };
   std::vector<Cut> cuts;
 };
@@ -325,13 +325,12 @@ class FaceBuilder {
     if (static_cast<long long>(faces_.size()) + static_cast<long long>(n - 2) > kMaxIndexCount)
       fail_io(name_, "too many faces (more than " + std::to_string(kMaxIndexCount) + ")");
     if (record_ && record_->polygons) record_->polygons->emplace_back(c.begin(), c.end());
-    const size_t ordinal = count_++;
     if (n == 3) {
       faces_.push_back({static_cast<int>(c[0]), static_cast<int>(c[1]), static_cast<int>(c[2])});
       return;
     }
-    if (record_) record_->cuts.push_back({faces_.size(), n, ordinal});
-    pending_.push_back({faces_.size(), pending_corners_.size(), n, ordinal});
+    if (record_) record_->cuts.push_back({faces_.size(), n});
+    pending_.push_back({faces_.size(), pending_corners_.size(), n});
     for (long long i : c) pending_corners_.push_back(static_cast<int>(i));
     faces_.resize(faces_.size() + n - 2);  // placeholders, filled in finish()
   }
@@ -343,13 +342,12 @@ class FaceBuilder {
 
  private:
   struct Pending {
-    size_t first_face, first_corner, n, ordinal;
+    size_t first_face, first_corner, n;
   };
   std::string name_;
   long long num_vertices_;
   int index_base_;
   FaceRecord* record_;
-  size_t count_ = 0;  // faces added
   std::vector<Face> faces_;
   std::vector<Pending> pending_;
   std::vector<int> pending_corners_;
@@ -377,13 +375,16 @@ std::vector<Face> FaceBuilder::finish(const std::vector<Vec3>& vertices) {
     }
     diagonal = (hi - lo).stableNorm();
   }
-  for (const Pending& p : pending_)
+  size_t extra = 0;  // triangles beyond one per file face, of the polygons before
+  for (const Pending& p : pending_) {
     if (!internal::triangulate_polygon(vertices, pending_corners_.data() + p.first_corner, p.n, diagonal,
                                        faces_.data() + p.first_face))
-      fail_input(name_, "the file's " + ordinal(p.ordinal + 1) + " face, a polygon of " +
+      fail_input(name_, "the file's " + ordinal(p.first_face - extra + 1) + " face, a polygon of " +
                             std::to_string(p.n) +
                             " corners, has no triangulation without overlapping triangles that the reader "
                             "finds: it crosses itself, or is nearly degenerate");
+    extra += p.n - 3;
+  }
   pending_.clear();
   pending_corners_.clear();
   return std::move(faces_);
@@ -1115,7 +1116,7 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
       hi = hi.cwiseMax(mesh.vertices[v] * scale);
     }
   const double diag = (hi - lo).norm();  // bbox_diagonal(vertices) * scale
-  const double min_double_area = 2e-14 * diag * diag;
+  const double min_double_area = internal::kZeroAreaRelative * diag * diag;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& t = mesh.faces[f];
     const Vec3 a = mesh.vertices[t[0]] * scale, b = mesh.vertices[t[1]] * scale,
@@ -1195,7 +1196,7 @@ std::string file_face_note(long long face, const std::vector<FaceRecord::Cut>& c
     if (f < c.first_face) break;
     if (f < c.first_face + c.n - 2)
       return head + "one of the " + std::to_string(c.n - 2) + " triangles cut from the file's " +
-             ordinal(c.ordinal + 1) + " face, a polygon of " + std::to_string(c.n) + " corners)";
+             ordinal(c.first_face - extra + 1) + " face, a polygon of " + std::to_string(c.n) + " corners)";
     extra += c.n - 3;
   }
   return head + "the file's " + ordinal(f - extra + 1) + " face)";

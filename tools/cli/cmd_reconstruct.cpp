@@ -131,7 +131,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
               {"solve_phases_seconds", solve_phases_json(outcome.stats)}};
   // What makes the result miss a target, for pipelines (--strict exits 3 on any).
   json warnings = json::array();
-  if (!in.warning.empty()) warnings.push_back(in.warning + "; the result may be meaningless");
+  if (!in.warning.empty()) warnings.push_back(in.warning);
   if (method == Method::Volumes) {
     if (outcome.stats && !outcome.stats->converged)
       warnings.push_back("not converged: the max relative prism volume error " +

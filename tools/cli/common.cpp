@@ -298,9 +298,9 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
     w << detail.name << " does not look like a displacement of " << base.name << ": " << er.num_fallback
       << " of " << er.num_vertices
       << " vertices have no base point along its normals, and the median offset is " << median
-      << " against a base diagonal of " << base_size;
+      << " against a base diagonal of " << base_size << "; the result may be meaningless";
     e.warning = w.str();
-    std::cerr << "strata: warning: " << e.warning << "; the result may be meaningless" << std::endl;
+    std::cerr << "strata: warning: " << e.warning << std::endl;
   }
   log.phase("counting self-intersections of the input detail");
   e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces);

@@ -310,7 +310,8 @@ bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n
   std::vector<std::array<int, 3>> tri(n - 2);
   const double diagonal = std::ldexp(mesh_diagonal, -exponent);  // in w's units
   const bool ears =
-      EarClipper(w, normal, std::isfinite(diagonal) ? 2e-14 * diagonal * diagonal : 0.0).run(tri.data());
+      EarClipper(w, normal, std::isfinite(diagonal) ? kZeroAreaRelative * diagonal * diagonal : 0.0)
+          .run(tri.data());
   for (std::size_t k = 0; k + 2 < n; ++k) out[k] = {c[tri[k][0]], c[tri[k][1]], c[tri[k][2]]};
   return ears;
 }

@@ -8,6 +8,10 @@
 
 namespace strata::internal {
 
+//! The mesh validation's zero area: a triangle's doubled area at most this times the squared
+//! diagonal of the bounding box of the mesh's face vertices.
+constexpr double kZeroAreaRelative = 2e-14;
+
 //! Splits the polygon with corners \p c[0..n) (indices into \p v, n >= 3) into n - 2 triangles
 //! written to \p out[0..n-2), each oriented as the polygon (its Newell normal).
 //!
@@ -24,8 +28,8 @@ namespace strata::internal {
 //! without overlaps.
 //!
 //! \p mesh_diagonal: the diagonal of the bounding box of the mesh's face vertices (0 if unknown).
-//! Ear clipping cuts last the ears of doubled area at most 2e-14 mesh_diagonal^2, which the mesh
-//! validation calls zero area.
+//! Ear clipping cuts last the ears of doubled area at most kZeroAreaRelative mesh_diagonal^2,
+//! which the mesh validation calls zero area.
 //!
 //! Returns false if the triangles overlap: ear clipping found no ear at some point and cut a
 //! corner whose triangle overlaps the rest, or the normal is zero with corners off a line. The
