@@ -38,10 +38,13 @@ namespace strata {
 //! polygon: a polygon of up to 32 corners that one corner sees whole (a fan whose every triangle
 //! has over 1e-10 of its area) gets the fan from the corner whose smallest triangle is largest;
 //! any other (a U-shaped face, a hole's cap of many corners) is cut by ear clipping in the plane of
-//! its Newell normal, smallest ears first. A simple polygon is thus covered without flipped or
-//! overlapping triangles; one that crosses itself is an error, and so is one with corners so
-//! nearly on a line through others that the clipping finds no ear. A polygon of corners all on
-//! one line is fanned, its zero-area triangles then reported by the validation.
+//! its Newell normal, smallest ears first; where corners within rounding of a line through others
+//! trap the clipping, a polygon of up to 256 corners gets the triangulation whose smallest
+//! triangle is largest (an exact O(n^3) search). A simple polygon is thus covered without flipped
+//! or overlapping triangles. One whose sides cross (checked for 5-256 corners; a quad that crosses
+//! itself has no fan of positive triangles) is an error, and so is a trapped one of over 256
+//! corners. A polygon with a part of zero width gets zero-area triangles, and a polygon of corners
+//! all on one line is fanned: the validation reports their zero area.
 //! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
 //! data (normals, colors, texture coordinates, materials) is ignored. The result has passed
 //! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a

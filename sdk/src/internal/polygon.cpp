@@ -14,6 +14,10 @@ namespace {
 
 using Vec2 = Eigen::Vector2d;
 
+// Polygons the ear clipping could not cut whose corners are at most this many get the exact
+// search (max_min_area_triangulation(), O(n^3)): 2.7 million steps at most.
+constexpr std::size_t kExactMaxCorners = 256;
+
 // The polygon's corners relative to its first, in units of 2^exponent, the power of two just above
 // its largest coordinate: exact (barring subnormals), and neither the differences, their cross
 // products nor their squares overflow or underflow at 1e+-300, nor lose a small face far from the
@@ -56,6 +60,98 @@ std::size_t best_fan_apex(const std::vector<Vec3>& w, const Vec3& normal, double
     }
   }
   return best;
+}
+
+// Twice the signed area of (a, b, q).
+double orient(const Vec2& a, const Vec2& b, const Vec2& q) {
+  return (b.x() - a.x()) * (q.y() - a.y()) - (b.y() - a.y()) * (q.x() - a.x());
+}
+
+// The corners \p w in an orthonormal basis (u, t) of the plane of \p normal (not zero) with
+// u x t = normal / |normal|, so that the polygon's signed area is positive there; into \p p.
+// Returns the doubled area within rounding of zero there: 1e-14 of the squared extent.
+double plane_coordinates(const std::vector<Vec3>& w, const Vec3& normal, std::vector<Vec2>& p) {
+  const Vec3 nn = normal.normalized();
+  int k = 0;
+  nn.cwiseAbs().minCoeff(&k);
+  const Vec3 u = nn.cross(Vec3::Unit(k)).normalized(), t = nn.cross(u);
+  Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  p.resize(w.size());
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    p[i] = Vec2(w[i].dot(u), w[i].dot(t));
+    lo = lo.cwiseMin(p[i]);
+    hi = hi.cwiseMax(p[i]);
+  }
+  const double extent = std::max((hi - lo).maxCoeff(), std::numeric_limits<double>::min());
+  return 1e-14 * extent * extent;
+}
+
+// Whether two of the polygon's sides cross by more than rounding: each one's ends on either side of
+// the other's line, in the plane of \p normal (not zero), by more than 1e-14 of the squared
+// extent (sides that meet within rounding touch). A polygon that crosses itself has no
+// triangulation without overlaps: any of positive triangles covers twice where it winds twice.
+// O(n^2): polygons of at most kExactMaxCorners corners only.
+bool sides_cross(const std::vector<Vec3>& w, const Vec3& normal) {
+  const std::size_t n = w.size();
+  Vec3 lo = w[0], hi = w[0];
+  for (const Vec3& x : w) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  const double extent = (hi - lo).maxCoeff(), eps = 1e-14 * extent * extent * normal.norm();
+  auto orient = [&normal](const Vec3& a, const Vec3& b, const Vec3& q) {
+    return (b - a).cross(q - a).dot(normal);
+  };
+  auto opposite = [eps](double x, double y) { return (x > eps && y < -eps) || (x < -eps && y > eps); };
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j + 1 == n) continue;  // adjacent through corner 0
+      const Vec3 &a = w[i], &b = w[i + 1], &c = w[j], &d = w[(j + 1) % n];
+      if (opposite(orient(a, b, c), orient(a, b, d)) && opposite(orient(c, d, a), orient(c, d, b)))
+        return true;
+    }
+  return false;
+}
+
+// The triangulation of the polygon \p p (counter-clockwise) whose smallest triangle is largest,
+// by dynamic programming over its chains (i..j cut by a triangle (i, k, j)): O(n^3) time, O(n^2)
+// memory. For a polygon whose sides do not cross, any triangulation of positive triangles covers
+// it once (their winding numbers sum to the polygon's, 1 inside and 0 outside), whatever the
+// diagonals: so no visibility test is needed, and the rounding that traps the ear clipping
+// (corners within 1e-14 of a line through others) does not. Writes \p out and returns true if
+// the smallest doubled area exceeds -\p eps: a triangle within rounding of zero area is left to
+// the mesh validation, which names it (the polygon has a part of zero width).
+bool max_min_area_triangulation(const std::vector<Vec2>& p, double eps, std::array<int, 3>* out) {
+  const int n = static_cast<int>(p.size());
+  std::vector<double> best(static_cast<std::size_t>(n) * n, std::numeric_limits<double>::infinity());
+  std::vector<int> apex(static_cast<std::size_t>(n) * n, -1);
+  auto at = [n](int i, int j) { return static_cast<std::size_t>(i) * n + j; };
+  for (int len = 2; len < n; ++len)
+    for (int i = 0; i + len < n; ++i) {
+      const int j = i + len;
+      double b = -std::numeric_limits<double>::infinity();
+      for (int k = i + 1; k < j; ++k) {
+        const double s = std::min({orient(p[i], p[k], p[j]), best[at(i, k)], best[at(k, j)]});
+        if (s > b) {
+          b = s;
+          apex[at(i, j)] = k;
+        }
+      }
+      best[at(i, j)] = b;
+    }
+  if (!(best[at(0, n - 1)] > -eps)) return false;
+  int written = 0;
+  std::vector<std::pair<int, int>> chains{{0, n - 1}};  // still to cut
+  while (!chains.empty()) {
+    const auto [i, j] = chains.back();
+    chains.pop_back();
+    if (j - i < 2) continue;
+    const int k = apex[at(i, j)];
+    out[written++] = {i, k, j};
+    chains.push_back({i, k});
+    chains.push_back({k, j});
+  }
+  return written == n - 2;
 }
 
 // A static k-d tree over some of the corners, from which corners are removed: the clipper's
@@ -165,28 +261,22 @@ class EarClipper {
         next_(w.size()),
         version_(w.size(), 0),
         removed_(w.size(), 0) {
-    // An orthonormal basis (u, t) of the plane with u x t = normal / |normal|: the polygon's
-    // signed area is positive in it.
-    const Vec3 nn = normal.normalized();
-    int k = 0;
-    nn.cwiseAbs().minCoeff(&k);
-    const Vec3 u = nn.cross(Vec3::Unit(k)).normalized(), t = nn.cross(u);
-    Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    eps_ = plane_coordinates(w, normal, p_);
     for (int i = 0; i < n_; ++i) {
-      p_[i] = Vec2(w[i].dot(u), w[i].dot(t));
-      lo = lo.cwiseMin(p_[i]);
-      hi = hi.cwiseMax(p_[i]);
       prev_[i] = (i + n_ - 1) % n_;
       next_[i] = (i + 1) % n_;
     }
-    const double extent = std::max((hi - lo).maxCoeff(), std::numeric_limits<double>::min());
-    eps_ = 1e-14 * extent * extent;
     sliver_ = std::max(eps_, min_area2);
     std::vector<int> items;
     for (int i = 0; i < n_; ++i)
       if (!convex(i)) items.push_back(i);
     tree_ = std::make_unique<CornerTree>(p_, std::move(items));
   }
+
+  //! The corners in the plane (plane_coordinates()).
+  const std::vector<Vec2>& points() const { return p_; }
+  //! The doubled area within rounding of zero, in the plane's units.
+  double eps() const { return eps_; }
 
   //! Writes the n - 2 triangles, as positions of the polygon's corners, to \p out. Returns
   //! whether each was an ear (else some overlap: the polygon crosses itself or is degenerate).
@@ -220,10 +310,6 @@ class EarClipper {
   }
 
  private:
-  // Twice the signed area of (a, b, q).
-  static double orient(const Vec2& a, const Vec2& b, const Vec2& q) {
-    return (b.x() - a.x()) * (q.y() - a.y()) - (b.y() - a.y()) * (q.x() - a.x());
-  }
   double turn(int i) const { return orient(p_[prev_[i]], p_[i], p_[next_[i]]); }
   // Convex by more than a sliver: a corner nearly on the line of its neighbours counts as reflex,
   // so that it is cut off by a wider triangle and can block an ear whose side it lies on.
@@ -292,6 +378,12 @@ bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n
   const double largest = normal.cwiseAbs().maxCoeff();
   const bool flat = w.empty() || !(largest > 0) || !std::isfinite(largest);
   std::size_t apex = 0;
+  // (A quad that crosses itself needs no test: each diagonal cuts it into triangles of opposite
+  // orientations, so it has no fan below, and quads are most of the polygons files hold.)
+  if (!flat && n >= 5 && n <= kExactMaxCorners && sides_cross(w, normal)) {
+    for (std::size_t i = 1; i + 1 < n; ++i) out[i - 1] = {c[0], c[i], c[i + 1]};
+    return false;
+  }
   if (n <= 32 || flat) {
     double score = 0.0;
     if (n <= 32 && !flat) apex = best_fan_apex(w, normal, score);
@@ -309,9 +401,11 @@ bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n
   }
   std::vector<std::array<int, 3>> tri(n - 2);
   const double diagonal = std::ldexp(mesh_diagonal, -exponent);  // in w's units
-  const bool ears =
-      EarClipper(w, normal, std::isfinite(diagonal) ? kZeroAreaRelative * diagonal * diagonal : 0.0)
-          .run(tri.data());
+  EarClipper clipper(w, normal, std::isfinite(diagonal) ? kZeroAreaRelative * diagonal * diagonal : 0.0);
+  bool ears = clipper.run(tri.data());
+  // Trapped by corners within rounding of a line through others (the sides do not cross, above).
+  if (!ears && n <= kExactMaxCorners)
+    ears = max_min_area_triangulation(clipper.points(), clipper.eps(), tri.data());
   for (std::size_t k = 0; k + 2 < n; ++k) out[k] = {c[tri[k][0]], c[tri[k][1]], c[tri[k][2]]};
   return ears;
 }

@@ -31,10 +31,14 @@ constexpr double kZeroAreaRelative = 2e-14;
 //! Ear clipping cuts last the ears of doubled area at most kZeroAreaRelative mesh_diagonal^2,
 //! which the mesh validation calls zero area.
 //!
-//! Returns false if the triangles overlap: ear clipping found no ear at some point and cut a
-//! corner whose triangle overlaps the rest, or the normal is zero with corners off a line. The
-//! polygon then crosses itself, or is nearly degenerate (corners within rounding of a line through
-//! other corners can trap the clipping). The n - 2 triangles are written either way.
+//! If the clipping finds no ear at some point (the polygon crosses itself, or corners within
+//! rounding of a line through other corners trap it), a polygon of at most 256 corners whose sides
+//! do not cross gets the triangulation whose smallest triangle is largest, by an exact O(n^3)
+//! search; a triangle within rounding of zero area there is left to the mesh validation.
+//!
+//! Returns false if the triangles overlap: the clipping was trapped and the exact search did not
+//! apply or found only triangles that face away, or the normal is zero with corners off a line.
+//! The n - 2 triangles are written either way.
 bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n, double mesh_diagonal,
                          Face* out);
 
