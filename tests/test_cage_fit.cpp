@@ -134,6 +134,34 @@ TEST(CageFit, RejectsBadInput) {
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothness = NAN; })), InvalidInput);
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.rounds = 0; })), InvalidInput);
   EXPECT_NO_THROW(fit_cage(scan, with([](CageFitOptions&) {})));
+  // Coordinates beyond the engine's range are refused (at 1e160 the limit projection crashed).
+  TriMesh far = scan;
+  for (Vec3& v : far.vertices) v *= 1e160;
+  EXPECT_THROW(fit_cage(far, with([](CageFitOptions&) {})), InvalidInput);
+}
+
+// A scan may hold vertices in no face (validate_mesh() allows them): the decimation drops them
+// (deleting one without OpenMesh's status attributes aborted the process), and the cage is the
+// one fitted to the scan without them up to the decimation's order (the vertices' numbering
+// differs): as many faces, neither stray point among its vertices, the same fit to the sphere.
+TEST(CageFit, UnreferencedScanVerticesAreDropped) {
+  const TriMesh clean = icosphere(3);
+  TriMesh scan = clean;
+  scan.vertices.push_back(Vec3(5, 5, 5));
+  scan.vertices.insert(scan.vertices.begin(), Vec3(-5, 0, 0));
+  for (Face& f : scan.faces)
+    for (int& v : f) ++v;
+  CageFitOptions o;
+  o.faces = 200;
+  const CageFit fit = fit_cage(scan, o), reference = fit_cage(clean, o);
+  EXPECT_EQ(fit.cage.num_faces(), reference.cage.num_faces());
+  for (const Vec3& x : fit.cage.vertices) {
+    EXPECT_GT((x - Vec3(5, 5, 5)).norm(), 1.0);
+    EXPECT_GT((x - Vec3(-5, 0, 0)).norm(), 1.0);
+  }
+  const RadialError e = radial_error(fit.cage), r = radial_error(reference.cage);
+  EXPECT_NEAR(e.max, r.max, 0.2 * r.max);
+  EXPECT_NEAR(e.mean, r.mean, 0.2 * std::abs(r.mean) + 1e-4);
 }
 
 TEST(CageIo, ParsesTagsAndNamesTheProblem) {

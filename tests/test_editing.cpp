@@ -125,6 +125,26 @@ TEST(RegionEditor, RejectsBadSelections) {
   EditTransform flip;
   flip.linear = Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal();
   EXPECT_THROW(ok.apply(flip), InvalidInput);  // a reflection cannot be blended
+  // Coordinates beyond the engine's range.
+  TriMesh far = m;
+  far.vertices[0].x() = 1e25;
+  EXPECT_THROW(RegionEditor(far, region, handle), InvalidInput);
+}
+
+// Every other face of the cylinder: triangles that share no edge, so every vertex lies on open
+// edges and has no Laplacian row. CHOLMOD was handed empty columns and the process crashed; the
+// editor now names a vertex where the system is singular.
+TEST(RegionEditor, TrianglesThatShareNoEdgeAreRefused) {
+  const TriMesh m = bumpy_cylinder(2000);
+  TriMesh apart;
+  apart.vertices = m.vertices;
+  for (std::size_t f = 0; f < m.faces.size(); f += 2) apart.faces.push_back(m.faces[f]);
+  try {
+    RegionEditor(apart, above(apart, 2.0), above(apart, 4.0));
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("system is singular at vertex"), std::string::npos) << e.what();
+  }
 }
 
 // The decomposition is a low-pass filter: short ripples go to the detail, the plane they sit on

@@ -132,6 +132,21 @@ TEST(Encoding, RejectsBadInput) {
   std::vector<Vec3> nan_base = c.base.vertices;
   nan_base[0][0] = INFINITY;
   EXPECT_THROW(reconstruct_vectors(e, nan_base), InvalidInput);
+  // Beyond the engine's range (kMaxCoordinate): a detail vertex 1e80 from the base crashed the
+  // encoding, one 1e28 away overflowed the solver. The message names the vertex and its magnitude.
+  TriMesh far_detail = c.detail;
+  far_detail.vertices[2] *= 1e80;
+  try {
+    encode_detail(far_detail, c.base);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& ex) {
+    EXPECT_NE(std::string(ex.what()).find("detail mesh vertex 2 has a coordinate of magnitude"),
+              std::string::npos)
+        << ex.what();
+  }
+  std::vector<Vec3> far_base = c.base.vertices;
+  far_base[1] *= 1e25;
+  EXPECT_THROW(evaluate_base_frames(e, far_base), InvalidInput);
 }
 
 // The projections run on TBB's threads: one thread and three give the same base points, offsets,

@@ -392,6 +392,21 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
       if (s.name == "band1.base_faces")
         s.bytes[0] = 0xff, s.bytes[1] = 0xff, s.bytes[2] = 0xff, s.bytes[3] = 0x0f;
   });
+  // Found by a fuzzing pass (2026-11-28): each was read, and `info` and `export` exited 0.
+  variant("nan_cage_point", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band0.points") {
+        const double nan = std::nan("");
+        std::memcpy(s.bytes.data() + 8 * 5, &nan, sizeof nan);
+      }
+  });
+  variant("repeated_corner", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.faces") std::memcpy(s.bytes.data() + 4, s.bytes.data(), 4);
+  });
+  variant("option_out_of_range", [](nlohmann::json& m, layers::StrataContainer&) {
+    m["options"]["reconstruct"]["coarsening_ratio"] = -1.0;
+  });
   // The untouched container still reads.
   EXPECT_NO_THROW(layers::read_model(good));
 }

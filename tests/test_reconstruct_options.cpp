@@ -115,7 +115,10 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
   EXPECT_EQ(refusal("volume_scales", "0"),
             "reconstruction option volume_scales = 0 is out of range (at least 1)");
   EXPECT_EQ(refusal("threads", "-2"),
-            "reconstruction option threads = -2 is out of range (at least 0; 0 is all cores)");
+            "reconstruction option threads = -2 is out of range (0-1024; 0 is all cores)");
+  // TBB crashed on an arena of 65,537 threads.
+  EXPECT_EQ(refusal("threads", "100000"),
+            "reconstruction option threads = 100000 is out of range (0-1024; 0 is all cores)");
   EXPECT_EQ(refusal("coarsening_ratio", "1"),
             "reconstruction option coarsening_ratio = 1 is out of range (between 0 and 1)");
   EXPECT_EQ(refusal("multigrid.damping", "0"),

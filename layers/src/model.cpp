@@ -489,6 +489,13 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                                     std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
   if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
+  // The cage's current points make a limit surface (a NaN point passed `info` and `export`, and an
+  // edit blamed its script).
+  try {
+    const SubdivSurface surface(bands[0].cage, bands[0].tags, bands[0].subdiv);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput("band 0: " + std::string(e.what()));
+  }
   for (int k = 1; k < nb; ++k) {
     const Band& b = bands[k];
     const std::string name = "band " + std::to_string(k);
@@ -496,8 +503,16 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     const int nv = b.mesh.num_vertices();
     if (e.num_detail_vertices() != nv || e.detail_faces != b.mesh.faces)
       throw InvalidInput(name + ": the encoding does not match the band's mesh");
-    for (const Vec3& p : b.mesh.vertices)
-      if (!p.allFinite()) throw InvalidInput(name + ": a vertex position is not finite");
+    // A face with a repeated corner spans no prism (such a band passed every command).
+    for (std::size_t f = 0; f < b.mesh.faces.size(); ++f) {
+      const Face& t = b.mesh.faces[f];
+      for (int c = 0; c < 3; ++c)
+        if (t[c] < 0 || t[c] >= nv || t[c] == t[(c + 1) % 3])
+          throw InvalidInput(name + ": face " + std::to_string(f) + " has corners (" + std::to_string(t[0]) +
+                             "," + std::to_string(t[1]) + "," + std::to_string(t[2]) +
+                             "), not 3 distinct vertices of " + std::to_string(nv));
+    }
+    check_coordinates(b.mesh.vertices, name + ":");
     if (!std::isfinite(b.amplitude)) throw InvalidInput(name + ": the amplitude is not finite");
     const int base_n = k == 1 ? bands[0].cage.num_vertices() : bands[k - 1].mesh.num_vertices();
     if (e.base_num_vertices != base_n || static_cast<int>(b.base_rest.size()) != base_n)

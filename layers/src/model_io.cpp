@@ -389,6 +389,12 @@ LayeredModel read_model(const std::string& path) {
   if (!bands_j.is_array() || bands_j.size() < 2 || bands_j.size() > 64)
     h.fail("'bands' must be an array of 2 to 64 bands");
   const ModelOptions options = read_options(h, h.at(m, "options", "the model header"));
+  // Options out of the solver's range were read and named only by the first edit, without the file.
+  try {
+    check_reconstruct_options(options.reconstruct);
+  } catch (const InvalidInput& e) {
+    h.fail(std::string("the model's ") + e.what());
+  }
   std::vector<std::string> history;
   const json& hist = h.at(m, "history", "the model header");
   if (!hist.is_array()) h.fail("'history' is not an array");

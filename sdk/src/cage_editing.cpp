@@ -87,6 +87,7 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
+    check_coordinates(mesh.vertices, "edited mesh");
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       region_.push_back(i);

@@ -123,6 +123,7 @@ class CageFitter {
 CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   check_options(options);
   validate_mesh(scan, "scan");
+  check_coordinates(scan.vertices, "scan");
   const int target = options.faces > 0
                          ? options.faces
                          : std::max(options.min_faces,
@@ -141,19 +142,32 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   for (const Face& f : decimated_mesh.faces) decimated.faces.push_back({f[0], f[1], f[2]});
   fit.seconds_decimate = seconds_since(t0);
 
+  // The fit's targets are the vertices in faces: a stray point (validate_mesh() allows them) would
+  // pull the cage towards itself.
+  std::vector<char> used(scan.vertices.size(), 0);
+  for (const Face& f : scan.faces)
+    for (int v : f) used[v] = 1;
+  std::vector<Vec3> smooth_used, scan_used;
+  for (std::size_t i = 0; i < used.size(); ++i)
+    if (used[i]) {
+      smooth_used.push_back(smooth[i]);
+      scan_used.push_back(scan.vertices[i]);
+    }
+
   t0 = Clock::now();
-  CageFitter fitter(decimated, smooth, options);
+  CageFitter fitter(decimated, smooth_used, options);
   for (int r = 0; r < options.rounds; ++r) fitter.round();
   fit.rounds = options.rounds;
   const SubdivSurface& s = fitter.surface();
   fit.cage = s.cage();
   fit.cage.vertices = s.control_points();
-  const double diag = std::max(bbox_diagonal(scan.vertices), 1e-300);
-  const Distances target_d = distances(s, smooth, project_to_limit(s, smooth, options.projection).points);
+  const double diag = std::max(bbox_diagonal(scan_used), 1e-300);
+  const Distances target_d =
+      distances(s, smooth_used, project_to_limit(s, smooth_used, options.projection).points);
   fit.rms_error = target_d.rms / diag;
   fit.max_error = target_d.max / diag;
-  const Projection scan_p = project_to_limit(s, scan.vertices, options.projection);
-  const Distances scan_d = distances(s, scan.vertices, scan_p.points);
+  const Projection scan_p = project_to_limit(s, scan_used, options.projection);
+  const Distances scan_d = distances(s, scan_used, scan_p.points);
   fit.scan_rms_distance = scan_d.rms / diag;
   fit.scan_max_distance = scan_d.max / diag;
   fit.scan_fallback = scan_p.num_fallback;

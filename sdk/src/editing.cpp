@@ -136,6 +136,7 @@ class RegionEditor::Impl {
     if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
       throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) +
                          ")");
+    check_coordinates(mesh.vertices, "edited mesh");
     const auto t0 = Clock::now();
     in_region_.assign(n, 0);
     in_handle_.assign(n, 0);
@@ -307,10 +308,18 @@ class RegionEditor::Impl {
       }
       return trip;
     };
-    auto solve = [](int m, std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs,
-                    const char* what) {
+    auto solve = [](const std::vector<int>& unknowns, std::vector<Eigen::Triplet<double>>& trip,
+                    const Eigen::MatrixXd& rhs, const char* what) {
+      const int m = static_cast<int>(unknowns.size());
       Eigen::SparseMatrix<double> Q(m, m);
       Q.setFromTriplets(trip.begin(), trip.end());
+      // A vertex whose neighbours all lie on open edges has no Laplacian row (a mesh of triangles
+      // that share no edge): CHOLMOD was handed an empty column and the process crashed.
+      for (int r = 0; r < m; ++r)
+        if (!(Q.coeff(r, r) > 0))
+          throw InvalidInput(std::string("the region's ") + what + " system is singular at vertex " +
+                             std::to_string(unknowns[r]) +
+                             ": it and its neighbours lie on open edges, with no interior vertex to fair");
       const internal::SerialOpenMp serial;
       Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(Q);
       if (llt.info() != Eigen::Success)
@@ -330,7 +339,7 @@ class RegionEditor::Impl {
       trip.emplace_back(r, r, pull * area[i]);
       rhs.row(r) += pull * area[i] * x[i].transpose();
     }
-    const Eigen::MatrixXd faired = solve(static_cast<int>(region_.size()), trip, rhs, "fairing");
+    const Eigen::MatrixXd faired = solve(region_, trip, rhs, "fairing");
     base_ = x;
     for (std::size_t k = 0; k < region_.size(); ++k)
       base_[region_[k]] = faired.row(static_cast<Eigen::Index>(k)).transpose();
@@ -341,7 +350,7 @@ class RegionEditor::Impl {
           if (in_handle_[j]) b(r, 0) -= v;
         },
         rhs);
-    const Eigen::MatrixXd blend = solve(static_cast<int>(free.size()), trip, rhs, "blend field");
+    const Eigen::MatrixXd blend = solve(free, trip, rhs, "blend field");
     s_.assign(n, 0.0);
     for (int i : handle_) s_[i] = 1.0;
     for (std::size_t k = 0; k < free.size(); ++k) s_[free[k]] = blend(static_cast<Eigen::Index>(k), 0);

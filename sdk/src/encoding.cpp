@@ -21,8 +21,7 @@ namespace {
 
 void check_mesh(const TriMesh& m, const char* what) {
   if (m.faces.empty()) throw InvalidInput(std::string(what) + " mesh has no faces");
-  for (const Vec3& v : m.vertices)
-    if (!v.allFinite()) throw InvalidInput(std::string(what) + " mesh has a non-finite coordinate");
+  check_coordinates(m.vertices, std::string(what) + " mesh");
   for (const Face& f : m.faces)
     for (int v : f)
       if (v < 0 || v >= m.num_vertices())
@@ -118,12 +117,14 @@ class Encoder {
       // counted as one, such roots made vertices ambiguous and at times won as the nearest.
       if (internal::offset_collapsed(tri, t)) continue;
       Vec3 b = internal::offset_barycentric(tri, p, t);
-      if (b.minCoeff() < -opt_.barycentric_tolerance) continue;
+      // Not finite where the cubic overflows (a detail vertex 1e80 from a unit base): no root, so
+      // the closest point is the fallback (such a vertex had no base face, and the frames crashed).
+      if (!b.allFinite() || b.minCoeff() < -opt_.barycentric_tolerance) continue;
       b = b.cwiseMax(0.0);
       b /= b.sum();
       const Vec3 q = b[0] * tri.x[0] + b[1] * tri.x[1] + b[2] * tri.x[2];
       const double d = (p - q).norm();
-      if (d > T) continue;
+      if (!(d <= T)) continue;
       // The same point found through two faces sharing an edge is not an ambiguity.
       if (found == 0 || (q - best_q).norm() > 1e-9 * (1.0 + d)) ++found;
       if (d < best) {
@@ -360,8 +361,7 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
   if (static_cast<int>(x.size()) != e.base_num_vertices)
     throw InvalidInput("edited base has " + std::to_string(x.size()) + " vertices, the encoding's base has " +
                        std::to_string(e.base_num_vertices));
-  for (const Vec3& v : x)
-    if (!v.allFinite()) throw InvalidInput("edited base has a non-finite coordinate");
+  check_coordinates(x, "edited base");
   const std::vector<Vec3> vn = vertex_normals(x, e.base_faces);
   const int n = e.num_detail_vertices();
   BaseFrames fr;

@@ -215,9 +215,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
   if (options.seed_resolution < 1 || options.max_iterations < 1 || !(options.orthogonality_tolerance > 0) ||
       !(options.seam_tolerance >= options.orthogonality_tolerance))
     throw InvalidInput("projection options out of range");
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!points[i].allFinite())
-      throw InvalidInput("point " + std::to_string(i) + " to project has a non-finite coordinate");
+  check_coordinates(points, "projected");
   Projection out;
   const std::size_t n = points.size();
   out.points.resize(n);

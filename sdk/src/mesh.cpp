@@ -1,8 +1,26 @@
 #include "strata/mesh.h"
 
 #include <cmath>
+#include <sstream>
+
+#include "strata/exceptions.h"
 
 namespace strata {
+
+void check_coordinates(const std::vector<Vec3>& points, const std::string& what) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    if (!p.allFinite())
+      throw InvalidInput(what + " vertex " + std::to_string(i) + " has a non-finite coordinate");
+    const double m = p.cwiseAbs().maxCoeff();
+    if (m > kMaxCoordinate) {
+      std::ostringstream s;
+      s << what << " vertex " << i << " has a coordinate of magnitude " << m
+        << ", beyond the engine's range (" << kMaxCoordinate << ")";
+      throw InvalidInput(s.str());
+    }
+  }
+}
 
 double bbox_diagonal(const std::vector<Vec3>& points) {
   if (points.empty()) return 0.0;

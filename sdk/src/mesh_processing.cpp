@@ -61,9 +61,18 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
   // is rejected by OpenMesh's add_face, and that face is left out of the decimation input.
   for (const Face& f : mesh.faces) om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
-  // Unreferenced and isolated vertices would survive as stray points.
+  // Unreferenced and isolated vertices would survive as stray points. Deleting needs the status
+  // attributes (without them OpenMesh aborted on a scan with one unreferenced vertex).
+  om.request_vertex_status();
+  om.request_edge_status();
+  om.request_face_status();
+  bool isolated = false;
   for (auto v : om.vertices())
-    if (om.is_isolated(v)) om.delete_vertex(v, false);
+    if (om.is_isolated(v)) {
+      om.delete_vertex(v, false);
+      isolated = true;
+    }
+  if (isolated) om.garbage_collection();
   // The normal-flipping module needs face normals (OpenMesh prints a warning and computes them).
   om.request_face_normals();
   om.update_face_normals();

@@ -89,9 +89,7 @@ class SubdivSurface::Impl {
   void validate() {
     const int nv = cage_.num_vertices();
     if (nv == 0 || cage_.faces.empty()) throw InvalidInput("cage has no vertices or no faces");
-    for (int v = 0; v < nv; ++v)
-      if (!cage_.vertices[v].allFinite())
-        throw InvalidInput("cage vertex " + vtx(v) + " has a non-finite coordinate");
+    check_coordinates(cage_.vertices, "cage");
     bool all_triangles = true;
     // Undirected edges get ids and may be shared by at most 2 faces; directed ones must be unique
     // (consistent orientation).
@@ -572,9 +570,7 @@ void SubdivSurface::set_control_points(const std::vector<Vec3>& points) {
   if (static_cast<int>(points.size()) != impl_->cage_.num_vertices())
     throw InvalidInput("cage edit has " + vtx(static_cast<int>(points.size())) +
                        " control points, the cage has " + vtx(impl_->cage_.num_vertices()));
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!points[i].allFinite())
-      throw InvalidInput("control point " + vtx(static_cast<int>(i)) + " is not finite");
+  check_coordinates(points, "edited cage");
   impl_->cage_.vertices = points;
   impl_->update_points();
 }

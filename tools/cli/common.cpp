@@ -52,6 +52,7 @@ NamedMesh read_named_mesh(const std::string& path) {
   NamedMesh m;
   m.name = path;
   m.mesh = read_mesh(path);  // its errors start with the path
+  check_coordinates(m.mesh.vertices, path + ":");
   return m;
 }
 
@@ -59,6 +60,8 @@ std::pair<NamedMesh, NamedMesh> read_base_pair(const std::string& base, const st
   std::vector<std::vector<int>> base_polygons, edited_polygons;
   std::pair<NamedMesh, NamedMesh> r{{read_mesh(base, &base_polygons), base},
                                     {read_mesh(edited, &edited_polygons), edited}};
+  check_coordinates(r.first.mesh.vertices, base + ":");
+  check_coordinates(r.second.mesh.vertices, edited + ":");
   if (r.second.mesh.faces != r.first.mesh.faces && edited_polygons == base_polygons &&
       r.second.mesh.num_vertices() == r.first.mesh.num_vertices()) {
     r.second.mesh.faces = r.first.mesh.faces;

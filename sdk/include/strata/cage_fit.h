@@ -58,9 +58,10 @@ struct CageFit {
   double seconds_smooth = 0.0, seconds_decimate = 0.0, seconds_fit = 0.0;
 };
 
-//! Fits a Loop control cage to \p scan.
+//! Fits a Loop control cage to \p scan. Vertices in no face are ignored (neither decimated nor
+//! fitted to).
 //! \pre nothing: the scan is checked.
-//! \throw InvalidInput if the scan has no faces, an index out of range, non-finite coordinates,
+//! \throw InvalidInput if the scan fails validate_mesh(), has a coordinate beyond kMaxCoordinate,
 //!        or fewer faces than the cage would have, or if an option is out of range (faces < 0,
 //!        face_fraction outside (0, 1], min_faces < 4, smoothing_steps < 0, smoothness < 0,
 //!        rounds < 1).

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <string>
 #include <vector>
 
 namespace strata {
@@ -24,6 +25,17 @@ struct TriMesh {
 
 //! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points).
 double bbox_diagonal(const std::vector<Vec3>& points);
+
+//! The largest coordinate magnitude the engine takes. Prism volumes are cubic in the coordinates
+//! and the solver's inner products hold higher powers: a 3 x 6 tube case scaled as a whole
+//! reconstructs alike from 1e-20 to 1e25, while a detail 1e28 from a unit base overflowed the
+//! solver and one 1e80 away crashed the encoding (2026-11-28). Real scans are far inside.
+constexpr double kMaxCoordinate = 1e20;
+
+//! Checks that every coordinate of \p points is finite and of magnitude at most kMaxCoordinate.
+//! \throw InvalidInput "<what> vertex <i> has a non-finite coordinate" or "<what> vertex <i> has
+//!        a coordinate of magnitude <x>, beyond the engine's range (1e+20)".
+void check_coordinates(const std::vector<Vec3>& points, const std::string& what);
 
 //! Unnormalized normal of triangle (a, b, c): twice its area times its unit normal.
 inline Vec3 triangle_area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {

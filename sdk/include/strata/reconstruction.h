@@ -311,8 +311,8 @@ struct ReconstructOptions {
   MultigridStepOptions multigrid;
   //! Threads of the solver's sweeps over prisms and vertices and of its counts of new intersecting
   //! pairs (TBB; the factorizations run on the calling thread). 0: as many as TBB allows the
-  //! caller; 1: the calling thread only. Every sum is taken in the same order whatever the count,
-  //! and the pairs are sorted, so results are identical for any value.
+  //! caller; 1: the calling thread only; at most 1024. Every sum is taken in the same order
+  //! whatever the count, and the pairs are sorted, so results are identical for any value.
   int threads = 0;
   //! Optional progress reports (phase, fraction), on the calling thread: during a clean-start
   //! reconstruction after every level of every volume scale, the fraction weighted by the levels'
@@ -354,6 +354,12 @@ struct ReconstructOptions {
 //! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
 //! outcomes are erratic from mesh to mesh (sdk/docs/engine-log.md).
 ReconstructOptions multigrid_reconstruct_options();
+
+//! Checks that every field of \p options is in the solver's range, as VolumeReconstructor does on
+//! construction: for options that arrive apart from a solve (a file's, a --set's).
+//! \throw InvalidInput "reconstruction option NAME = VALUE is out of range (RANGE)" for the
+//!        first field out of range.
+void check_reconstruct_options(const ReconstructOptions& options);
 
 //! Sets one field of \p options by its name as spelled in ReconstructOptions ("multigrid.NAME"
 //! for a MultigridStepOptions field) from text, as tools and configuration files give it: whole
