@@ -105,6 +105,26 @@ expect_fail "report = input"        "would replace the input" reconstruct -q --d
 cmp -s mine.obj $G/detail.obj || { echo "FAIL [output = input]: the input was changed" >&2; failures=$((failures + 1)); }
 expect_fail "cage output = scan"    "would replace the input" cage fit mine.obj -o ./mine.obj
 
+# Found by a fuzzing pass (2026-11-28); each crashed (signal) before.
+awk '/^v / {printf "v %.17g %.17g %.17g\n", $2 * 1e80, $3 * 1e80, $4 * 1e80; next} {print}' $G/detail.obj >far.obj
+expect_fail "detail 1e80 away"      "far.obj: vertex 0 has a coordinate of magnitude" $(rec far.obj $G/base.obj $G/edited_base.obj)
+expect_fail "cage fit 1e80"         "far.obj: vertex 0 has a coordinate" cage fit far.obj -o out/cage.obj
+expect_fail "threads 100000"        "threads = 100000 is out of range" $(rec $G/detail.obj $G/base.obj \
+  $G/edited_base.obj --set threads=100000)
+# Every other face: triangles that share no edge (the region's system had empty rows).
+awk '/^f / {if (n++ % 2) next} {print}' $G/detail.obj | grep -v '^#' >apart.obj
+cat >edit.json <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 4], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 30, "pivot": [0, 0, 3]}}}
+JSON
+expect_fail "deform, no shared edge" "system is singular at vertex" deform apart.obj --edit edit.json -o out/d.obj
+# A scan with a vertex in no face is fitted (OpenMesh aborted in the decimation).
+{ grep -v '^#' $G/detail.obj; echo "v 50 50 50"; } >stray.obj
+if ! "$STRATA" cage fit -q stray.obj --faces 100 -o cage_stray.obj >stdout.txt 2>stderr.txt; then
+  echo "FAIL [cage fit, stray vertex]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+fi
+
 if [ "$failures" -ne 0 ]; then
   echo "bad_input: $failures check(s) failed" >&2
   exit 1
