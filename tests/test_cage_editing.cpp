@@ -191,4 +191,21 @@ TEST(CageEditor, RejectsBadSelections) {
   EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), s.region, s.region), InvalidInput);
   EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), std::vector<char>(3, 1), s.handle),
                InvalidInput);
+  // The whole cage as the region holds nothing fixed (it was accepted; a mesh's is refused).
+  const std::vector<char> all(s.cage.num_vertices(), 1);
+  EXPECT_THROW(cage_blend_field(s.cage, all, s.handle), InvalidInput);
+  EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), all, s.handle), InvalidInput);
+  // A cage vertex in no face inside the region: its row of the field's system is empty (it
+  // failed as a factorization).
+  PolyMesh stray = s.cage;
+  stray.vertices.push_back(Vec3(9, 9, 9));
+  std::vector<char> region = s.region, handle = s.handle;
+  region.push_back(1);
+  handle.push_back(0);
+  try {
+    cage_blend_field(stray, region, handle);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("which is in no face"), std::string::npos) << e.what();
+  }
 }

@@ -374,6 +374,11 @@ TEST(EditScript, RejectsMalformedScriptsNamingTheFileAndThePlace) {
       {R"({"region": {"vertices": [0, -3]}, "handle": {"vertices": [0]}, "transform": {}})", "vertex index"},
       {R"({"region": {"sphere": {}, "box": {}}, "handle": {"vertices": [0]}, "transform": {}})",
        "exactly one"},
+      // Found by a fuzzing pass: a raw library message, and overflows blamed on other things.
+      {"{" + sel + R"(, "transform": {"rotate": {"axis": [0, 0, 1], "degrees": 1e999}}})", "not valid JSON"},
+      {"{" + sel + R"(, "transform": {"translate": [1e300, 0, 0]}})",
+       "edit.transform.translate[0]: 1e+300 is beyond the engine's range"},
+      {"{" + sel + R"(, "transform": {"scale": 1e-300}})", "within 1e-6 to 1e6"},
   };
   for (const auto& [text, expected] : bad) {
     try {

@@ -167,6 +167,9 @@ TEST(Layers, BadAmplitudesAndBandsAreRejected) {
   EXPECT_THROW(model.set_amplitude(0, 0.5), InvalidInput);
   EXPECT_THROW(model.set_amplitude(3, 0.5), InvalidInput);
   EXPECT_THROW(model.set_amplitude(1, std::nan("")), InvalidInput);
+  // 1e308 overflowed the solve (named as its options' fault).
+  EXPECT_THROW(model.set_amplitude(1, 1e308), InvalidInput);
+  EXPECT_THROW(model.set_amplitude(1, -1001.0), InvalidInput);
   EXPECT_THROW(model.band(-1), InvalidInput);
   EditStep step;
   step.region = Selection::sphere(Vec3(100, 100, 100), 0.01);

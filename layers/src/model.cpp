@@ -8,6 +8,7 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 
 #include "strata/cage_editing.h"
 #include "strata/exceptions.h"
@@ -485,6 +486,18 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   return model;
 }
 
+namespace {
+
+// Amplitudes within +-LayeredModel::kMaxAmplitude.
+void check_amplitude(double amplitude, const std::string& what) {
+  if (std::abs(amplitude) <= LayeredModel::kMaxAmplitude) return;
+  std::ostringstream s;
+  s << what << " must be a number within +-" << LayeredModel::kMaxAmplitude << ", not " << amplitude;
+  throw InvalidInput(s.str());
+}
+
+}  // namespace
+
 LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options,
                                     std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
@@ -513,7 +526,7 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                              "), not 3 distinct vertices of " + std::to_string(nv));
     }
     check_coordinates(b.mesh.vertices, name + ":");
-    if (!std::isfinite(b.amplitude)) throw InvalidInput(name + ": the amplitude is not finite");
+    check_amplitude(b.amplitude, name + ": the amplitude");
     const int base_n = k == 1 ? bands[0].cage.num_vertices() : bands[k - 1].mesh.num_vertices();
     if (e.base_num_vertices != base_n || static_cast<int>(b.base_rest.size()) != base_n)
       throw InvalidInput(name + ": its base has " + std::to_string(base_n) + " vertices, the encoding " +
@@ -577,7 +590,7 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
 CascadeReport LayeredModel::set_amplitude(int k, double amplitude) {
   if (impl_->drag) throw InvalidInput("set_amplitude() during a drag: end or cancel the drag first");
   check_band_index(k, impl_->n(), false);
-  if (!std::isfinite(amplitude)) throw InvalidInput("the amplitude must be a finite number");
+  check_amplitude(amplitude, "the amplitude");
   const auto t0 = Clock::now();
   Impl work(*impl_);
   work.deps = impl_->deps;

@@ -34,6 +34,8 @@ void check_cage_selection(int n, const std::vector<char>& region, const std::vec
   if (nr == 0) throw InvalidInput("the region selects no cage vertex");
   if (nh == 0) throw InvalidInput("the handle selects no cage vertex of the region");
   if (nh == nr) throw InvalidInput("the handle is the whole region: nothing to blend");
+  // As RegionEditor: the blend needs a fixed rest (the whole cage was accepted, unlike a mesh).
+  if (nr == n) throw InvalidInput("the region is the whole cage: nothing is held fixed");
 }
 
 }  // namespace
@@ -68,6 +70,11 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
   Eigen::SparseMatrix<double> A(m, m);
   A.setFromTriplets(tf.begin(), tf.end());
+  // A vertex in no face has an empty row (a cage with one failed as "could not be factorized").
+  for (int k = 0; k < m; ++k)
+    if (!(A.coeff(k, k) > 0))
+      throw InvalidInput("the cage's blend field is singular at cage vertex " + std::to_string(free[k]) +
+                         ", which is in no face");
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
   if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
   const Eigen::VectorXd x = ldlt.solve(rhs);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 
 #include "internal/read_file.h"
 #include "strata/exceptions.h"
@@ -36,6 +37,13 @@ double number(const Ctx& c, const std::string& where, const json& j) {
   if (!j.is_number()) c.fail(where, "expected a number");
   const double v = j.get<double>();
   if (!std::isfinite(v)) c.fail(where, "not a finite number");
+  // Positions, pivots and translations beyond the engine's range overflowed the solves into
+  // messages that did not name the script.
+  if (std::abs(v) > kMaxCoordinate) {
+    std::ostringstream s;
+    s << v << " is beyond the engine's range (" << kMaxCoordinate << ")";
+    c.fail(where, s.str());
+  }
   return v;
 }
 
@@ -103,6 +111,8 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
     const std::string w = where + ".scale";
     const Vec3 f = s.is_array() ? vec3(c, w, s) : Vec3::Constant(number(c, w, s));
     if (!(f.minCoeff() > 0)) c.fail(w, "scale factors must be positive");
+    // A factor of 1e-300 made the map singular (reported as a determinant of 0.000000).
+    if (f.minCoeff() < 1e-6 || f.maxCoeff() > 1e6) c.fail(w, "scale factors must be within 1e-6 to 1e6");
     S = f.asDiagonal();
   }
   if (j.contains("matrix")) {
@@ -134,7 +144,7 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InvalidInput(name + ": not valid JSON: " + e.what());
   }
   EditScript script;

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -424,6 +425,14 @@ class SubdivSurface::Impl {
     bool has_subfaces = false;
     for (const auto& f : cage_.faces) has_subfaces = has_subfaces || static_cast<int>(f.size()) != corners_;
     const int R = has_subfaces ? resolution + resolution % 2 : resolution;
+    // Resolution 1000 over a 50-face cage wrote 50M faces (2.8 GB); 100000 ran out of memory.
+    const double triangles = 2.0 * num_ptex_ * static_cast<double>(R) * R;
+    if (triangles > kMaxTessellationTriangles) {
+      char text[160];
+      std::snprintf(text, sizeof text, "a tessellation at resolution %d would have %.3g triangles, over %.3g",
+                    resolution, triangles, kMaxTessellationTriangles);
+      throw InvalidInput(text);
+    }
     LimitTessellation t;
     std::unordered_map<std::uint64_t, int> ids;  // (line, lattice index) or a corner key -> vertex
     const std::uint64_t corner_tag = std::uint64_t(1) << 63;

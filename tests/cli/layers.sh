@@ -99,11 +99,34 @@ done
 if "$STRATA" edit camel.strata --band 7 --edit "$DATA/edits/camel_neck.json" -o out.strata 2>err.txt; then
   fail "edit accepted band 7"
 fi
-grep -q "out of range" err.txt || fail "no message for band 7"
+grep -q -- "--band 7 is out of range: camel.strata has bands 0 to 2" err.txt || fail "no message for band 7: $(cat err.txt)"
 set +e
 "$STRATA" amplitude camel.strata --band 0 --scale 0 -o out.strata 2>/dev/null
 code=$?
 set -e
 [ "$code" = 2 ] || fail "amplitude of band 0 should be a usage error (exit 2), got $code"
 [ -e out.strata ] && fail "an output was written after an error"
+# Found by a fuzzing pass (2026-11-28).
+# An empty amplitude was read as 0 (muting the band), and 1e308 overflowed the solve.
+for scale in "" 1e308 nan; do
+  if "$STRATA" amplitude camel.strata --band 1 --scale "$scale" -o out.strata 2>err.txt; then
+    fail "amplitude accepted --scale '$scale'"
+  fi
+  grep -q "strata: error: " err.txt || fail "no error for --scale '$scale'"
+done
+# CLI11's bound printed DBL_MAX in full.
+"$STRATA" amplitude camel.strata --band 0 --scale 1 -o out.strata 2>err.txt && fail "band 0 accepted"
+grep -q -- "--band: must be above 0, not 0" err.txt || fail "band 0 message: $(cat err.txt)"
+# A tessellation of 100 million triangles was written (2.8 GB at resolution 1000 for a small cage).
+"$STRATA" export camel.strata --band 0 --resolution 100000 -o out.obj 2>err.txt && fail "resolution 100000 accepted"
+grep -q "would have .* triangles, over 5e+07" err.txt || fail "resolution message: $(cat err.txt)"
+# Two scans of one name would be built into one model, the second over the first.
+mkdir -p a b
+cp "$SCANS/bear.off" a/bear.off
+cp "$SCANS/bear.off" b/bear.off
+"$STRATA" build a/bear.off b/bear.off --out-dir same -q 2>err.txt && fail "two scans into one model accepted"
+grep -q "would both be built into same/bear.strata" err.txt || fail "duplicate-name message: $(cat err.txt)"
+[ -e same/bear.strata ] && fail "a model was written for duplicate names"
+[ -e out.strata ] && fail "an output was written after an error"
+[ -e out.obj ] && fail "an output was written after an error"
 echo "layers CLI: ok"

@@ -92,16 +92,16 @@ Subcommand register_cage(CLI::App& parent) {
   fit->add_option(
          "--faces", o->fit.faces,
          "Cage faces (default: 1% of the scan's faces, at least " + std::to_string(o->fit.min_faces) + ")")
-      ->check(CLI::NonNegativeNumber);
+      ->check(at_least(0));
   fit->add_option("--smoothness", o->fit.smoothness, "Weight of the cage's smoothness term")
-      ->check(CLI::NonNegativeNumber)
+      ->check(at_least(0))
       ->capture_default_str();
   fit->add_option("--smoothing-steps", o->fit.smoothing_steps,
                   "Taubin smoothing steps applied to the scan first")
-      ->check(CLI::NonNegativeNumber)
+      ->check(at_least(0))
       ->capture_default_str();
   fit->add_option("--rounds", o->fit.rounds, "Rounds of projection and least-squares solve")
-      ->check(CLI::PositiveNumber)
+      ->check(above(0))
       ->capture_default_str();
   fit->add_option("--report", o->report, "Write the fitting error and timing as JSON");
   fit->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");

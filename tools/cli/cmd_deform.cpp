@@ -286,11 +286,11 @@ Subcommand register_deform(CLI::App& parent) {
   app->add_option(
          "--threads", o->threads,
          "Threads of the volume solver's sweeps (0: all cores, 1: one); the result is the same for any count")
-      ->check(CLI::NonNegativeNumber)
+      ->check(at_least(0))
       ->capture_default_str();
   add_solver_option(app, o->solver);
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
-      ->check(CLI::NonNegativeNumber);
+      ->check(at_least(0));
   app->add_option("--report", o->report, "Also write a JSON report (metrics, sizes, timings) here");
   app->add_option(
          "--smoothing", o->smoothing,

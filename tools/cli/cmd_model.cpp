@@ -92,6 +92,19 @@ int run_build(const BuildCmdOptions& o) {
   if (!o.output.empty()) check_output_path(o.output);
   if (!o.report.empty()) check_output_path(o.report);
   check_output_names({o.output, o.report}, o.scans);
+  auto model_path = [&](const std::string& scan_path) {
+    return o.output.empty()
+               ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string()
+               : o.output;
+  };
+  // Two scans of one name in different directories would write one model, the second over the
+  // first, both reported built.
+  if (!o.out_dir.empty())
+    for (std::size_t i = 0; i < o.scans.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (model_path(o.scans[i]) == model_path(o.scans[j]))
+          throw InvalidInput(o.scans[j] + " and " + o.scans[i] + " would both be built into " +
+                             model_path(o.scans[i]) + "; build them into different --out-dir directories");
   // With -o, the model lands only with its report; with --out-dir each model is written as it is
   // built (a batch keeps what it built), the report at the end.
   StagedOutputs staged;
@@ -101,9 +114,7 @@ int run_build(const BuildCmdOptions& o) {
   int failed = 0;
   for (std::size_t i = 0; i < o.scans.size(); ++i) {
     const std::string& scan_path = o.scans[i];
-    const std::string out =
-        o.output.empty() ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string()
-                         : o.output;
+    const std::string out = model_path(scan_path);
     bar.show(static_cast<int>(i), scan_path);
     json r{{"scan", scan_path}, {"model", out}};
     Stopwatch sw;
@@ -310,6 +321,10 @@ int run_edit(const EditCmdOptions& o) {
   if (raw.is_object() && raw.contains("edits")) raw = raw["edits"];
   if (!raw.is_array()) raw = json::array({raw});
   return run_change(o, "edit", [&](LayeredModel& model, const Log& log) {
+    // The band is the command line's, not the script's (it was reported as the script's edit 0).
+    if (o.band >= model.num_bands())
+      throw InvalidInput("--band " + std::to_string(o.band) + " is out of range: " + o.model +
+                         " has bands 0 to " + std::to_string(model.num_bands() - 1));
     json out = json::array();
     for (std::size_t i = 0; i < script.edits.size(); ++i) {
       log.phase("edit " + std::to_string(i + 1) + " of " + std::to_string(script.edits.size()) + " on band " +
@@ -320,7 +335,7 @@ int run_edit(const EditCmdOptions& o) {
         print_cascade(c);
         out.push_back(cascade_json(c));
       } catch (const InvalidInput& e) {
-        throw InvalidInput(o.edit + ": edit " + std::to_string(i) + ": " + e.what());
+        throw InvalidInput(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
       }
     }
     return out;
@@ -329,6 +344,9 @@ int run_edit(const EditCmdOptions& o) {
 
 int run_amplitude(const EditCmdOptions& o) {
   return run_change(o, "amplitude", [&](LayeredModel& model, const Log& log) {
+    if (o.band >= model.num_bands())
+      throw InvalidInput("--band " + std::to_string(o.band) + " is out of range: " + o.model +
+                         " has bands 1 to " + std::to_string(model.num_bands() - 1));
     log.phase("band " + std::to_string(o.band) + " amplitude " + fixed(o.scale, 3));
     const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
     print_cascade(c);
@@ -398,7 +416,7 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         ->check(CLI::Range(2, 8))
         ->capture_default_str();
     app->add_option("--cage-faces", o->cage_faces, "Cage faces (default: 1% of the scan's, at least 400)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(at_least(0));
     app->add_option("--report", o->report, "Write a JSON report of every model");
     app->add_flag("-q,--quiet", o->quiet, "No progress on stderr");
     out.push_back({app, [o] { return run_build(*o); }});
@@ -419,7 +437,7 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "Edit one band of a layered model with an edit script (the format of 'strata deform'): band 0\n"
         "selects cage vertices, band k its vertices. The finer bands are rebuilt in cascade.");
     app->add_option("model", o->model, "Model (.strata)")->required();
-    app->add_option("--band", o->band, "Band to edit")->required()->check(CLI::NonNegativeNumber);
+    app->add_option("--band", o->band, "Band to edit")->required()->check(at_least(0));
     app->add_option("--edit", o->edit, "Edit script (JSON)")->required();
     add_change_options(*app, *o);
     out.push_back({app, [o] { return run_edit(*o); }});
@@ -431,8 +449,17 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "Scale one band's detail: 0 mutes it, 1 keeps it, above 1 exaggerates and below 0 inverts it.\n"
         "The finer bands are rebuilt in cascade.");
     app->add_option("model", o->model, "Model (.strata)")->required();
-    app->add_option("--band", o->band, "Band (1 or more)")->required()->check(CLI::PositiveNumber);
-    app->add_option("--scale", o->scale, "Amplitude")->required();
+    app->add_option("--band", o->band, "Band (1 or more)")->required()->check(above(0));
+    app->add_option("--scale", o->scale, "Amplitude, within +-1000")
+        ->required()
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+              double v = 0.0;
+              if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
+                return "'" + text + "' is not a number";
+              return {};
+            },
+            "NUMBER"));
     add_change_options(*app, *o);
     out.push_back({app, [o] { return run_amplitude(*o); }});
   }
@@ -442,10 +469,9 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "export", "Write one band of a layered model as a mesh (default: the finest band, the edited scan).");
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("-o,--output", o->output, "Mesh to write (.obj, .off, .ply, .stl)")->required();
-    app->add_option("--band", o->band, "Band (0: the cage's limit surface, tessellated)")
-        ->check(CLI::NonNegativeNumber);
+    app->add_option("--band", o->band, "Band (0: the cage's limit surface, tessellated)")->check(at_least(0));
     app->add_option("--resolution", o->resolution, "Band 0: segments per ptex edge")
-        ->check(CLI::PositiveNumber)
+        ->check(above(0))
         ->capture_default_str();
     app->add_flag("--cage", o->cage, "Write the control cage itself");
     out.push_back({app, [o] { return run_export(*o); }});

@@ -48,6 +48,20 @@ Method parse_method(const std::string& text) {
   throw InvalidInput("unknown method '" + text + "' (expected 'volumes' or 'vectors')");
 }
 
+CLI::Validator at_least(double lo, bool strict) {
+  std::ostringstream bound;
+  bound << lo;
+  const std::string range = (strict ? "above " : "at least ") + bound.str();
+  return CLI::Validator(
+      [lo, strict, range](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v) || std::isnan(v)) return "'" + text + "' is not a number";
+        if (strict ? v > lo : v >= lo) return {};
+        return "must be " + range + ", not " + text;
+      },
+      strict ? "> " + bound.str() : ">= " + bound.str());
+}
+
 NamedMesh read_named_mesh(const std::string& path) {
   NamedMesh m;
   m.name = path;
@@ -104,7 +118,9 @@ void check_output_path(const std::string& path) {
   if (fs::is_directory(p, ec)) throw IoError(path + ": is a directory, expected a file name");
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec))
-    throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
+    throw IoError(path + ": cannot write: " +
+                  (fs::exists(dir, ec) ? dir.string() + " is not a directory"
+                                       : "directory " + dir.string() + " does not exist"));
 }
 
 bool same_file_name(const std::string& a, const std::string& b) {

@@ -79,6 +79,13 @@ const char* to_string(Method method);
 //! "volumes" or "vectors"; throws InvalidInput for anything else.
 Method parse_method(const std::string& text);
 
+//! A numeric option's lower bound, \p lo (above it with \p strict): CLI11's NonNegativeNumber and
+//! PositiveNumber printed their upper bound, DBL_MAX, in 310 digits.
+CLI::Validator at_least(double lo, bool strict = false);
+inline CLI::Validator above(double lo) {
+  return at_least(lo, true);
+}
+
 //! A mesh and the name it is known by in messages (its path, or a generated case's name).
 struct NamedMesh {
   TriMesh mesh;

@@ -48,7 +48,8 @@ struct CageEditOptions {
 //! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
-//!        handle is empty, or the handle is the whole region.
+//!        handle is empty, the handle is the whole region, the region is the whole cage, or a
+//!        region vertex outside the handle is in no face.
 //! \throw SolverError if the field's system cannot be factorized or solved.
 std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<char>& region,
                                      const std::vector<char>& handle);

@@ -146,8 +146,10 @@ class SubdivSurface {
   //! Tessellates every ptex face into a grid of \p resolution segments per edge, watertight across
   //! ptex faces. With non-quads under Catmull-Clark the resolution is rounded up to even and their
   //! sub-faces get half of it (each covers half of its cage edges).
-  //! \throw InvalidInput if resolution < 1.
+  //! \throw InvalidInput if resolution < 1 or the grid would exceed kMaxTessellationTriangles.
   LimitTessellation tessellate(int resolution) const;
+  //! The largest tessellation tessellate() makes (about 2 GB of mesh).
+  static constexpr double kMaxTessellationTriangles = 50e6;
 
   //! Where the adjacent ptex face continues edge \p edge of ptex face \p face (edges run from
   //! corner k to corner k+1) at the edge's parameter \p t in [0,1]: that face, its edge and the

@@ -162,8 +162,12 @@ class LayeredModel {
   CascadeReport edit(int k, const EditStep& step, const std::string& provenance = "{}");
 
   //! Sets band k's amplitude (k >= 1) and rebuilds bands k .. N-1.
-  //! \throw InvalidInput if k is 0 or out of range or the amplitude is not finite.
+  //! \throw InvalidInput if k is 0 or out of range or the amplitude is not finite or beyond
+  //!        +-kMaxAmplitude.
   CascadeReport set_amplitude(int k, double amplitude);
+  //! Amplitudes are within +-this: the target volumes scale with it, and 1e308 overflowed the
+  //! solve into a message about its options.
+  static constexpr double kMaxAmplitude = 1000.0;
 
   // Interactive editing (paper, section 5), for the viewer: while dragging, band(j) holds the
   // preview (band k by the editor's warm-started drag step, finer bands by warm-started
