@@ -321,7 +321,9 @@ class RegionEditor::Impl {
                              std::to_string(unknowns[r]) +
                              ": it and its neighbours lie on open edges, with no interior vertex to fair");
       const internal::SerialOpenMp serial;
-      Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(Q);
+      Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt;
+      llt.cholmod().print = 0;  // its failures are thrown; CHOLMOD printed them on stdout too
+      llt.compute(Q);
       if (llt.info() != Eigen::Success)
         throw SolverError(std::string("the region's ") + what + " system could not be factorized");
       Eigen::MatrixXd sol = llt.solve(rhs);

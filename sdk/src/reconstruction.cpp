@@ -605,6 +605,7 @@ class VolumeReconstructor::Impl {
     L.jj_diag_slot.resize(m);
     for (int j = 0; j < m; ++j) L.jj_diag_slot[j] = jj_slot(L, j, j);
     L.llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
+    L.llt->cholmod().print = 0;  // a failed factorization is handled; CHOLMOD printed it on stdout too
     const internal::SerialOpenMp serial;
     L.llt->analyzePattern(L.jj);
   }
@@ -1053,7 +1054,9 @@ class VolumeReconstructor::Impl {
       Eigen::VectorXd y;
       if (k >= kSupernodalMinPrisms) {
         const internal::SerialOpenMp serial;
-        const Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt(A);
+        Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+        llt.cholmod().print = 0;
+        llt.compute(A);
         if (llt.info() != Eigen::Success) return factorization_failed(damping);
         y = llt.solve(r);
       } else {

@@ -93,7 +93,9 @@ void write_polygon_mesh(const std::vector<Vec3>& vertices, const std::vector<std
 //! repeated within a face; no zero-area face (twice its area, |(b-a)x(c-a)|, is 0 or at most
 //! 2e-14 * bbox_diagonal(vertices)^2); no non-manifold edge (an undirected edge used by more than
 //! two faces); no edge used twice in the same direction (inconsistently oriented neighbours).
-//! Unreferenced vertices are allowed. The first problem found is reported.
+//! Unreferenced vertices are allowed, and so are vertices where separate fans of faces meet (scans
+//! hold them; the engine takes them, and the cage fit's decimation leaves such a vertex's faces
+//! out of its input). The first problem found is reported.
 //! \param name names the mesh in messages (usually its file path).
 //! \throw InvalidInput "<name>: <problem>", e.g. "bunny.obj: face 12 has vertex index 99 out of
 //!        range (mesh has 40 vertices)" or "z.ply: edge (4,7) is non-manifold: shared by 3 faces".
