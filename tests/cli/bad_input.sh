@@ -124,6 +124,11 @@ expect_fail "deform, no shared edge" "system is singular at vertex" deform apart
 if ! "$STRATA" cage fit -q stray.obj --faces 100 -o cage_stray.obj >stdout.txt 2>stderr.txt; then
   echo "FAIL [cage fit, stray vertex]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1))
 fi
+# STL holds triangles only: a vertex in no face is not written, and a warning says so.
+"$STRATA" reconstruct -q --detail stray.obj --base $G/base.obj --edited-base $G/edited_base.obj -o stray_out.stl \
+  >stdout.txt 2>stderr.txt || { echo "FAIL [stl stray]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }
+grep -q "stray_out.stl: STL holds triangles only: 1 vertices in no face are not written" stderr.txt ||
+  { echo "FAIL [stl stray]: no warning" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }
 
 if [ "$failures" -ne 0 ]; then
   echo "bad_input: $failures check(s) failed" >&2

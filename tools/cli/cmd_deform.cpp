@@ -192,12 +192,15 @@ int run_deform(const DeformCmdOptions& o) {
   log.phase("writing " + o.output);
   sw.restart();
   StagedOutputs staged;  // the outputs land together, or none does
+  warn_stl_drops_vertices(current, o.output);
   staged.write(o.output, [&](const std::string& p) { write_mesh(current, p); });
   if (!o.base_output.empty()) {
     if (subdiv)
       staged.write(o.base_output, [&](const std::string& p) { write_cage(cage, p); });
-    else
+    else {
+      warn_stl_drops_vertices(base_out, o.base_output);
       staged.write(o.base_output, [&](const std::string& p) { write_mesh(base_out, p); });
+    }
   }
   const double write_seconds = sw.seconds();
 

@@ -382,6 +382,7 @@ int run_export(const ExportCmdOptions& o) {
     return 0;
   }
   const TriMesh mesh = model.band_mesh(k, o.resolution);
+  warn_stl_drops_vertices(mesh, o.output);
   write_mesh(mesh, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces)" << std::endl;

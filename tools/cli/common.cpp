@@ -62,6 +62,20 @@ CLI::Validator at_least(double lo, bool strict) {
       strict ? "> " + bound.str() : ">= " + bound.str());
 }
 
+int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext != ".stl") return 0;
+  std::vector<char> used(mesh.vertices.size(), 0);
+  for (const Face& f : mesh.faces)
+    for (int v : f) used[v] = 1;
+  const int lost = static_cast<int>(std::count(used.begin(), used.end(), 0));
+  if (lost > 0)
+    std::cerr << "strata: warning: " << path << ": STL holds triangles only: " << lost
+              << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
+  return lost;
+}
+
 NamedMesh read_named_mesh(const std::string& path) {
   NamedMesh m;
   m.name = path;

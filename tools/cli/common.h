@@ -95,6 +95,10 @@ struct NamedMesh {
 //! read_mesh(path) with the path in the name.
 NamedMesh read_named_mesh(const std::string& path);
 
+//! Warns on stderr when \p mesh is to be written to an STL \p path and some of its vertices are
+//! in no face: STL holds triangles only, so they would be lost without a word. Returns how many.
+int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
+
 //! A base S and its edited S2, read as read_named_mesh(). A polygon of more than 3 corners is cut
 //! into triangles by its shape, so S and S2 listing the same polygons may be cut differently: S2
 //! then takes S's triangles (validated at S2's positions), so that its connectivity is S's.
