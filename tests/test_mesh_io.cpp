@@ -610,9 +610,20 @@ TEST(MeshIoTriangulate, APolygonThatCrossesItselfIsAnError) {
                 {-0.087, -0.706, 0},
                 {0.774, -0.811, 0}},
                {{0, 1, 2, 3, 4, 5}}};
+  // A circle wound twice, 2,000 corners (the second turn at radius 0.9): past the exact search's
+  // 256 corners, found by the sweep over the sides.
+  Soup twice;
+  std::vector<long long> around;
+  for (int k = 0; k < 2000; ++k) {
+    const double a = 4 * kPi * k / 2000, r = k < 1000 ? 1.0 : 0.9;
+    twice.v.push_back({r * std::cos(a), r * std::sin(a), 0});
+    around.push_back(k);
+  }
+  twice.f = {around};
   for (const auto& [name, soup, n] : {std::tuple{"bowtie", bowtie, 4}, std::tuple{"pentagram", pentagram, 5},
-                                      std::tuple{"twisted", twisted, 6}})
+                                      std::tuple{"twisted", twisted, 6}, std::tuple{"twice", twice, 2000}})
     for (Fmt fmt : {Fmt::Obj, Fmt::Off, Fmt::PlyAscii}) {
+      if (fmt == Fmt::PlyAscii && n > 255) continue;  // the writer's list counts are uchar
       const std::string path = fx.put(soup, fmt, name);
       EXPECT_TRUE(throws_with<InvalidInput>(
           [&] { read_mesh(path); }, {path + ": the file's 1st face, a polygon of " + std::to_string(n) +
@@ -630,7 +641,7 @@ TEST(MeshIoTriangulate, APolygonThatCrossesItselfIsAnError) {
                                         {path + ": the file's 3rd face, a polygon of 4 corners"}));
 }
 
-// Against a reference: random polygons of 5-40 corners around a centre, some of whose sides cross
+// Against a reference: random polygons of 5-40 and 300-500 corners around a centre, some of whose sides cross
 // (the corners' angles jittered over several steps). Each whose sides cross by more than 1e-6
 // (doubled areas of a side and an end of the other) is an error; each that is simple with a margin
 // (every corner over 1e-4 from the sides it is not on) is cut into triangles that face its
@@ -643,12 +654,16 @@ TEST(MeshIoTriangulate, RandomPolygonsAreCutIfAndOnlyIfTheyAreSimple) {
   };
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int crossing = 0, simple = 0;
-  for (int trial = 0; trial < 400; ++trial) {
-    const int n = 5 + static_cast<int>(rng() % 36);
+  int crossing = 0, simple = 0, large_crossing = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    // The last 200 of 300-500 corners, past the exact search (the ear clipping had accepted 101 of
+    // 2,751 such crossing polygons: the sweep over the sides finds their crossings).
+    const bool large = trial >= 400;
+    const int n = large ? 300 + static_cast<int>(rng() % 200) : 5 + static_cast<int>(rng() % 36);
+    const double jitter = trial % 2 ? 3.0 : (large ? 1.5 : 1.2);
     std::vector<P> ring(n);
     for (int k = 0; k < n; ++k) {
-      const double a = 2 * kPi * (k + (trial % 2 ? 3.0 : 1.2) * unit(rng)) / n, r = 0.2 + unit(rng);
+      const double a = 2 * kPi * (k + jitter * unit(rng)) / n, r = 0.2 + unit(rng);
       ring[k] = {r * std::cos(a), r * std::sin(a)};
     }
     bool crosses = false, near = false;
@@ -681,6 +696,7 @@ TEST(MeshIoTriangulate, RandomPolygonsAreCutIfAndOnlyIfTheyAreSimple) {
     const std::string label = "trial " + std::to_string(trial) + ", " + std::to_string(n) + " corners";
     if (crosses) {
       ++crossing;
+      large_crossing += large;
       EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh(path); },
                                             {"has no triangulation without overlapping triangles"}))
           << label;
@@ -699,6 +715,7 @@ TEST(MeshIoTriangulate, RandomPolygonsAreCutIfAndOnlyIfTheyAreSimple) {
   }
   // Both verdicts are exercised.
   EXPECT_GT(crossing, 50);
+  EXPECT_GT(large_crossing, 100);
   EXPECT_GT(simple, 50);
 }
 
@@ -1451,9 +1468,22 @@ TEST(MeshIoAtomicFile, FailedRenameIsIoErrorWithoutLeftovers) {
   test::ScratchDir dir{"strata_mesh_io"};
   fs::create_directories(dir.file("occupied/child"));  // a non-empty directory cannot be replaced by a file
   EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("occupied"), "x"); },
-                                   {dir.file("occupied") + ": cannot replace it"}));
+                                   {dir.file("occupied") + ": is not a regular file (a directory)"}));
   EXPECT_EQ(dir.listing(), (std::set<std::string>{"occupied"}));
   EXPECT_TRUE(fs::is_directory(dir.file("occupied/child")));
+  // A FIFO (as a device, such as /dev/null, which a rename replaced with a regular file when the
+  // process could write /dev), and a link to one, are refused and left as they are.
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  fs::create_symlink(dir.file("fifo"), dir.file("link"));
+  for (const char* name : {"fifo", "link"}) {
+    EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file(name), "x"); },
+                                     {dir.file(name) + ": is not a regular file (a FIFO)"}))
+        << name;
+    EXPECT_TRUE(fs::is_fifo(dir.file("fifo")));
+  }
+  EXPECT_EQ(dir.listing(), (std::set<std::string>{"occupied", "fifo", "link"}));
+  fs::remove(dir.file("fifo"));
+  fs::remove(dir.file("link"));
   EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("no/such/dir/f.txt"), "x"); },
                                    {"cannot create a temporary file in directory"}));
   EXPECT_TRUE(throws_with<IoError>([&] { write_text_file_atomically(dir.file("trailing/"), "x"); },

@@ -400,6 +400,20 @@ TEST(Subdiv, TessellationIsWatertightAndOnTheSurface) {
         }
     }
     EXPECT_THROW(s.tessellate(0), InvalidInput);
+    // Over kMaxTessellationTriangles: refused, and the count named is the one the grid would have
+    // (a Loop cage's grid was counted twice over): at resolution 2r, 4 times that at r = 6.
+    const int r = 6;
+    const double at_r = static_cast<double>(s.tessellate(r).mesh.num_faces());
+    const int big =
+        static_cast<int>(r * std::ceil(std::sqrt(SubdivSurface::kMaxTessellationTriangles / at_r) + 1));
+    try {
+      s.tessellate(big);
+      ADD_FAILURE() << "accepted resolution " << big;
+    } catch (const InvalidInput& e) {
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "would have %.3g triangles", at_r * (big / r) * (big / r));
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what() << " / " << expected;
+    }
   }
 }
 

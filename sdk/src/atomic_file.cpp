@@ -98,11 +98,26 @@ void sync_directory(const fs::path& target) {
 
 }  // namespace
 
+void check_replaceable(const std::string& path) {
+  struct stat st;
+  if (::lstat(path.c_str(), &st) != 0) return;                        // nothing there (or nothing we can see)
+  if (S_ISLNK(st.st_mode) && ::stat(path.c_str(), &st) != 0) return;  // a link to nothing
+  if (S_ISREG(st.st_mode)) return;
+  const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
+                     : S_ISCHR(st.st_mode)  ? "a character device"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a file";
+  throw IoError(path + ": is not a regular file (" + kind + "); refusing to replace it");
+}
+
 void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& tmp_path)>& writer) {
   const fs::path target(path);
   if (path.empty() || !target.has_filename())
     throw IoError("'" + path + "': not a file path (empty or ends with a directory separator)");
+  check_replaceable(path);
 
   const std::string tmp = create_temp_file(target);
   try {

@@ -34,8 +34,8 @@ void check_cage_selection(int n, const std::vector<char>& region, const std::vec
   if (nr == 0) throw InvalidInput("the region selects no cage vertex");
   if (nh == 0) throw InvalidInput("the handle selects no cage vertex of the region");
   if (nh == nr) throw InvalidInput("the handle is the whole region: nothing to blend");
-  // As RegionEditor: the blend needs a fixed rest (the whole cage was accepted, unlike a mesh).
-  if (nr == n) throw InvalidInput("the region is the whole cage: nothing is held fixed");
+  // A region that is the whole cage is well posed (the handle holds the field at 1, which then is
+  // 1 everywhere: the model moves rigidly); a mesh's is refused because its fairing needs a rest.
 }
 
 }  // namespace

@@ -53,7 +53,7 @@ SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InvalidInput(name + ": not valid JSON: " + e.what());
   }
   only_keys(name, "top level", j, {"creases", "corners"});
@@ -86,6 +86,7 @@ SubdivTags read_subdiv_tags(const std::string& path) {
 PolyMesh read_cage(const std::string& path) {
   PolyMesh cage;
   cage.vertices = read_mesh(path, &cage.faces).vertices;
+  check_coordinates(cage.vertices, path + ":");  // named here, not by the edit that uses the cage
   return cage;
 }
 

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
 
 #include "internal/blended_map.h"
@@ -122,7 +123,17 @@ std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::ve
   const BlendedMap map(transform);
   std::vector<Vec3> out = points;
   for (std::size_t i = 0; i < points.size(); ++i)
-    if (s[i] != 0.0) out[i] = map.apply(points[i], s[i]);
+    if (s[i] != 0.0) {
+      out[i] = map.apply(points[i], s[i]);
+      // Named here with the point's own index: a script's matrix 1e15 times scale 1e6 was reported
+      // by the reconstruction as a vertex of its region's sub-mesh, naming no edit.
+      if (!(out[i].allFinite() && out[i].cwiseAbs().maxCoeff() <= kMaxCoordinate)) {
+        std::ostringstream m;
+        m << "the edit moves vertex " << i << " to (" << out[i].transpose()
+          << "), beyond the engine's range (" << kMaxCoordinate << ")";
+        throw InvalidInput(m.str());
+      }
+    }
   return out;
 }
 

@@ -184,6 +184,8 @@ void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
     if (!start[i].allFinite() || !frames.points[i].allFinite() || !frames.normals[i].allFinite() ||
         !frames.tangents[i].allFinite())
       throw InvalidInput("drag start: vertex " + std::to_string(i) + " or its base frame is not finite");
+  check_coordinates(start, "drag start:");
+  check_coordinates(frames.points, "drag start's base frames:");
   impl_->frames = frames;
   impl_->start = std::move(start);
   impl_->level.clear();
@@ -335,6 +337,7 @@ class VolumeReconstructor::Impl {
       if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
         throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
                            std::to_string(enc_.num_detail_vertices()) + " vertices");
+      check_coordinates(*start, "warm start:");
       s.P = *start;
       place_pinned(s);
       if (warm->coarse_levels_only) {
@@ -646,7 +649,11 @@ class VolumeReconstructor::Impl {
   }
 
   void init_state(const BaseFrames& fr, const ReconstructRequest& request, State& s) const {
-    if (!std::isfinite(request.amplitude)) throw InvalidInput("reconstruction: the amplitude is not finite");
+    if (!(std::abs(request.amplitude) <= kMaxAmplitude)) {
+      std::ostringstream m;  // 1e300 overflowed the solve, reported as its options' fault
+      m << "reconstruction: the amplitude " << request.amplitude << " is not within +-" << kMaxAmplitude;
+      throw InvalidInput(m.str());
+    }
     s.amplitude = request.amplitude;
     s.cycle_volume_iterations = opt_.volume_iterations;
     const int n = enc_.num_detail_vertices();
@@ -657,6 +664,7 @@ class VolumeReconstructor::Impl {
     for (int i = 0; i < n; ++i)
       if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
         throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
+    check_coordinates(fr.points, "base frames:");
     s.Q = fr.points;
     s.N = fr.normals;
     s.tangential = opt_.tangential_regularization;
@@ -678,8 +686,9 @@ class VolumeReconstructor::Impl {
       throw InvalidInput("reconstruction: " + std::to_string(pp.size()) + " pinned positions for " +
                          std::to_string(n) + " detail vertices");
     for (int i = 0; i < n; ++i)
-      if (enc_.pinned[i] && !pp[i].allFinite())
-        throw InvalidInput("reconstruction: pinned position " + std::to_string(i) + " is not finite");
+      if (enc_.pinned[i] && !(pp[i].allFinite() && pp[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        throw InvalidInput("reconstruction: pinned position " + std::to_string(i) +
+                           " is not finite or beyond the engine's range");
     s.pinned_at = pp;
   }
 

@@ -14,8 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -426,7 +426,11 @@ class SubdivSurface::Impl {
     for (const auto& f : cage_.faces) has_subfaces = has_subfaces || static_cast<int>(f.size()) != corners_;
     const int R = has_subfaces ? resolution + resolution % 2 : resolution;
     // Resolution 1000 over a 50-face cage wrote 50M faces (2.8 GB); 100000 ran out of memory.
-    const double triangles = 2.0 * num_ptex_ * static_cast<double>(R) * R;
+    double triangles = 0.0;  // as the loop below makes them: a quad grid 2 Rf^2, a triangle grid Rf^2
+    for (int p = 0; p < num_ptex_; ++p) {
+      const double Rf = deriv_scale_[p] == 1.0 ? R : R / 2;
+      triangles += (corners_ == 4 ? 2.0 : 1.0) * Rf * Rf;
+    }
     if (triangles > kMaxTessellationTriangles) {
       char text[160];
       std::snprintf(text, sizeof text, "a tessellation at resolution %d would have %.3g triangles, over %.3g",

@@ -124,6 +124,12 @@ expect_fail "deform, no shared edge" "system is singular at vertex" deform apart
 if ! "$STRATA" cage fit -q stray.obj --faces 100 -o cage_stray.obj >stdout.txt 2>stderr.txt; then
   echo "FAIL [cage fit, stray vertex]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1))
 fi
+# A report path that is a FIFO (or a device: a rename replaced /dev/null with a regular file when
+# run as root) is refused before anything is computed, and left as it is.
+mkfifo report_fifo
+expect_fail "report is a FIFO"      "report_fifo: is not a regular file (a FIFO)" reconstruct -q --detail $G/detail.obj \
+  --base $G/base.obj --edited-base $G/edited_base.obj -o out/result.obj --report report_fifo
+[ -p report_fifo ] || { echo "FAIL [report is a FIFO]: the FIFO was replaced" >&2; failures=$((failures + 1)); }
 # STL holds triangles only: a vertex in no face is not written, and a warning says so.
 "$STRATA" reconstruct -q --detail stray.obj --base $G/base.obj --edited-base $G/edited_base.obj -o stray_out.stl \
   >stdout.txt 2>stderr.txt || { echo "FAIL [stl stray]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }

@@ -126,7 +126,7 @@ cp "$SCANS/bear.off" a/bear.off
 cp "$SCANS/bear.off" b/bear.off
 "$STRATA" build a/bear.off b/bear.off --out-dir same -q 2>err.txt && fail "two scans into one model accepted"
 grep -q "would both be built into same/bear.strata" err.txt || fail "duplicate-name message: $(cat err.txt)"
-[ -e same/bear.strata ] && fail "a model was written for duplicate names"
+[ -e same ] && fail "the output directory was made for duplicate names"
 [ -e out.strata ] && fail "an output was written after an error"
 [ -e out.obj ] && fail "an output was written after an error"
 echo "layers CLI: ok"

@@ -65,6 +65,17 @@ json edit_json(const EditFacts& editor, Method method, const EditResult& r, doub
   return j;
 }
 
+// The editor's apply(), its input errors prefixed with the script and the edit (a transform that
+// moves a vertex out of range was named without either).
+template <class Editor>
+EditResult apply_named(const Editor& editor, const EditTransform& t, const std::string& where) {
+  try {
+    return editor.apply(t);
+  } catch (const InvalidInput& ex) {
+    throw InvalidInput(where + ": " + ex.what());
+  }
+}
+
 int run_deform(const DeformCmdOptions& o) {
   const Log log(o.quiet);
   const Method method = parse_method(o.method);
@@ -169,7 +180,7 @@ int run_deform(const DeformCmdOptions& o) {
       log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region cage vertices, " +
                 std::to_string(editor->handle_vertices().size()) + " handle; reconstructing " +
                 std::to_string(editor->region_faces()) + " prisms");
-      record(*editor, editor->apply(e.transform), select_seconds, cage.vertices);
+      record(*editor, apply_named(*editor, e.transform, where), select_seconds, cage.vertices);
       continue;
     }
     log.phase(label + ": decomposing the region");
@@ -182,7 +193,7 @@ int run_deform(const DeformCmdOptions& o) {
     }
     log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region vertices, " +
               std::to_string(editor->handle_vertices().size()) + " handle vertices; reconstructing");
-    record(*editor, editor->apply(e.transform), select_seconds, base_out.vertices);
+    record(*editor, apply_named(*editor, e.transform, where), select_seconds, base_out.vertices);
   }
 
   log.phase("counting self-intersections");

@@ -88,10 +88,6 @@ int run_build(const BuildCmdOptions& o) {
     throw InvalidInput("several scans need --out-dir (each model is written as DIR/<scan name>.strata)");
   if (!o.output.empty() && !o.out_dir.empty()) throw InvalidInput("give either -o or --out-dir, not both");
   if (o.output.empty() && o.out_dir.empty()) throw InvalidInput("give -o MODEL.strata or --out-dir DIR");
-  if (!o.out_dir.empty()) ensure_directory(o.out_dir);
-  if (!o.output.empty()) check_output_path(o.output);
-  if (!o.report.empty()) check_output_path(o.report);
-  check_output_names({o.output, o.report}, o.scans);
   auto model_path = [&](const std::string& scan_path) {
     return o.output.empty()
                ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string()
@@ -105,6 +101,10 @@ int run_build(const BuildCmdOptions& o) {
         if (model_path(o.scans[i]) == model_path(o.scans[j]))
           throw InvalidInput(o.scans[j] + " and " + o.scans[i] + " would both be built into " +
                              model_path(o.scans[i]) + "; build them into different --out-dir directories");
+  if (!o.out_dir.empty()) ensure_directory(o.out_dir);
+  if (!o.output.empty()) check_output_path(o.output);
+  if (!o.report.empty()) check_output_path(o.report);
+  check_output_names({o.output, o.report}, o.scans);
   // With -o, the model lands only with its report; with --out-dir each model is written as it is
   // built (a batch keeps what it built), the report at the end.
   StagedOutputs staged;

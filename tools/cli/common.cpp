@@ -130,6 +130,7 @@ void check_output_path(const std::string& path) {
   const fs::path p(path);
   std::error_code ec;
   if (fs::is_directory(p, ec)) throw IoError(path + ": is a directory, expected a file name");
+  check_replaceable(path);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec))
     throw IoError(path + ": cannot write: " +
@@ -185,6 +186,7 @@ StagedOutputs::~StagedOutputs() {
 
 void StagedOutputs::write(const std::string& target,
                           const std::function<void(const std::string& path)>& writer) {
+  check_replaceable(target);
   const fs::path t(target);
   const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
   const std::string name = "." + t.filename().string() + ".staged." + std::to_string(::getpid()) + "." +

@@ -15,16 +15,23 @@ namespace strata {
 //! The temporary file already exists (empty) when \p writer is called; the writer opens it
 //! itself, writes it completely and closes it before returning. Its name is unique, so
 //! concurrent writes of the same target do not collide (the last rename wins). A file that
-//! already exists at \p path keeps its permission bits. A symbolic link at \p path is replaced
-//! by the new file, not followed.
+//! already exists at \p path keeps its permission bits. A symbolic link at \p path (to a regular
+//! file or to nothing) is replaced by the new file, not followed.
 //!
 //! \pre The directory containing \p path exists and is writable.
+//! \throw IoError as check_replaceable(path), before anything is written.
 //! \throw IoError if the temporary file cannot be created or synced, or the rename fails; the
 //!        temporary file is removed and \p path is left untouched.
 //! \throw anything \p writer throws: the temporary file is removed, \p path is left untouched,
 //!        and the exception propagates unchanged.
 void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& tmp_path)>& writer);
+
+//! Checks that \p path may be replaced by a rename: it does not exist, or it is a regular file, or
+//! a symbolic link to one (or to nothing). A device, FIFO, socket or directory (or a link to one)
+//! is refused: a rename over /dev/null replaced the device with a regular file.
+//! \throw IoError "<path>: is not a regular file (...); refusing to replace it".
+void check_replaceable(const std::string& path);
 
 //! Atomically replaces \p path with exactly the bytes of \p contents (no newline translation).
 //! \pre The directory containing \p path exists and is writable.

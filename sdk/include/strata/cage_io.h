@@ -27,7 +27,8 @@ SubdivTags read_subdiv_tags(const std::string& path);
 
 //! Reads a cage with its polygons as the file lists them (read_mesh(path, &polygons)); the file
 //! must be a valid mesh once its polygons are triangulated.
-//! \throw as read_mesh().
+//! \throw as read_mesh(); InvalidInput "<path>: vertex <i> has a coordinate of magnitude ..."
+//!        beyond kMaxCoordinate.
 PolyMesh read_cage(const std::string& path);
 
 //! Writes a cage with its polygons (write_polygon_mesh, atomically); read_cage gives it back.

@@ -81,7 +81,8 @@ struct EditTransform {
 //! \p points with \p transform blended by the field \p s (one value per point): point i gets
 //! transform.apply_blended(points[i], s[i]), the map decomposed once for all points; points with
 //! s = 0 keep their positions exactly.
-//! \throw InvalidInput if the sizes differ, or as EditTransform::apply_blended().
+//! \throw InvalidInput if the sizes differ, as EditTransform::apply_blended(), or if a point is
+//!        moved beyond kMaxCoordinate (the message names its index).
 std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::vector<double>& s,
                                   const EditTransform& transform);
 

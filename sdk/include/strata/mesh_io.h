@@ -41,9 +41,10 @@ namespace strata {
 //! its Newell normal, smallest ears first; where corners within rounding of a line through others
 //! trap the clipping, a polygon of up to 256 corners gets the triangulation whose smallest
 //! triangle is largest (an exact O(n^3) search). A simple polygon is thus covered without flipped
-//! or overlapping triangles. One whose sides cross (checked for 5-256 corners; a quad that crosses
-//! itself has no fan of positive triangles) is an error, and so is a trapped one of over 256
-//! corners. A polygon with a part of zero width gets zero-area triangles, and a polygon of corners
+//! or overlapping triangles. One whose sides cross is an error (a quad that crosses itself has no
+//! fan of positive triangles; for more corners a sweep over the sides, given up past 64 n +
+//! 100,000 candidate pairs, as for spokes that all span one point), and so is a trapped one of
+//! over 256 corners. A polygon with a part of zero width gets zero-area triangles, and a polygon of corners
 //! all on one line is fanned: the validation reports their zero area.
 //! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
 //! data (normals, colors, texture coordinates, materials) is ignored. The result has passed

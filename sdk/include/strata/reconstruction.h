@@ -465,11 +465,15 @@ struct WarmStartOptions {
   int max_cycles = 0;
 };
 
+//! The largest amplitude magnitude a reconstruction takes (ReconstructRequest::amplitude): the
+//! target volumes scale with it, and 1e300 overflowed the solve.
+constexpr double kMaxAmplitude = 1000.0;
+
 //! Per-call inputs of a clean-start reconstruction beyond the edited base (layered models).
 struct ReconstructRequest {
   //! Scales every target volume and rest offset (a band's amplitude, issue 5): 1 keeps the
   //! detail, 0 removes it (every vertex on its base point, no solve), values above 1 exaggerate
-  //! it and negative values invert it. Must be finite.
+  //! it and negative values invert it. Must be within +-kMaxAmplitude.
   double amplitude = 1.0;
   //! Optional, one position per detail vertex (only the pinned vertices' entries are read):
   //! where the encoding's pinned vertices stay. Null: where displacement vectors put them. A

@@ -15,6 +15,11 @@ constexpr double kZeroAreaRelative = 2e-14;
 //! Splits the polygon with corners \p c[0..n) (indices into \p v, n >= 3) into n - 2 triangles
 //! written to \p out[0..n-2), each oriented as the polygon (its Newell normal).
 //!
+//! First, a polygon of 5 or more corners whose sides cross by more than rounding gets false (a
+//! fan is written): any triangulation covers twice where it winds twice. The sweep that finds the
+//! crossing gives up past 64 n + 100,000 candidate pairs and lets the polygon through. (A quad
+//! that crosses itself has no fan of positive triangles, and fails below.)
+//!
 //! A polygon of at most 32 corners with a fan whose every triangle faces the normal with over
 //! 1e-10 of the polygon's area (a convex or star-shaped one) gets the fan from the corner whose
 //! smallest triangle is largest, so that slivers are avoided where a fan allows it: the triangles

@@ -167,7 +167,7 @@ class LayeredModel {
   CascadeReport set_amplitude(int k, double amplitude);
   //! Amplitudes are within +-this: the target volumes scale with it, and 1e308 overflowed the
   //! solve into a message about its options.
-  static constexpr double kMaxAmplitude = 1000.0;
+  static constexpr double kMaxAmplitude = strata::kMaxAmplitude;
 
   // Interactive editing (paper, section 5), for the viewer: while dragging, band(j) holds the
   // preview (band k by the editor's warm-started drag step, finer bands by warm-started
