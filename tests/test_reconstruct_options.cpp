@@ -113,7 +113,10 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
     return std::string("accepted");
   };
   EXPECT_EQ(refusal("volume_scales", "0"),
-            "reconstruction option volume_scales = 0 is out of range (at least 1)");
+            "reconstruction option volume_scales = 0 is out of range (1-1000)");
+  // Counts are bounded above too: 2^31 volume scales ran for ever.
+  EXPECT_EQ(refusal("volume_scales", "2147483647"),
+            "reconstruction option volume_scales = 2147483647 is out of range (1-1000)");
   EXPECT_EQ(refusal("threads", "-2"),
             "reconstruction option threads = -2 is out of range (0-1024; 0 is all cores)");
   // TBB crashed on an arena of 65,537 threads.
@@ -130,9 +133,9 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
   EXPECT_EQ(refusal("local_polish_max_fraction", "1.5"),
             "reconstruction option local_polish_max_fraction = 1.5 is out of range (0 to 1)");
   EXPECT_EQ(refusal("multigrid.retry_iterations", "-1"),
-            "reconstruction option multigrid.retry_iterations = -1 is out of range (at least 0)");
+            "reconstruction option multigrid.retry_iterations = -1 is out of range (0-100000)");
   EXPECT_EQ(refusal("coarsest_max_cycles", "-1"),
-            "reconstruction option coarsest_max_cycles = -1 is out of range (at least 0; 0 is max_cycles)");
+            "reconstruction option coarsest_max_cycles = -1 is out of range (0-100000; 0 is max_cycles)");
   EXPECT_EQ(refusal("volume_scales", "3"), "accepted");
   // The rest Laplacian needs the original base's frames, which an encoding built by hand may lack.
   DetailEncoding bare = e;

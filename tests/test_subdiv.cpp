@@ -533,6 +533,40 @@ TEST(Subdiv, RejectsBadCages) {
   SubdivOptions iso;
   iso.isolation_level = 0;
   EXPECT_NE(msg(cube_cage(), {}, iso).find("isolation level"), std::string::npos);
+  // Faces of over 64 corners and vertices in over 64 faces (a 300-corner face took 30 s): a prism
+  // whose caps have k corners, and a bipyramid whose apexes are in k faces; 64 is accepted.
+  auto prism = [](int k) {
+    PolyMesh p;
+    for (int z = 0; z < 2; ++z)
+      for (int i = 0; i < k; ++i)
+        p.vertices.push_back(Vec3(std::cos(2 * M_PI * i / k), std::sin(2 * M_PI * i / k), z));
+    std::vector<int> top, bottom;
+    for (int i = 0; i < k; ++i) {
+      p.faces.push_back({i, (i + 1) % k, k + (i + 1) % k, k + i});
+      top.push_back(k + i);
+      bottom.push_back(k - 1 - i);
+    }
+    p.faces.push_back(top);
+    p.faces.push_back(bottom);
+    return p;
+  };
+  auto bipyramid = [](int k) {
+    PolyMesh p;
+    for (int i = 0; i < k; ++i)
+      p.vertices.push_back(Vec3(std::cos(2 * M_PI * i / k), std::sin(2 * M_PI * i / k), 0));
+    p.vertices.push_back(Vec3(0, 0, 1));
+    p.vertices.push_back(Vec3(0, 0, -1));
+    for (int i = 0; i < k; ++i) {
+      p.faces.push_back({i, (i + 1) % k, k});
+      p.faces.push_back({(i + 1) % k, i, k + 1});
+    }
+    return p;
+  };
+  EXPECT_EQ(msg(prism(64)), "no error");
+  EXPECT_NE(msg(prism(65)).find("has 65 corners, over 64"), std::string::npos) << msg(prism(65));
+  EXPECT_EQ(msg(bipyramid(64)), "no error");
+  EXPECT_NE(msg(bipyramid(65)).find("cage vertex 65 is in over 64 faces"), std::string::npos)
+      << msg(bipyramid(65));
   const SubdivSurface s(cube_cage());
   EXPECT_THROW(s.evaluate({99, 0.5, 0.5}), InvalidInput);
   EXPECT_THROW(s.evaluate({0, std::nan(""), 0.5}), InvalidInput);

@@ -1792,56 +1792,63 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   auto check = [](bool ok, const char* name, double value, const char* range) {
     if (ok) return;
     std::ostringstream os;
-    os << "reconstruction option " << name << " = " << value << " is out of range (" << range << ")";
+    os << "reconstruction option " << name << " = ";
+    if (value == std::floor(value) && std::abs(value) < 1e15)
+      os << static_cast<long long>(value);  // a count in full, not 2.14748e+09
+    else
+      os << value;
+    os << " is out of range (" << range << ")";
     throw InvalidInput(os.str());
   };
+  // Counts have upper bounds too (the .strata reader's): 2^31 volume scales ran for ever.
+  auto count = [&check](int value, const char* name, int lo, int hi, const char* note = nullptr) {
+    const std::string range =
+        std::to_string(lo) + "-" + std::to_string(hi) + (note ? std::string("; ") + note : "");
+    check(value >= lo && value <= hi, name, value, range.c_str());
+  };
   const MultigridStepOptions& mo = o.multigrid;
-  check(o.volume_scales >= 1, "volume_scales", o.volume_scales, "at least 1");
-  check(o.max_levels >= 1, "max_levels", o.max_levels, "at least 1");
+  count(o.volume_scales, "volume_scales", 1, 1000);
+  count(o.max_levels, "max_levels", 1, 100);
   check(o.coarsest_vertices >= 1, "coarsest_vertices", o.coarsest_vertices, "at least 1");
   check(o.coarsening_ratio > 0 && o.coarsening_ratio < 1, "coarsening_ratio", o.coarsening_ratio,
         "between 0 and 1");
-  check(o.volume_iterations >= 1, "volume_iterations", o.volume_iterations, "at least 1");
-  check(o.retry_volume_iterations >= 0, "retry_volume_iterations", o.retry_volume_iterations, "at least 0");
-  check(o.fold_repair_rounds >= 0, "fold_repair_rounds", o.fold_repair_rounds, "at least 0");
-  check(o.fold_repair_local_rings >= 0, "fold_repair_local_rings", o.fold_repair_local_rings, "at least 0");
+  count(o.volume_iterations, "volume_iterations", 1, 100000);
+  count(o.retry_volume_iterations, "retry_volume_iterations", 0, 100000);
+  count(o.fold_repair_rounds, "fold_repair_rounds", 0, 1000);
+  count(o.fold_repair_local_rings, "fold_repair_local_rings", 0, 1000);
   check(o.fold_repair_max_fraction >= 0, "fold_repair_max_fraction", o.fold_repair_max_fraction,
         "at least 0");
-  check(o.fold_repair_rings >= 0, "fold_repair_rings", o.fold_repair_rings, "at least 0");
-  check(o.fold_repair_sweeps >= 0, "fold_repair_sweeps", o.fold_repair_sweeps, "at least 0");
+  count(o.fold_repair_rings, "fold_repair_rings", 0, 1000);
+  count(o.fold_repair_sweeps, "fold_repair_sweeps", 0, 100000);
   check(o.local_polish_max_fraction >= 0 && o.local_polish_max_fraction <= 1, "local_polish_max_fraction",
         o.local_polish_max_fraction, "0 to 1");
-  check(o.local_polish_rings >= 0, "local_polish_rings", o.local_polish_rings, "at least 0");
-  check(o.finest_volume_iterations >= 1, "finest_volume_iterations", o.finest_volume_iterations,
-        "at least 1");
-  check(o.regularization_iterations >= 0, "regularization_iterations", o.regularization_iterations,
-        "at least 0");
-  check(o.coarse_regularization_iterations >= 0, "coarse_regularization_iterations",
-        o.coarse_regularization_iterations, "at least 0");
-  check(o.coarsest_regularization_iterations >= 0, "coarsest_regularization_iterations",
-        o.coarsest_regularization_iterations, "at least 0; 0 is as the coarse levels");
-  check(o.coarsest_max_cycles >= 0, "coarsest_max_cycles", o.coarsest_max_cycles,
-        "at least 0; 0 is max_cycles");
-  check(o.max_cycles >= 1, "max_cycles", o.max_cycles, "at least 1");
-  check(o.final_max_cycles >= 1, "final_max_cycles", o.final_max_cycles, "at least 1");
+  count(o.local_polish_rings, "local_polish_rings", 0, 1000);
+  count(o.finest_volume_iterations, "finest_volume_iterations", 1, 100000);
+  count(o.regularization_iterations, "regularization_iterations", 0, 100000);
+  count(o.coarse_regularization_iterations, "coarse_regularization_iterations", 0, 100000);
+  count(o.coarsest_regularization_iterations, "coarsest_regularization_iterations", 0, 100000,
+        "0 is as the coarse levels");
+  count(o.coarsest_max_cycles, "coarsest_max_cycles", 0, 100000, "0 is max_cycles");
+  count(o.max_cycles, "max_cycles", 1, 100000);
+  count(o.final_max_cycles, "final_max_cycles", 1, 100000);
   check(o.tangential_lambda >= 0, "tangential_lambda", o.tangential_lambda, "at least 0");
   check(o.length_lambda >= 0, "length_lambda", o.length_lambda, "at least 0");
   check(o.level_tolerance > 0, "level_tolerance", o.level_tolerance, "above 0");
   check(o.tolerance > 0, "tolerance", o.tolerance, "above 0");
-  check(o.max_final_steps >= 0, "max_final_steps", o.max_final_steps, "at least 0");
+  count(o.max_final_steps, "max_final_steps", 0, 100000);
   check(o.min_length_fraction >= 0, "min_length_fraction", o.min_length_fraction, "at least 0");
   check(o.fixed_point_tolerance >= 0, "fixed_point_tolerance", o.fixed_point_tolerance, "at least 0");
   check(o.regularization_decay >= 0, "regularization_decay", o.regularization_decay, "at least 0");
   check(o.cg_tolerance >= 0, "cg_tolerance", o.cg_tolerance, "at least 0");
-  check(o.cg_max_iterations >= 1, "cg_max_iterations", o.cg_max_iterations, "at least 1");
+  count(o.cg_max_iterations, "cg_max_iterations", 1, 1000000);
   // TBB's arenas crashed from 65,537 threads; far more than any machine's cores anyway.
   check(o.threads >= 0 && o.threads <= 1024, "threads", o.threads, "0-1024; 0 is all cores");
   if (o.polish_solver == VolumeStepSolver::JacobiCG)
     throw InvalidInput(
         "reconstruction option polish_solver = jacobi_cg is out of range (direct or multigrid)");
-  check(mo.iterations >= 1, "multigrid.iterations", mo.iterations, "at least 1");
-  check(mo.polish_iterations >= 1, "multigrid.polish_iterations", mo.polish_iterations, "at least 1");
-  check(mo.retry_iterations >= 0, "multigrid.retry_iterations", mo.retry_iterations, "at least 0");
+  count(mo.iterations, "multigrid.iterations", 1, 100000);
+  count(mo.polish_iterations, "multigrid.polish_iterations", 1, 100000);
+  count(mo.retry_iterations, "multigrid.retry_iterations", 0, 100000);
   check(mo.tolerance >= 0, "multigrid.tolerance", mo.tolerance, "at least 0");
   check(mo.polish_tolerance >= 0, "multigrid.polish_tolerance", mo.polish_tolerance, "at least 0");
   check(mo.damping > 0, "multigrid.damping", mo.damping, "above 0");

@@ -101,6 +101,10 @@ class SubdivSurface::Impl {
       const int n = static_cast<int>(c.size());
       if (n < 3)
         throw InvalidInput("cage face " + vtx(f) + " has " + vtx(n) + " corners (a face needs at least 3)");
+      if (n > kMaxCageValence)
+        throw InvalidInput("cage face " + vtx(f) + " has " + vtx(n) + " corners, over " +
+                           vtx(kMaxCageValence) +
+                           " (the limit patches' cost grows with about the cube of it: 300 took 30 s)");
       all_triangles = all_triangles && n == 3;
       for (int k = 0; k < n; ++k) {
         if (c[k] < 0 || c[k] >= nv)
@@ -121,6 +125,13 @@ class SubdivSurface::Impl {
                              ") is non-manifold: shared by more than 2 faces");
       }
     }
+    std::vector<int> valence(nv, 0);
+    for (const std::vector<int>& c : cage_.faces)
+      for (int v : c)
+        if (++valence[v] > kMaxCageValence)
+          throw InvalidInput(
+              "cage vertex " + vtx(v) + " is in over " + vtx(kMaxCageValence) +
+              " faces (the limit patches' cost grows with about the cube of it: 200 took 8 s)");
     for (const std::vector<int>& c : cage_.faces)
       for (std::size_t k = 0; k < c.size(); ++k) {
         const int a = c[k], b = c[(k + 1) % c.size()];

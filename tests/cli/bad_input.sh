@@ -130,6 +130,40 @@ mkfifo report_fifo
 expect_fail "report is a FIFO"      "report_fifo: is not a regular file (a FIFO)" reconstruct -q --detail $G/detail.obj \
   --base $G/base.obj --edited-base $G/edited_base.obj -o out/result.obj --report report_fifo
 [ -p report_fifo ] || { echo "FAIL [report is a FIFO]: the FIFO was replaced" >&2; failures=$((failures + 1)); }
+# Second fuzzing pass (2026-11-28).
+expect_fail "empty integer"         "--handle-rings: '' is not a number" deform $G/detail.obj --edit edit.json \
+  --handle-rings '' -o out/d.obj
+expect_fail "nan in a range"        "--smoothing: 'nan' is not a number" deform $G/detail.obj --edit edit.json \
+  --smoothing nan -o out/d.obj
+expect_fail "2^31 volume scales"    "volume_scales = 2147483647 is out of range (1-1000)" $(rec $G/detail.obj \
+  $G/base.obj $G/edited_base.obj --set volume_scales=2147483647)
+expect_fail "missing assets dir"    "nodir: --assets-dir is not a directory" demo --assets-dir nodir --out-dir out/demo
+mkdir -p assets_clash/bumps
+cp $G/detail.obj $G/base.obj $G/edited_base.obj assets_clash/bumps/
+expect_fail "asset named as a case" "the case name 'bumps' is taken" demo --assets-dir assets_clash --out-dir out/demo
+rm -rf out/demo
+# A cage face of 300 corners (its patches took 30 s to build): a prism with 300-corner caps.
+python3 - <<'PY'
+import math
+k = 300
+with open("bigpoly_cage.obj", "w") as f:
+    for z in (0, 6):
+        for i in range(k):
+            f.write("v %.9f %.9f %g\n" % (2 * math.cos(2 * math.pi * i / k), 2 * math.sin(2 * math.pi * i / k), z))
+    for i in range(k):
+        f.write("f %d %d %d %d\n" % (i + 1, (i + 1) % k + 1, k + (i + 1) % k + 1, k + i + 1))
+    f.write("f " + " ".join(str(k + i + 1) for i in range(k)) + "\n")
+    f.write("f " + " ".join(str(k - i) for i in range(k)) + "\n")
+PY
+expect_fail "300-corner cage face"  "bigpoly_cage.obj: cage face 300 has 300 corners, over 64" deform $G/detail.obj \
+  --edit edit.json --base subdiv --cage bigpoly_cage.obj -o out/d.obj
+# A tags file's crease that is no cage edge names the cage and the tags, not the edit script.
+"$STRATA" cage fit -q $G/detail.obj --faces 100 -o fitted_cage.obj >/dev/null
+echo '{"creases": [{"edge": [0, 99999]}]}' >bad_tags.json
+expect_fail "tags not on the cage"  "fitted_cage.obj with bad_tags.json: crease (0,99999)" deform $G/detail.obj \
+  --edit edit.json --base subdiv --cage fitted_cage.obj --cage-tags bad_tags.json -o out/d.obj
+# With -q a failed build still says why on stderr (it was only in the table on stdout).
+expect_fail "build -q failure"      "truncated.obj" build -q truncated.obj -o out/m.strata
 # STL holds triangles only: a vertex in no face is not written, and a warning says so.
 "$STRATA" reconstruct -q --detail stray.obj --base $G/base.obj --edited-base $G/edited_base.obj -o stray_out.stl \
   >stdout.txt 2>stderr.txt || { echo "FAIL [stl stray]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }

@@ -127,6 +127,10 @@ cp "$SCANS/bear.off" b/bear.off
 "$STRATA" build a/bear.off b/bear.off --out-dir same -q 2>err.txt && fail "two scans into one model accepted"
 grep -q "would both be built into same/bear.strata" err.txt || fail "duplicate-name message: $(cat err.txt)"
 [ -e same ] && fail "the output directory was made for duplicate names"
+# A model is written as .strata (any name was taken).
+"$STRATA" amplitude camel.strata --band 1 --scale 2 -o out.xyz 2>err.txt && fail "a model written as out.xyz"
+grep -q "out.xyz: a layered model is written as a .strata file" err.txt || fail "extension message: $(cat err.txt)"
+[ -e out.xyz ] && fail "out.xyz was written"
 [ -e out.strata ] && fail "an output was written after an error"
 [ -e out.obj ] && fail "an output was written after an error"
 echo "layers CLI: ok"

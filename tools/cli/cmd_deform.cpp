@@ -104,6 +104,13 @@ int run_deform(const DeformCmdOptions& o) {
       log.phase("reading the cage " + o.cage);
       cage = read_cage(o.cage);
       if (!o.cage_tags.empty()) tags = read_subdiv_tags(o.cage_tags);
+      // The cage and its tags make a surface, or the files are named (their problems were reported
+      // as the edit script's).
+      try {
+        const SubdivSurface surface(cage, tags);
+      } catch (const InvalidInput& ex) {
+        throw InvalidInput(o.cage + (o.cage_tags.empty() ? "" : " with " + o.cage_tags) + ": " + ex.what());
+      }
       const bool triangles = std::all_of(cage.faces.begin(), cage.faces.end(),
                                          [](const std::vector<int>& f) { return f.size() == 3; });
       cage_json = {{"path", o.cage},

@@ -25,6 +25,7 @@ struct DemoCmdOptions {
   std::string out_dir = "out";
   int triangles = 0;
   std::string assets_dir = "assets";
+  bool assets_dir_given = false;  // named on the command line: then it must exist
   bool no_assets = false;
   bool quiet = false;
 };
@@ -184,8 +185,6 @@ void print_table(std::ostream& os, const std::vector<Row>& rows) {
 int run_demo(const DemoCmdOptions& o) {
   const Log log(o.quiet);
   if (o.triangles < 0) throw InvalidInput("--triangles must be >= 0");
-  ensure_directory(o.out_dir);
-  const std::string report_path = (fs::path(o.out_dir) / "demo_report.json").string();
 
   std::vector<CaseSource> sources;
   for (const cases::DetailKind kind :
@@ -195,8 +194,23 @@ int run_demo(const DemoCmdOptions& o) {
     s.kind = kind;
     sources.push_back(s);
   }
-  if (!o.no_assets)
-    for (CaseSource& s : find_asset_cases(o.assets_dir, log)) sources.push_back(std::move(s));
+  if (!o.no_assets) {
+    std::error_code ec;
+    if (o.assets_dir_given && !fs::is_directory(o.assets_dir, ec))
+      throw IoError(o.assets_dir + ": --assets-dir is not a directory");
+    for (CaseSource& s : find_asset_cases(o.assets_dir, log)) {
+      // Outputs are named after the case: an asset named as a generated case overwrote its files.
+      for (const CaseSource& other : sources)
+        if (other.name == s.name)
+          throw InvalidInput((fs::path(o.assets_dir) / s.name).string() + ": the case name '" + s.name +
+                             "' is taken by a generated case; rename the directory");
+      sources.push_back(std::move(s));
+    }
+  }
+
+  // After the cases are known: a bad --assets-dir leaves no output directory behind.
+  ensure_directory(o.out_dir);
+  const std::string report_path = (fs::path(o.out_dir) / "demo_report.json").string();
 
   std::cout << "strata demo: " << sources.size() << " cases, each rebuilt over its bent base by displacement "
             << "volumes and by displacement vectors\n"
@@ -266,7 +280,8 @@ Subcommand register_demo(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--assets-dir", o->assets_dir,
                   "Also run every subdirectory holding detail.*, base.* and edited_base.* meshes")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->assets_dir_given = true; });
   app->add_flag("--no-assets", o->no_assets, "Run the generated cases only");
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   return {app, [o] { return run_demo(*o); }};

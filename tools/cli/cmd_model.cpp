@@ -2,6 +2,8 @@
 // `strata export`.
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -83,6 +85,14 @@ json band_summary_json(const LayeredModel& model) {
   return bands;
 }
 
+// A model output: a writable path ending in .strata (any other name was written as a model).
+void check_model_output_path(const std::string& path) {
+  check_output_path(path);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext != ".strata") throw IoError(path + ": a layered model is written as a .strata file");
+}
+
 int run_build(const BuildCmdOptions& o) {
   if (o.scans.size() > 1 && o.out_dir.empty())
     throw InvalidInput("several scans need --out-dir (each model is written as DIR/<scan name>.strata)");
@@ -102,7 +112,7 @@ int run_build(const BuildCmdOptions& o) {
           throw InvalidInput(o.scans[j] + " and " + o.scans[i] + " would both be built into " +
                              model_path(o.scans[i]) + "; build them into different --out-dir directories");
   if (!o.out_dir.empty()) ensure_directory(o.out_dir);
-  if (!o.output.empty()) check_output_path(o.output);
+  if (!o.output.empty()) check_model_output_path(o.output);
   if (!o.report.empty()) check_output_path(o.report);
   check_output_names({o.output, o.report}, o.scans);
   // With -o, the model lands only with its report; with --out-dir each model is written as it is
@@ -153,8 +163,9 @@ int run_build(const BuildCmdOptions& o) {
       r["ok"] = false;
       r["error"] = e.what();
       r["seconds"] = sw.seconds();
-      if (!o.quiet)
-        std::cerr << (isatty(STDERR_FILENO) ? "\n" : "") << "strata: error: " << e.what() << std::endl;
+      // Errors go to stderr with -q too (-q quiets progress; a failure was only in the table).
+      std::cerr << (!o.quiet && isatty(STDERR_FILENO) ? "\n" : "") << "strata: error: " << e.what()
+                << std::endl;
     }
     results.push_back(r);
   }
@@ -278,7 +289,7 @@ void print_cascade(const layers::CascadeReport& r) {
 // count of the finest band's new self-intersections and a JSON report.
 int run_change(const EditCmdOptions& o, const std::string& command,
                const std::function<json(LayeredModel&, const Log&)>& change) {
-  check_output_path(o.output);
+  check_model_output_path(o.output);
   if (!o.report.empty()) check_output_path(o.report);
   check_output_names({o.output, o.report}, {o.model, o.edit});
   const Log log(o.quiet);

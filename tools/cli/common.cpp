@@ -76,6 +76,23 @@ int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
   return lost;
 }
 
+void require_numbers(CLI::App& app) {
+  const CLI::Validator number(
+      [](std::string& text) -> std::string {
+        double v = 0.0;
+        if (text.empty() || !CLI::detail::lexical_cast(text, v) || std::isnan(v))
+          return "'" + text + "' is not a number";
+        return {};
+      },
+      "");
+  for (CLI::Option* option : app.get_options()) {
+    // The type name, then ':' and the validators' descriptions ("FLOAT:FLOAT in [0 - 360]").
+    const std::string type = option->get_type_name().substr(0, option->get_type_name().find(':'));
+    if (type == "INT" || type == "UINT" || type == "FLOAT" || type == "NUMBER") option->check(number);
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) require_numbers(*sub);
+}
+
 NamedMesh read_named_mesh(const std::string& path) {
   NamedMesh m;
   m.name = path;

@@ -82,6 +82,10 @@ Method parse_method(const std::string& text);
 //! A numeric option's lower bound, \p lo (above it with \p strict): CLI11's NonNegativeNumber and
 //! PositiveNumber printed their upper bound, DBL_MAX, in 310 digits.
 CLI::Validator at_least(double lo, bool strict = false);
+
+//! Adds to every numeric option of \p app and its subcommands a check that its value is a number
+//! ('' was read as 0, and "nan" passed every range).
+void require_numbers(CLI::App& app);
 inline CLI::Validator above(double lo) {
   return at_least(lo, true);
 }

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
                                         register_generate(app),    register_demo(app),
                                         register_deform(app),      register_cage(app)};
     for (Subcommand& c : register_model_commands(app)) commands.push_back(std::move(c));
+    require_numbers(app);
     app.parse(argc, argv);
     for (const Subcommand& c : commands)
       if (c.app->parsed()) return c.run();
