@@ -185,6 +185,11 @@ TEST(CageIo, ParsesTagsAndNamesTheProblem) {
     return "";
   };
   EXPECT_NE(message("{").find("t.json: not valid JSON"), std::string::npos);
+  // A NUL byte ended the parse, and what came before was read; 1e999 gave a raw library message.
+  EXPECT_NE(message(std::string("{}\0", 3)).find("t.json: not valid JSON: it holds a NUL byte"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"corners": [{"vertex": 1, "sharpness": 1e999}]})").find("t.json: not valid JSON"),
+            std::string::npos);
   EXPECT_NE(message(R"({"crease": []})").find("unknown key \"crease\""), std::string::npos);
   EXPECT_NE(message(R"({"creases": [{"edge": [0]}]})").find("creases[0].edge"), std::string::npos);
   EXPECT_NE(message(R"({"creases": [{"edge": [0, -1]}]})").find("creases[0].edge"), std::string::npos);

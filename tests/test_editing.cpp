@@ -379,6 +379,7 @@ TEST(EditScript, RejectsMalformedScriptsNamingTheFileAndThePlace) {
       {"{" + sel + R"(, "transform": {"translate": [1e300, 0, 0]}})",
        "edit.transform.translate[0]: 1e+300 is beyond the engine's range"},
       {"{" + sel + R"(, "transform": {"scale": 1e-300}})", "within 1e-6 to 1e6"},
+      {std::string("{}\0", 3), "it holds a NUL byte"},
   };
   for (const auto& [text, expected] : bad) {
     try {

@@ -50,6 +50,9 @@ const json& list(const std::string& name, const json& j, const char* key) {
 }  // namespace
 
 SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
+  // The JSON parser stops at a NUL byte and took what came before (a tags file with one was read).
+  if (text.find('\0') != std::string::npos)
+    throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
   json j;
   try {
     j = json::parse(text);

@@ -141,6 +141,9 @@ EditStep step(const Ctx& c, const std::string& where, const json& j) {
 
 EditScript parse_edit_script(const std::string& text, const std::string& name) {
   const Ctx c{name};
+  // The JSON parser stops at a NUL byte and took what came before.
+  if (text.find('\0') != std::string::npos)
+    throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
   json j;
   try {
     j = json::parse(text);
