@@ -133,6 +133,11 @@ TEST(CageFit, RejectsBadInput) {
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothing_steps = -1; })), InvalidInput);
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothness = NAN; })), InvalidInput);
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.rounds = 0; })), InvalidInput);
+  // Upper bounds (10^5 rounds or 10^7 smoothing steps ran for minutes; 1e308 failed the solve).
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.rounds = 101; })), InvalidInput);
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothing_steps = 1001; })), InvalidInput);
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.smoothness = 1e308; })), InvalidInput);
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.faces = 3; })), InvalidInput);
   EXPECT_NO_THROW(fit_cage(scan, with([](CageFitOptions&) {})));
   // Coordinates beyond the engine's range are refused (at 1e160 the limit projection crashed).
   TriMesh far = scan;

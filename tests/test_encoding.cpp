@@ -144,6 +144,13 @@ TEST(Encoding, RejectsBadInput) {
               std::string::npos)
         << ex.what();
   }
+  // Base points whose barycentric coordinates are not a point's on the face (a file's 1e308).
+  std::vector<BasePoint> off(c.detail.vertices.size(), BasePoint{0, Vec3(1, 0, 0)});
+  EXPECT_NO_THROW(encode_detail_at(c.detail, c.base, off));
+  off[1].bary = Vec3(1e308, 0, 0);
+  EXPECT_THROW(encode_detail_at(c.detail, c.base, off), InvalidInput);
+  off[1].bary = Vec3(0.5, 0.6, 0.0);
+  EXPECT_THROW(encode_detail_at(c.detail, c.base, off), InvalidInput);
   std::vector<Vec3> far_base = c.base.vertices;
   far_base[1] *= 1e25;
   EXPECT_THROW(evaluate_base_frames(e, far_base), InvalidInput);

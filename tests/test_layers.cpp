@@ -410,6 +410,28 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
   variant("option_out_of_range", [](nlohmann::json& m, layers::StrataContainer&) {
     m["options"]["reconstruct"]["coarsening_ratio"] = -1.0;
   });
+  // A third pass: options the first edit blamed on its script, a weight that overflowed the
+  // solve, barycentric coordinates of 1e308 (read, the detail silently changed), and a cage whose
+  // points all coincide (export blamed its own output).
+  variant("projection_option", [](nlohmann::json& m, layers::StrataContainer&) {
+    m["options"]["projection"]["orthogonality_tolerance"] = -1.0;
+  });
+  variant("smoothing_fraction",
+          [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["smoothing_fraction"] = -1.0; });
+  variant("huge_weight", [](nlohmann::json& m, layers::StrataContainer&) {
+    m["options"]["reconstruct"]["length_lambda"] = 1e308;
+  });
+  variant("huge_base_coords", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.base_coords") {
+        const double big = 1e308;
+        std::memcpy(s.bytes.data(), &big, sizeof big);
+      }
+  });
+  variant("coincident_cage", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band0.points") std::fill(s.bytes.begin(), s.bytes.end(), 0);
+  });
   // The untouched container still reads.
   EXPECT_NO_THROW(layers::read_model(good));
 }

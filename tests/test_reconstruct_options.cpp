@@ -129,7 +129,7 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
   EXPECT_EQ(refusal("polish_solver", "jacobi_cg"),
             "reconstruction option polish_solver = jacobi_cg is out of range (direct or multigrid)");
   EXPECT_EQ(refusal("tangential_lambda", "-0.5"),
-            "reconstruction option tangential_lambda = -0.5 is out of range (at least 0)");
+            "reconstruction option tangential_lambda = -0.5 is out of range (0-1000)");
   EXPECT_EQ(refusal("local_polish_max_fraction", "1.5"),
             "reconstruction option local_polish_max_fraction = 1.5 is out of range (0 to 1)");
   EXPECT_EQ(refusal("multigrid.retry_iterations", "-1"),

@@ -509,6 +509,9 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
   } catch (const InvalidInput& e) {
     throw InvalidInput("band 0: " + std::string(e.what()));
   }
+  // A band collapsed to a point (all its points equal) was read; export then blamed its output.
+  if (!(bbox_diagonal(bands[0].cage.vertices) > 0))
+    throw InvalidInput("band 0: the cage's points all coincide");
   for (int k = 1; k < nb; ++k) {
     const Band& b = bands[k];
     const std::string name = "band " + std::to_string(k);
@@ -526,6 +529,9 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                              "), not 3 distinct vertices of " + std::to_string(nv));
     }
     check_coordinates(b.mesh.vertices, name + ":");
+    if (!(bbox_diagonal(b.mesh.vertices) > 0) || !(bbox_diagonal(e.detail_rest) > 0) ||
+        !(bbox_diagonal(b.base_rest) > 0))
+      throw InvalidInput(name + ": its points (current, at rest, or its base's at rest) all coincide");
     check_amplitude(b.amplitude, name + ": the amplitude");
     const int base_n = k == 1 ? bands[0].cage.num_vertices() : bands[k - 1].mesh.num_vertices();
     if (e.base_num_vertices != base_n || static_cast<int>(b.base_rest.size()) != base_n)

@@ -49,7 +49,13 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   std::vector<int> free_id(n, -1), free;
   Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);
   std::vector<double> s(n, 0.0);
+  // A cage vertex in no face shapes no surface: it keeps s = 0 (1 on the handle) and stays out of
+  // the system, where its row would be empty (a cage with one failed as "could not be factorized").
+  std::vector<char> in_face(n, 0);
+  for (const std::vector<int>& f : cage.faces)
+    for (int v : f) in_face[v] = 1;
   for (int v = 0; v < n; ++v) {
+    if (region[v] && !handle[v] && !in_face[v]) continue;
     if (region[v] && !handle[v]) {
       free_id[v] = static_cast<int>(free.size());
       free.push_back(v);
@@ -70,11 +76,6 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
   Eigen::SparseMatrix<double> A(m, m);
   A.setFromTriplets(tf.begin(), tf.end());
-  // A vertex in no face has an empty row (a cage with one failed as "could not be factorized").
-  for (int k = 0; k < m; ++k)
-    if (!(A.coeff(k, k) > 0))
-      throw InvalidInput("the cage's blend field is singular at cage vertex " + std::to_string(free[k]) +
-                         ", which is in no face");
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
   if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
   const Eigen::VectorXd x = ldlt.solve(rhs);

@@ -24,14 +24,18 @@ double seconds_since(Clock::time_point t0) {
 }
 
 void check_options(const CageFitOptions& o) {
-  if (o.faces < 0) throw InvalidInput("cage fit: faces must be >= 0 (0 chooses face_fraction)");
+  if (o.faces < 0 || (o.faces > 0 && o.faces < 4))
+    throw InvalidInput("cage fit: faces must be 0 (face_fraction chooses) or at least 4");
   if (!(o.face_fraction > 0.0 && o.face_fraction <= 1.0))
     throw InvalidInput("cage fit: face_fraction must lie in (0, 1]");
   if (o.min_faces < 4) throw InvalidInput("cage fit: min_faces must be >= 4");
-  if (o.smoothing_steps < 0) throw InvalidInput("cage fit: smoothing_steps must be >= 0");
-  if (!(o.smoothness >= 0.0) || !std::isfinite(o.smoothness))
-    throw InvalidInput("cage fit: smoothness must be finite and >= 0");
-  if (o.rounds < 1) throw InvalidInput("cage fit: rounds must be >= 1");
+  // Upper bounds too: 10^7 smoothing steps or 10^5 rounds ran for minutes (Taubin smoothing drifts
+  // out of range after about 10^5 steps), and a smoothness of 1e308 failed the solve.
+  if (o.smoothing_steps < 0 || o.smoothing_steps > 1000)
+    throw InvalidInput("cage fit: smoothing_steps must be within 0-1000");
+  if (!(o.smoothness >= 0.0 && o.smoothness <= 1e12))
+    throw InvalidInput("cage fit: smoothness must be within 0-1e12");
+  if (o.rounds < 1 || o.rounds > 100) throw InvalidInput("cage fit: rounds must be within 1-100");
 }
 
 struct Distances {

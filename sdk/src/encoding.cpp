@@ -276,10 +276,14 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
   if (base_points.size() != detail.vertices.size())
     throw InvalidInput("encoding: " + std::to_string(base_points.size()) + " base points for " +
                        std::to_string(detail.vertices.size()) + " detail vertices");
-  for (std::size_t i = 0; i < base_points.size(); ++i)
-    if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() ||
-        !base_points[i].bary.allFinite())
+  // Barycentric coordinates of a point on the face (the encoder's are clamped to it): 1e308 was
+  // read from a file and silently changed the detail.
+  for (std::size_t i = 0; i < base_points.size(); ++i) {
+    const Vec3& b = base_points[i].bary;
+    if (base_points[i].face < 0 || base_points[i].face >= base.num_faces() || !b.allFinite() ||
+        b.minCoeff() < -1e-6 || std::abs(b.sum() - 1.0) > 1e-6)
       throw InvalidInput("encoding: base point " + std::to_string(i) + " is not on a base face");
+  }
   DetailEncoding e = encoding_over_mesh(detail, base, std::move(base_points));
   e.report.seconds = seconds_since(t0);
   return e;
@@ -294,7 +298,8 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base
                        std::to_string(detail.vertices.size()) + " detail vertices");
   for (std::size_t i = 0; i < limit_points.size(); ++i) {
     const LimitPoint& p = limit_points[i];
-    if (p.face < 0 || p.face >= base.num_ptex_faces() || !std::isfinite(p.u) || !std::isfinite(p.v))
+    if (p.face < 0 || p.face >= base.num_ptex_faces() || !(p.u >= -1e-6 && p.u <= 1 + 1e-6) ||
+        !(p.v >= -1e-6 && p.v <= 1 + 1e-6))
       throw InvalidInput("encoding: limit point " + std::to_string(i) + " is not on a ptex face");
   }
   DetailEncoding e = encoding_over_limit(detail, base, std::move(limit_points));

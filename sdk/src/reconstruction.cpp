@@ -760,8 +760,10 @@ class VolumeReconstructor::Impl {
   static void check_finite(const State& s) {
     for (std::size_t i = 0; i < s.P.size(); ++i)
       if (!s.P[i].allFinite())
-        throw SolverError("reconstruction produced non-finite positions (detail vertex " + std::to_string(i) +
-                          "); are the reconstruction options within a workable range?");
+        throw SolverError(
+            "reconstruction produced non-finite positions (detail vertex " + std::to_string(i) +
+            "): the solve diverged (a base edited beyond what the detail can follow, or options out of a "
+            "workable range)");
   }
 
   // The new pairs are counted (retry_on_new_intersections) for a converged result, and for an
@@ -1831,14 +1833,17 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   count(o.coarsest_max_cycles, "coarsest_max_cycles", 0, 100000, "0 is max_cycles");
   count(o.max_cycles, "max_cycles", 1, 100000);
   count(o.final_max_cycles, "final_max_cycles", 1, 100000);
-  check(o.tangential_lambda >= 0, "tangential_lambda", o.tangential_lambda, "at least 0");
-  check(o.length_lambda >= 0, "length_lambda", o.length_lambda, "at least 0");
+  // Weights of 1e308 overflowed the regularization into non-finite positions.
+  check(o.tangential_lambda >= 0 && o.tangential_lambda <= 1000, "tangential_lambda", o.tangential_lambda,
+        "0-1000");
+  check(o.length_lambda >= 0 && o.length_lambda <= 1000, "length_lambda", o.length_lambda, "0-1000");
   check(o.level_tolerance > 0, "level_tolerance", o.level_tolerance, "above 0");
   check(o.tolerance > 0, "tolerance", o.tolerance, "above 0");
   count(o.max_final_steps, "max_final_steps", 0, 100000);
   check(o.min_length_fraction >= 0, "min_length_fraction", o.min_length_fraction, "at least 0");
   check(o.fixed_point_tolerance >= 0, "fixed_point_tolerance", o.fixed_point_tolerance, "at least 0");
-  check(o.regularization_decay >= 0, "regularization_decay", o.regularization_decay, "at least 0");
+  check(o.regularization_decay >= 0 && o.regularization_decay <= 1000, "regularization_decay",
+        o.regularization_decay, "0-1000");
   check(o.cg_tolerance >= 0, "cg_tolerance", o.cg_tolerance, "at least 0");
   count(o.cg_max_iterations, "cg_max_iterations", 1, 1000000);
   // TBB's arenas crashed from 65,537 threads; far more than any machine's cores anyway.

@@ -93,8 +93,9 @@ expect_fail "report unwritable"     /proc/strata_report.json reconstruct -q --de
   --edited-base $G/edited_base.obj -o out/result.obj --report /proc/strata_report.json
 expect_fail "cage report unwritable" /proc/strata_report.json cage fit $G/base.obj -o out/cage.obj \
   --report /proc/strata_report.json
-# A solve driven out of range is named as such (it failed in the pair count on NaN coordinates).
-expect_fail "diverging options"     "reconstruction produced non-finite positions" $(rec $G/detail.obj $G/base.obj \
+# A weight that would drive the solve out of range is refused (1e308 failed in the pair count on NaN
+# coordinates, then as non-finite positions).
+expect_fail "diverging options"     "length_lambda = 1e+308 is out of range (0-1000)" $(rec $G/detail.obj $G/base.obj \
   $G/edited_base.obj --set length_lambda=1e308)
 # An output that would replace an input is refused before anything is read or written.
 cp $G/detail.obj mine.obj

@@ -347,6 +347,8 @@ int run_edit(const EditCmdOptions& o) {
         out.push_back(cascade_json(c));
       } catch (const InvalidInput& e) {
         throw InvalidInput(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
+      } catch (const SolverError& e) {  // which edit of a long script failed to solve
+        throw SolverError(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
       }
     }
     return out;
@@ -394,6 +396,12 @@ int run_export(const ExportCmdOptions& o) {
   }
   const TriMesh mesh = model.band_mesh(k, o.resolution);
   warn_stl_drops_vertices(mesh, o.output);
+  // The writer validates the mesh under the output's name; a degenerate band is the model's.
+  try {
+    validate_mesh(mesh, o.model + ": band " + std::to_string(k));
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string(e.what()) + " (not written to " + o.output + ")");
+  }
   write_mesh(mesh, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces)" << std::endl;

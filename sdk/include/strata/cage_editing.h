@@ -48,9 +48,9 @@ struct CageEditOptions {
 //! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
-//!        handle is empty, the handle is the whole region, or a region vertex outside the handle
-//!        is in no face. A region that is the whole cage (of one piece) gives s = 1 everywhere:
-//!        the edit moves the model rigidly.
+//!        handle is empty, or the handle is the whole region. A region that is the whole cage (of
+//!        one piece) gives s = 1 everywhere: the edit moves the model rigidly. A cage vertex in
+//!        no face (it shapes no surface) keeps s = 0, or 1 on the handle.
 //! \throw SolverError if the field's system cannot be factorized or solved.
 std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<char>& region,
                                      const std::vector<char>& handle);

@@ -62,9 +62,9 @@ struct CageFit {
 //! fitted to).
 //! \pre nothing: the scan is checked.
 //! \throw InvalidInput if the scan fails validate_mesh(), has a coordinate beyond kMaxCoordinate,
-//!        or fewer faces than the cage would have, or if an option is out of range (faces < 0,
-//!        face_fraction outside (0, 1], min_faces < 4, smoothing_steps < 0, smoothness < 0,
-//!        rounds < 1).
+//!        or fewer faces than the cage would have, or if an option is out of range (faces not 0
+//!        and below 4, face_fraction outside (0, 1], min_faces < 4, smoothing_steps outside
+//!        0-1000, smoothness outside 0-1e12, rounds outside 1-100).
 //! \throw SolverError if the decimation cannot reach a valid cage or the least-squares system
 //!        cannot be factorized.
 CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options = {});

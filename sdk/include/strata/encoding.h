@@ -121,13 +121,15 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
 //! restored from its base points is bit for bit the one first computed. The report counts every
 //! vertex as projected.
 //! \throw InvalidInput if a mesh is invalid as for encode_detail(), the point count differs from
-//!        the detail's vertex count, or a base point's face is out of range or its coordinates
-//!        are not finite.
+//!        the detail's vertex count, or a base point's face is out of range or its barycentric
+//!        coordinates are not those of a point on the face (each >= -1e-6, summing to 1 within
+//!        1e-6).
 DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
                                 std::vector<BasePoint> base_points);
 
 //! The same over a subdivision limit surface with the limit points given.
-//! \throw InvalidInput as above, or if a limit point's face is out of range.
+//! \throw InvalidInput as above, or if a limit point's face is out of range or its (u, v) lies
+//!        outside [0, 1]^2 by over 1e-6.
 DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
                                 std::vector<LimitPoint> limit_points);
 
