@@ -2,8 +2,6 @@
 // `strata export`.
 #include <unistd.h>
 
-#include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -88,8 +86,7 @@ json band_summary_json(const LayeredModel& model) {
 // A model output: a writable path ending in .strata (any other name was written as a model).
 void check_model_output_path(const std::string& path) {
   check_output_path(path);
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(path);
   if (ext != ".strata") throw IoError(path + ": a layered model is written as a .strata file");
 }
 
@@ -324,6 +321,13 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   return 0;
 }
 
+// --band within the model's bands (from \p first): named with the model, not by the SDK's check.
+void check_band_option(const EditCmdOptions& o, const LayeredModel& model, int first) {
+  if (o.band >= model.num_bands())
+    throw InvalidInput("--band " + std::to_string(o.band) + " is out of range: " + o.model + " has bands " +
+                       std::to_string(first) + " to " + std::to_string(model.num_bands() - 1));
+}
+
 int run_edit(const EditCmdOptions& o) {
   const std::string text = read_file_bytes(o.edit);
   const EditScript script = parse_edit_script(text, o.edit);
@@ -333,9 +337,7 @@ int run_edit(const EditCmdOptions& o) {
   if (!raw.is_array()) raw = json::array({raw});
   return run_change(o, "edit", [&](LayeredModel& model, const Log& log) {
     // The band is the command line's, not the script's (it was reported as the script's edit 0).
-    if (o.band >= model.num_bands())
-      throw InvalidInput("--band " + std::to_string(o.band) + " is out of range: " + o.model +
-                         " has bands 0 to " + std::to_string(model.num_bands() - 1));
+    check_band_option(o, model, 0);
     json out = json::array();
     for (std::size_t i = 0; i < script.edits.size(); ++i) {
       log.phase("edit " + std::to_string(i + 1) + " of " + std::to_string(script.edits.size()) + " on band " +
@@ -357,9 +359,7 @@ int run_edit(const EditCmdOptions& o) {
 
 int run_amplitude(const EditCmdOptions& o) {
   return run_change(o, "amplitude", [&](LayeredModel& model, const Log& log) {
-    if (o.band >= model.num_bands())
-      throw InvalidInput("--band " + std::to_string(o.band) + " is out of range: " + o.model +
-                         " has bands 1 to " + std::to_string(model.num_bands() - 1));
+    check_band_option(o, model, 1);
     log.phase("band " + std::to_string(o.band) + " amplitude " + fixed(o.scale, 3));
     const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
     print_cascade(c);
@@ -470,16 +470,8 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "The finer bands are rebuilt in cascade.");
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("--band", o->band, "Band (1 or more)")->required()->check(above(0));
-    app->add_option("--scale", o->scale, "Amplitude, within +-1000")
-        ->required()
-        ->check(CLI::Validator(
-            [](std::string& text) -> std::string {
-              double v = 0.0;
-              if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
-                return "'" + text + "' is not a number";
-              return {};
-            },
-            "NUMBER"));
+    // A number (require_numbers()); LayeredModel::set_amplitude() bounds it.
+    app->add_option("--scale", o->scale, "Amplitude, within +-1000")->required();
     add_change_options(*app, *o);
     out.push_back({app, [o] { return run_amplitude(*o); }});
   }

@@ -62,10 +62,14 @@ CLI::Validator at_least(double lo, bool strict) {
       strict ? "> " + bound.str() : ">= " + bound.str());
 }
 
-int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
+std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext != ".stl") return 0;
+  return ext;
+}
+
+void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
+  if (lower_extension(path) != ".stl") return;
   std::vector<char> used(mesh.vertices.size(), 0);
   for (const Face& f : mesh.faces)
     for (int v : f) used[v] = 1;
@@ -73,7 +77,6 @@ int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
   if (lost > 0)
     std::cerr << "strata: warning: " << path << ": STL holds triangles only: " << lost
               << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
-  return lost;
 }
 
 void require_numbers(CLI::App& app) {
@@ -236,8 +239,7 @@ void StagedOutputs::commit() {
 
 void check_mesh_output_path(const std::string& path) {
   check_output_path(path);
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(path);
   const std::vector<std::string> supported = supported_mesh_extensions();
   if (std::find(supported.begin(), supported.end(), ext) == supported.end()) {
     std::string list;

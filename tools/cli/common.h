@@ -99,9 +99,12 @@ struct NamedMesh {
 //! read_mesh(path) with the path in the name.
 NamedMesh read_named_mesh(const std::string& path);
 
+//! The extension of \p path with its dot, lower case ("a/B.OBJ" -> ".obj").
+std::string lower_extension(const std::string& path);
+
 //! Warns on stderr when \p mesh is to be written to an STL \p path and some of its vertices are
-//! in no face: STL holds triangles only, so they would be lost without a word. Returns how many.
-int warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
+//! in no face: STL holds triangles only, so they would be lost without a word.
+void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
 //! A base S and its edited S2, read as read_named_mesh(). A polygon of more than 3 corners is cut
 //! into triangles by its shape, so S and S2 listing the same polygons may be cut differently: S2

@@ -397,21 +397,24 @@ bool triangulate_polygon(const std::vector<Vec3>& v, const int* c, std::size_t n
   for (std::size_t i = 1; i + 1 < w.size(); ++i) normal += w[i].cross(w[i + 1]);
   const double largest = normal.cwiseAbs().maxCoeff();
   const bool flat = w.empty() || !(largest > 0) || !std::isfinite(largest);
-  std::size_t apex = 0;
+  auto fan = [&](std::size_t apex) {
+    for (std::size_t i = 1; i + 1 < n; ++i) out[i - 1] = {c[apex], c[(apex + i) % n], c[(apex + i + 1) % n]};
+  };
   // (A quad that crosses itself needs no test: each diagonal cuts it into triangles of opposite
-  // orientations, so it has no fan below, and quads are most of the polygons files hold.)
+  // orientations, so it has no fan below, and quads are most of the polygons files hold.) Up to
+  // kExactMaxCorners corners the sweep's budget covers every pair: the exact search below never
+  // meets a crossing polygon.
   if (!flat && n >= 5 && sides_cross(w, normal)) {
-    for (std::size_t i = 1; i + 1 < n; ++i) out[i - 1] = {c[0], c[i], c[i + 1]};
+    fan(0);
     return false;
   }
   if (n <= 32 || flat) {
     double score = 0.0;
-    if (n <= 32 && !flat) apex = best_fan_apex(w, normal, score);
+    const std::size_t apex = n <= 32 && !flat ? best_fan_apex(w, normal, score) : 0;
     // A fan whose every triangle faces the normal with some area: score / |normal| is a triangle's
     // doubled area along the normal, |normal| the polygon's.
     if (flat || score > 1e-10 * normal.squaredNorm()) {
-      for (std::size_t i = 1; i + 1 < n; ++i)
-        out[i - 1] = {c[apex], c[(apex + i) % n], c[(apex + i + 1) % n]};
+      fan(apex);
       if (!flat || w.empty()) return true;
       // A zero normal with corners off a line: lobes of opposite orientation (a bow tie).
       double spread = 0.0;
