@@ -574,6 +574,7 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
     RegionEditor editor(work.bands[k].mesh, region, handle, edit_options(work.options));
     EditResult r = editor.apply(step.transform);
     report.edit_volume = r.volume;
+    report.edit_stats = std::move(r.stats);
     work.bands[k].mesh.vertices = std::move(r.positions);
     work.reencode(k);
   }

@@ -53,6 +53,44 @@ if errors:
     sys.exit(1)
 PY
 
+# --strict: exit 3 (outputs written) exactly when the report has warnings; the bend above has
+# none, and a solve stopped short (one cycle, no polish, no retry) misses the tolerance, which a
+# warning naming the edit says (on stderr too, without --strict).
+got=0
+"$STRATA" deform "$MESH" --edit "$TMP/bend.json" --strict -q -o "$TMP/strict_ok.obj" --report "$TMP/strict_ok.json" \
+  >/dev/null 2>"$TMP/strict_ok.err" || got=$?
+[ "$got" = 0 ] || { echo "FAIL: --strict on the bend exited $got: $(cat "$TMP/strict_ok.err")" >&2; exit 1; }
+SHORT=(--set max_cycles=1 --set final_max_cycles=1 --set max_final_steps=0 --set fallback_schedule=false
+  --set retry_on_new_intersections=false --set fold_repair_rounds=0)
+"$STRATA" deform "$MESH" --edit "$TMP/bend.json" "${SHORT[@]}" -q -o "$TMP/short.obj" --report "$TMP/short.json" \
+  >/dev/null 2>"$TMP/short.err" || { echo "FAIL: a short solve without --strict failed" >&2; exit 1; }
+got=0
+"$STRATA" deform "$MESH" --edit "$TMP/bend.json" "${SHORT[@]}" --strict -q -o "$TMP/short_strict.obj" \
+  >/dev/null 2>"$TMP/short_strict.err" || got=$?
+[ "$got" = 3 ] && [ -s "$TMP/short_strict.obj" ] || { echo "FAIL: --strict on a short solve exited $got" >&2; exit 1; }
+python3 - "$TMP" <<'PY'
+import json, re, sys
+tmp = sys.argv[1]
+ok, short = json.load(open(tmp + "/strict_ok.json")), json.load(open(tmp + "/short.json"))
+err, strict_err = open(tmp + "/short.err").read(), open(tmp + "/short_strict.err").read()
+problems = []
+if ok["warnings"] != []: problems.append("warnings on the bend: %r" % ok["warnings"])
+it = short["edits"][0]["iterations"]
+pairs = short["intersections"]["new_pairs"]
+w = short["warnings"]
+m = re.fullmatch(r"edit 1: not converged: the max relative prism volume error (\S+) is above the tolerance (\S+)",
+                 w[0] if w else "")
+if it["converged"] or not m or float(m.group(1)) != it["solver_max_relative_error"] or \
+        len(w) != 1 + (pairs > 0) or (pairs > 0 and w[1] != "%d new intersecting pairs of triangles" % pairs):
+    problems.append("short: warnings %r (converged %r, new pairs %d)" % (w, it["converged"], pairs))
+for x in w:
+    if "strata: warning: " + x not in err: problems.append("stderr lacks the warning %r" % x)
+    if "strata: error: --strict: " + x not in strict_err: problems.append("--strict stderr lacks %r" % x)
+if problems:
+    print("FAIL (--strict):\n  " + "\n  ".join(problems), file=sys.stderr)
+    sys.exit(1)
+PY
+
 # Bad scripts and selections: exit 1, the script's name and the problem on stderr, no output.
 expect_error() {  # <name> <expected text> <script text>
   printf '%s' "$3" >"$TMP/$1.json"

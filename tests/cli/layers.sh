@@ -66,9 +66,45 @@ c = r["changes"][0]
 assert [b["band"] for b in c["rebuilt"]] == [1, 2], c
 for b in c["rebuilt"]:
     assert b["solved_vertices"] > 0 and b["volume_metrics"]["max_relative_error"] <= 1e-3, b
+assert r["warnings"] == [], r["warnings"]
 PY
 "$STRATA" info bent.strata --json | python3 -c "import json,sys; h=json.load(sys.stdin)['history']; assert h[-1]['op']=='edit' and h[-1]['edit']['script'].endswith('camel_neck.json'), h" \
   || fail "the edit is not in the history"
+
+# Warnings and --strict: a generated tube's band 1 bent back and forth by 45 degrees (the
+# selections taken anew on the bent band each time) drifts and folds until a solve misses the
+# tolerance. Every solve the report lists as not converged has a warning naming its edit and
+# band, and only those; --strict then exits 3 with the model written.
+"$STRATA" generate --case bumps --triangles 2000 --out-dir tube >/dev/null
+"$STRATA" build tube/detail.obj -o tube.strata -q >/dev/null || fail "build of the tube failed"
+python3 - <<'PY' || fail "could not write the back-and-forth script"
+import json
+json.dump([{"region": {"halfspace": {"point": [0, 0, 2.5], "normal": [0, 0, 1]}},
+            "handle": {"halfspace": {"point": [0, 0, 4.5], "normal": [0, 0, 1]}},
+            "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 45 * (-1) ** i, "pivot": [0, 0, 3.5]}}}
+           for i in range(4)], open("back_and_forth.json", "w"))
+PY
+status=0
+"$STRATA" edit tube.strata --band 1 --edit back_and_forth.json --strict -o drift.strata --report drift.json \
+  -q >/dev/null 2>drift.err || status=$?
+[ -s drift.strata ] || fail "--strict did not write the model"
+python3 - "$status" <<'PY' || fail "warnings do not match the unconverged solves"
+import json, sys
+r = json.load(open("drift.json"))
+expected = []
+for i, c in enumerate(r["changes"]):
+    if not c["edit_solver_converged"]:
+        expected.append("edit %d: band %d: not converged" % (i + 1, c["edited_band"]))
+    for b in c["rebuilt"]:
+        if b["solved_prisms"] > 0 and not b["solver_converged"]:
+            expected.append("edit %d: band %d rebuilt: not converged" % (i + 1, b["band"]))
+w = r["warnings"]
+assert expected, "no solve missed the tolerance: the case no longer tests the warnings"
+assert len(w) == len(expected) and all(a.startswith(b) for a, b in zip(w, expected)), (w, expected)
+assert int(sys.argv[1]) == 3, "--strict exited %s" % sys.argv[1]
+err = open("drift.err").read()
+assert all("strata: error: --strict: " + x in err for x in w), err
+PY
 
 # Mute band 2 and restore it: the finest band comes back as it was.
 "$STRATA" amplitude bent.strata --band 2 --scale 0 -o muted.strata -q >/dev/null || fail "mute failed"

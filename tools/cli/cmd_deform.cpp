@@ -33,6 +33,7 @@ struct DeformCmdOptions {
   int threads = 0;              // ReconstructOptions::threads (0: all cores)
   SolverChoice solver;          // --solver, --set: solver_options()
   bool quiet = false;
+  bool strict = false;  // exit 3 when the result misses a target (the report's "warnings")
 };
 
 // What the report says about one edit, whichever editor ran it.
@@ -145,9 +146,13 @@ int run_deform(const DeformCmdOptions& o) {
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
   json edits = json::array();
+  json warnings = json::array();  // what makes the result miss a target
   // Adopts one edit's result (the mesh, and the edited base or cage) and adds its report entry.
   auto record = [&](const auto& editor, EditResult r, double select_seconds, std::vector<Vec3>& base) {
     Stopwatch metrics;
+    if (method == Method::Volumes && !r.stats.converged)
+      warnings.push_back("edit " + std::to_string(edits.size() + 1) + ": " +
+                         not_converged_text(r.stats, options.reconstruct.tolerance));
     const EditFacts facts{editor.region_vertices().size(), editor.handle_vertices().size(),
                           editor.region_faces(), &editor.encoding().report};
     json ej = edit_json(facts, method, r, select_seconds, 0.0);
@@ -206,6 +211,8 @@ int run_deform(const DeformCmdOptions& o) {
   log.phase("counting self-intersections");
   const TimedIntersections output_pairs = find_intersections(current.vertices, current.faces);
   const std::size_t new_pairs = count_new_intersections(input_pairs.result, output_pairs.result);
+  if (method == Method::Volumes && new_pairs > 0)
+    warnings.push_back(std::to_string(new_pairs) + " new intersecting pairs of triangles");
 
   log.phase("writing " + o.output);
   sw.restart();
@@ -241,7 +248,8 @@ int run_deform(const DeformCmdOptions& o) {
                {{"read", read_seconds},
                 {"intersections", input_pairs.seconds + output_pairs.seconds},
                 {"write", write_seconds},
-                {"total", total.seconds()}}}};
+                {"total", total.seconds()}}},
+              {"warnings", warnings}};
   if (!o.base_output.empty()) report["base_output"] = o.base_output;
   if (!o.report.empty()) {
     report["report"] = o.report;
@@ -269,7 +277,8 @@ int run_deform(const DeformCmdOptions& o) {
             << "time           total " << fixed(report["timing_seconds"]["total"].get<double>()) << " s\n"
             << "output         " << o.output << "\n";
   if (!o.report.empty()) std::cout << "report         " << o.report << "\n";
-  return 0;
+  std::cout.flush();
+  return finish_warnings(warnings, o.strict, true);
 }
 
 }  // namespace
@@ -320,6 +329,10 @@ Subcommand register_deform(CLI::App& parent) {
       ->check(CLI::Range(1e-3, 100.0))
       ->capture_default_str();
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
+  app->add_flag(
+      "--strict", o->strict,
+      "Exit with 3 (outputs written) when the result misses a target: with volumes, an edit's solve "
+      "not converged or new intersecting pairs");
   app->footer(
       "Example:\n  strata deform scan.off --edit bend.json --method volumes -o bent.obj --report "
       "report.json");

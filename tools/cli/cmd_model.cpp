@@ -253,7 +253,23 @@ struct EditCmdOptions {
   double scale = 1.0;
   bool intersections = false;
   bool quiet = false;
+  bool strict = false;  // exit 3 when the result misses a target (the report's "warnings")
 };
+
+// What makes a change miss a target (volumes): the edited band's solve or a rebuilt band's not
+// converged; \p where names the change (e.g. "edit 3").
+void add_cascade_warnings(const layers::CascadeReport& r, const LayeredModel& model, const std::string& where,
+                          json& warnings) {
+  if (model.options().method != EditOptions::Method::Volumes) return;
+  const double tolerance = model.options().reconstruct.tolerance;
+  if (r.edited_band > 0 && r.edit_volume.mean_abs_target > 0 && !r.edit_stats.converged)
+    warnings.push_back(where + ": band " + std::to_string(r.edited_band) + ": " +
+                       not_converged_text(r.edit_stats, tolerance));
+  for (const layers::BandRebuild& b : r.rebuilt)
+    if (b.solved_prisms > 0 && !b.stats.converged)
+      warnings.push_back(where + ": band " + std::to_string(b.band) +
+                         " rebuilt: " + not_converged_text(b.stats, tolerance));
+}
 
 json cascade_json(const layers::CascadeReport& r) {
   json rebuilt = json::array();
@@ -266,11 +282,13 @@ json cascade_json(const layers::CascadeReport& r) {
                        {"volume_metrics", volume_metrics_json(b.volume)},
                        {"solver_converged", b.stats.converged},
                        {"seconds", b.seconds}});
-  return {{"edited_band", r.edited_band},
-          {"edit_seconds", r.edit_seconds},
-          {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
-          {"rebuilt", rebuilt},
-          {"total_seconds", r.total_seconds}};
+  json j{{"edited_band", r.edited_band},
+         {"edit_seconds", r.edit_seconds},
+         {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
+         {"rebuilt", rebuilt},
+         {"total_seconds", r.total_seconds}};
+  if (r.edited_band > 0) j["edit_solver_converged"] = r.edit_stats.converged;
+  return j;
 }
 
 void print_cascade(const layers::CascadeReport& r) {
@@ -283,9 +301,10 @@ void print_cascade(const layers::CascadeReport& r) {
 }
 
 // Runs \p change on the model read from o.model, then writes it to o.output, with an optional
-// count of the finest band's new self-intersections and a JSON report.
+// count of the finest band's new self-intersections and a JSON report. \p change adds to the
+// warnings what makes its result miss a target.
 int run_change(const EditCmdOptions& o, const std::string& command,
-               const std::function<json(LayeredModel&, const Log&)>& change) {
+               const std::function<json(LayeredModel&, const Log&, json& warnings)>& change) {
   check_model_output_path(o.output);
   if (!o.report.empty()) check_output_path(o.report);
   check_output_names({o.output, o.report}, {o.model, o.edit});
@@ -296,7 +315,8 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   const int finest = model.num_bands() - 1;
   const std::vector<Vec3> before = model.band(finest).mesh.vertices;
   json r{{"command", command}, {"model", o.model}, {"output", o.output}, {"read_seconds", sw.seconds()}};
-  r["changes"] = change(model, log);
+  json warnings = json::array();
+  r["changes"] = change(model, log, warnings);
   if (o.intersections) {
     log.phase("counting self-intersections of the finest band");
     const TimedIntersections in = find_intersections(before, model.band(finest).mesh.faces);
@@ -309,7 +329,10 @@ int run_change(const EditCmdOptions& o, const std::string& command,
                                       {"seconds", in.seconds + out.seconds}};
     std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, "
               << out.result.num_pairs << " after, " << fresh << " new\n";
+    if (fresh > 0 && model.options().method == EditOptions::Method::Volumes)
+      warnings.push_back("finest band: " + std::to_string(fresh) + " new intersecting pairs of triangles");
   }
+  r["warnings"] = warnings;
   sw.restart();
   log.phase("writing " + o.output);
   StagedOutputs staged;  // the model lands only with its report
@@ -318,7 +341,7 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   if (!o.report.empty()) staged.write(o.report, [&](const std::string& p) { write_json_report(r, p); });
   staged.commit();
   std::cout << "wrote " << o.output << std::endl;
-  return 0;
+  return finish_warnings(warnings, o.strict, true);
 }
 
 // --band within the model's bands (from \p first): named with the model, not by the SDK's check.
@@ -335,7 +358,7 @@ int run_edit(const EditCmdOptions& o) {
   json raw = json::parse(text, nullptr, false);
   if (raw.is_object() && raw.contains("edits")) raw = raw["edits"];
   if (!raw.is_array()) raw = json::array({raw});
-  return run_change(o, "edit", [&](LayeredModel& model, const Log& log) {
+  return run_change(o, "edit", [&](LayeredModel& model, const Log& log, json& warnings) {
     // The band is the command line's, not the script's (it was reported as the script's edit 0).
     check_band_option(o, model, 0);
     json out = json::array();
@@ -347,6 +370,7 @@ int run_edit(const EditCmdOptions& o) {
         const layers::CascadeReport c = model.edit(o.band, script.edits[i], prov.dump());
         print_cascade(c);
         out.push_back(cascade_json(c));
+        add_cascade_warnings(c, model, "edit " + std::to_string(i + 1), warnings);
       } catch (const InvalidInput& e) {
         throw InvalidInput(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
       } catch (const SolverError& e) {  // which edit of a long script failed to solve
@@ -358,11 +382,12 @@ int run_edit(const EditCmdOptions& o) {
 }
 
 int run_amplitude(const EditCmdOptions& o) {
-  return run_change(o, "amplitude", [&](LayeredModel& model, const Log& log) {
+  return run_change(o, "amplitude", [&](LayeredModel& model, const Log& log, json& warnings) {
     check_band_option(o, model, 1);
     log.phase("band " + std::to_string(o.band) + " amplitude " + fixed(o.scale, 3));
     const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
     print_cascade(c);
+    add_cascade_warnings(c, model, "amplitude", warnings);
     return json::array({cascade_json(c)});
   });
 }
@@ -415,6 +440,9 @@ void add_change_options(CLI::App& app, EditCmdOptions& o) {
   app.add_flag("--intersections", o.intersections,
                "Count the finest band's self-intersections before and after");
   app.add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
+  app.add_flag("--strict", o.strict,
+               "Exit with 3 (model written) when the result misses a target: with volumes, a solve not "
+               "converged, or new intersecting pairs in the finest band (with --intersections)");
 }
 
 }  // namespace

@@ -1,9 +1,6 @@
 // `strata reconstruct`: encode a detail mesh over a base, rebuild it over an edited base.
-#include <iomanip>
 #include <iostream>
-#include <limits>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include "common.h"
@@ -25,17 +22,6 @@ struct ReconstructCmdOptions {
   bool quiet = false;
   bool strict = false;  // exit 3 when the result misses a target (the report's "warnings")
 };
-
-// Exit status of --strict when the result misses a target; errors exit 1, usage errors 2.
-constexpr int kStrictExit = 3;
-
-// A number with the digits to read back the same; "nan" and "inf" as such (a JSON dump
-// prints null for them).
-std::string number_text(double x) {
-  std::ostringstream os;
-  os << std::setprecision(std::numeric_limits<double>::max_digits10) << x;
-  return os.str();
-}
 
 void print_summary(std::ostream& os, const json& r) {
   const json& in = r["inputs"];
@@ -135,9 +121,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   if (!in.warning.empty()) warnings.push_back(in.warning);
   if (method == Method::Volumes) {
     if (outcome.stats && !outcome.stats->converged)
-      warnings.push_back("not converged: the max relative prism volume error " +
-                         number_text(outcome.stats->max_relative_error) + " is above the tolerance " +
-                         number_text(options.tolerance));
+      warnings.push_back(not_converged_text(*outcome.stats, options.tolerance));
     if (outcome.new_pairs > 0)
       warnings.push_back(std::to_string(outcome.new_pairs) + " new intersecting pairs of triangles");
   }
@@ -148,11 +132,10 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   }
   staged.commit();
   print_summary(std::cout, report);
-  if (o.strict && !warnings.empty()) {
-    for (const json& w : warnings) std::cerr << "strata: error: --strict: " << w.get<std::string>() << "\n";
-    return kStrictExit;
-  }
-  return 0;
+  if (o.strict) return finish_warnings(warnings, true, false);
+  json unprinted = warnings;  // the input's warning was printed when it was found
+  if (!in.warning.empty()) unprinted.erase(0);
+  return finish_warnings(unprinted, false, true);
 }
 
 }  // namespace

@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -490,6 +492,27 @@ std::string sci(double value, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*e", digits, value);
   return buf;
+}
+
+std::string number_text(double x) {
+  std::ostringstream os;
+  os << std::setprecision(std::numeric_limits<double>::max_digits10) << x;
+  return os.str();
+}
+
+std::string not_converged_text(const ReconstructStats& stats, double tolerance) {
+  return "not converged: the max relative prism volume error " + number_text(stats.max_relative_error) +
+         " is above the tolerance " + number_text(tolerance);
+}
+
+int finish_warnings(const json& warnings, bool strict, bool print) {
+  if (strict && !warnings.empty()) {
+    for (const json& w : warnings) std::cerr << "strata: error: --strict: " << w.get<std::string>() << "\n";
+    return kStrictExit;
+  }
+  if (print)
+    for (const json& w : warnings) std::cerr << "strata: warning: " << w.get<std::string>() << "\n";
+  return 0;
 }
 
 std::string fixed(double value, int digits) {

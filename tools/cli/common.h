@@ -266,6 +266,19 @@ json timing_json(const PhaseTimes& times);
 //! Writes \p report (pretty-printed, newline-terminated) to \p path atomically.
 void write_json_report(const json& report, const std::string& path);
 
+//! Exit status of --strict when a result misses a target (its "warnings"); errors exit 1, usage
+//! errors 2. The outputs are written all the same.
+constexpr int kStrictExit = 3;
+//! A number with the digits to read back the same; "nan" and "inf" as such (a JSON dump prints
+//! null for them).
+std::string number_text(double x);
+//! "not converged: the max relative prism volume error E is above the tolerance T".
+std::string not_converged_text(const ReconstructStats& stats, double tolerance);
+//! The end of a command whose result may miss a target: with \p strict each warning is printed as
+//! an error ("strata: error: --strict: W") and kStrictExit returned; otherwise, if \p print, each
+//! is printed as a warning; 0 then.
+int finish_warnings(const json& warnings, bool strict, bool print);
+
 //! printf-style "%.*e" / "%.*f" formatting helpers for the human summaries.
 std::string sci(double value, int digits = 2);
 std::string fixed(double value, int digits = 2);

@@ -105,8 +105,9 @@ struct BandRebuild {
 //! What an edit or an amplitude change did.
 struct CascadeReport {
   int edited_band = 0;
-  double edit_seconds = 0.0;  //!< the edit of the band itself (and its re-encoding)
-  VolumeMetrics edit_volume;  //!< the edited band's region prisms (triangle bands, volumes)
+  double edit_seconds = 0.0;    //!< the edit of the band itself (and its re-encoding)
+  VolumeMetrics edit_volume;    //!< the edited band's region prisms (triangle bands, volumes)
+  ReconstructStats edit_stats;  //!< the edited band's region solve (triangle bands, volumes)
   std::vector<BandRebuild> rebuilt;
   double total_seconds = 0.0;
 };
