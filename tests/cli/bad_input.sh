@@ -136,6 +136,9 @@ expect_fail "empty integer"         "--handle-rings: '' is not a number" deform 
   --handle-rings '' -o out/d.obj
 expect_fail "nan in a range"        "--smoothing: 'nan' is not a number" deform $G/detail.obj --edit edit.json \
   --smoothing nan -o out/d.obj
+expect_fail "empty bounded integer" "--bands: '' is not a number" build $G/detail.obj --bands '' -o out/m.strata
+expect_fail "out of a range"        "--jitter: must be 0 to 0.45, not 0.5" generate --case bumps --jitter 0.5 \
+  --out-dir out/gen
 expect_fail "2^31 volume scales"    "volume_scales = 2147483647 is out of range (1-1000)" $(rec $G/detail.obj \
   $G/base.obj $G/edited_base.obj --set volume_scales=2147483647)
 expect_fail "missing assets dir"    "nodir: --assets-dir is not a directory" demo --assets-dir nodir --out-dir out/demo

@@ -94,14 +94,14 @@ Subcommand register_cage(CLI::App& parent) {
          "Cage faces (default: 1% of the scan's faces, at least " + std::to_string(o->fit.min_faces) + ")")
       ->check(at_least(0));
   fit->add_option("--smoothness", o->fit.smoothness, "Weight of the cage's smoothness term")
-      ->check(CLI::Range(0.0, 1e12))
+      ->check(in_range(0.0, 1e12))
       ->capture_default_str();
   fit->add_option("--smoothing-steps", o->fit.smoothing_steps,
                   "Taubin smoothing steps applied to the scan first")
-      ->check(CLI::Range(0, 1000))
+      ->check(in_range(0, 1000))
       ->capture_default_str();
   fit->add_option("--rounds", o->fit.rounds, "Rounds of projection and least-squares solve")
-      ->check(CLI::Range(1, 100))
+      ->check(in_range(1, 100))
       ->capture_default_str();
   fit->add_option("--report", o->report, "Write the fitting error and timing as JSON");
   fit->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");

@@ -326,7 +326,7 @@ Subcommand register_deform(CLI::App& parent) {
          "--smoothing", o->smoothing,
          "Base cut-off wavelength as a fraction of the region's size: shape longer than this stays in "
          "the smooth base, shorter becomes detail")
-      ->check(CLI::Range(1e-3, 100.0))
+      ->check(in_range(1e-3, 100.0))
       ->capture_default_str();
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->add_flag(

@@ -276,7 +276,7 @@ Subcommand register_demo(CLI::App& parent) {
   app->add_option("--triangles", o->triangles,
                   "About this many detail triangles per generated case (0: the paper's "
                   "resolution)")
-      ->check(CLI::Range(0, 50000000))
+      ->check(in_range(0, 50000000))
       ->capture_default_str();
   app->add_option("--assets-dir", o->assets_dir,
                   "Also run every subdirectory holding detail.*, base.* and edited_base.* meshes")

@@ -51,15 +51,15 @@ Subcommand register_generate(CLI::App& parent) {
       ->required()
       ->check(CLI::IsMember({"bumps", "rings", "cuboid"}));
   app->add_option("--triangles", o->triangles, "About this many detail triangles (0: the paper's resolution)")
-      ->check(CLI::Range(0, 50000000))
+      ->check(in_range(0, 50000000))
       ->capture_default_str();
   app->add_option("--bend-degrees", o->bend_degrees, "Bend angle of the edited base, in degrees")
-      ->check(CLI::Range(0.0, 360.0))
+      ->check(in_range(0.0, 360.0))
       ->capture_default_str();
   app->add_option("--jitter", o->jitter,
                   "Irregular detail triangulation, as a scan's: vertices moved by up to this fraction of the "
                   "grid spacing, then Delaunay in the tube's parameter plane (0: the regular grid)")
-      ->check(CLI::Range(0.0, 0.45))
+      ->check(in_range(0.0, 0.45))
       ->capture_default_str();
   app->add_option("--out-dir", o->out_dir, "Directory to write the three meshes to (created if needed)")
       ->required();

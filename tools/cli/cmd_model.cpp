@@ -461,7 +461,7 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
     app->add_option("-o,--output", o->output, "Model to write (one scan)");
     app->add_option("--out-dir", o->out_dir, "Directory for the models (DIR/<scan name>.strata)");
     app->add_option("--bands", o->bands, "Bands in all, the cage included (2 to 8)")
-        ->check(CLI::Range(2, 8))
+        ->check(in_range(2, 8))
         ->capture_default_str();
     app->add_option("--cage-faces", o->cage_faces, "Cage faces (default: 1% of the scan's, at least 400)")
         ->check(at_least(0));

@@ -50,18 +50,42 @@ Method parse_method(const std::string& text) {
   throw InvalidInput("unknown method '" + text + "' (expected 'volumes' or 'vectors')");
 }
 
+namespace {
+// A numeric option's text as a number, or the message that it is not one.
+std::string parse_number(const std::string& text, double& v) {
+  if (text.empty() || !CLI::detail::lexical_cast(text, v) || std::isnan(v))
+    return "'" + text + "' is not a number";
+  return {};
+}
+std::string bound_text(double x) {
+  std::ostringstream os;
+  os << x;
+  return os.str();
+}
+}  // namespace
+
 CLI::Validator at_least(double lo, bool strict) {
-  std::ostringstream bound;
-  bound << lo;
-  const std::string range = (strict ? "above " : "at least ") + bound.str();
+  const std::string range = (strict ? "above " : "at least ") + bound_text(lo);
   return CLI::Validator(
       [lo, strict, range](std::string& text) -> std::string {
         double v = 0.0;
-        if (!CLI::detail::lexical_cast(text, v) || std::isnan(v)) return "'" + text + "' is not a number";
+        if (std::string e = parse_number(text, v); !e.empty()) return e;
         if (strict ? v > lo : v >= lo) return {};
         return "must be " + range + ", not " + text;
       },
-      strict ? "> " + bound.str() : ">= " + bound.str());
+      (strict ? "> " : ">= ") + bound_text(lo));
+}
+
+CLI::Validator in_range(double lo, double hi) {
+  const std::string range = bound_text(lo) + " to " + bound_text(hi);
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        double v = 0.0;
+        if (std::string e = parse_number(text, v); !e.empty()) return e;
+        if (v >= lo && v <= hi) return {};
+        return "must be " + range + ", not " + text;
+      },
+      "in " + range);
 }
 
 std::string lower_extension(const std::string& path) {
@@ -85,9 +109,7 @@ void require_numbers(CLI::App& app) {
   const CLI::Validator number(
       [](std::string& text) -> std::string {
         double v = 0.0;
-        if (text.empty() || !CLI::detail::lexical_cast(text, v) || std::isnan(v))
-          return "'" + text + "' is not a number";
-        return {};
+        return parse_number(text, v);
       },
       "");
   for (CLI::Option* option : app.get_options()) {

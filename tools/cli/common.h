@@ -82,6 +82,9 @@ Method parse_method(const std::string& text);
 //! A numeric option's lower bound, \p lo (above it with \p strict): CLI11's NonNegativeNumber and
 //! PositiveNumber printed their upper bound, DBL_MAX, in 310 digits.
 CLI::Validator at_least(double lo, bool strict = false);
+//! A numeric option within [lo, hi]; a value that is not a number is named as such (CLI11's Range,
+//! checked before the number check, called '' out of range).
+CLI::Validator in_range(double lo, double hi);
 
 //! Adds to every numeric option of \p app and its subcommands a check that its value is a number
 //! ('' was read as 0, and "nan" passed every range).
