@@ -399,6 +399,109 @@ TEST(IntersectLimit, MaxPairsStopsTheSearch) {
   }
 }
 
+// A strip of n parallel sheared triangle pairs in the plane z = 0: every triangle spans about n
+// units in x, so nearly all boxes overlap, but the triangles are disjoint (0 pairs, O(n^2) tests).
+TriMesh sheared_strip(int n) {
+  TriMesh m;
+  for (int i = 0; i <= n; ++i) {
+    m.vertices.emplace_back(i, 0.0, 0.0);
+    m.vertices.emplace_back(i + n, n, 0.0);
+  }
+  for (int i = 0; i < n; ++i) {
+    m.faces.push_back({2 * i, 2 * i + 2, 2 * i + 3});
+    m.faces.push_back({2 * i, 2 * i + 3, 2 * i + 1});
+  }
+  return m;
+}
+
+// Two combs that cross everywhere: n strips along x in the plane z = 0, and n triangles standing
+// across them, each crossing the middle half of the strips (about n^2 pairs).
+TriMesh crossing_combs(int n) {
+  TriMesh m;
+  for (int i = 0; i <= n; ++i) {
+    m.vertices.emplace_back(0.0, i, 0.0);
+    m.vertices.emplace_back(n, i, 0.0);
+  }
+  for (int i = 0; i < n; ++i) {
+    m.faces.push_back({2 * i, 2 * i + 1, 2 * i + 3});
+    m.faces.push_back({2 * i, 2 * i + 3, 2 * i + 2});
+  }
+  for (int j = 0; j < n; ++j) {
+    const int k = m.num_vertices();
+    m.vertices.emplace_back(j + 0.5, -1.0, -1.0);
+    m.vertices.emplace_back(j + 0.5, n + 1.0, -1.0);
+    m.vertices.emplace_back(j + 0.6, 0.5 * n, 1.0);
+    m.faces.push_back({k, k + 1, k + 2});
+  }
+  return m;
+}
+
+// IntersectionOptions::max_tests: a search that runs out of exact tests stops, says so, and its
+// count is a lower bound; with room to spare it is exact. bounded_intersection_options() leaves
+// the paper's meshes exact (a few tests a face) and stops the quadratic cases within its budget.
+TEST(IntersectLimit, MaxTestsStopsTheSearch) {
+  const TriMesh strip = sheared_strip(400);
+  const IntersectionResult all = find(strip);
+  EXPECT_EQ(all.num_pairs, 0u);
+  EXPECT_FALSE(all.truncated);
+  EXPECT_GT(all.num_tests, 100000u);  // nearly every pair of the 800 faces' boxes overlaps
+  const TriMesh combs = crossing_combs(100);
+  const IntersectionResult exact = find(combs);
+  ASSERT_GT(exact.num_pairs, 5000u);
+  ASSERT_GT(exact.num_tests, 2u * 4096u);  // room for a search cut short after a batch
+  for (bool parallel : {false, true}) {
+    IntersectionOptions o;
+    o.collect_pairs = true;
+    o.parallel = parallel;
+    o.max_tests = 20000;
+    const IntersectionResult cut = find_self_intersections(strip.vertices, strip.faces, o);
+    EXPECT_TRUE(cut.truncated);
+    EXPECT_TRUE(cut.out_of_tests);
+    EXPECT_EQ(cut.num_pairs, 0u);
+    // Batches of 4096 a thread: the search stops within a batch per thread of the limit.
+    EXPECT_GE(cut.num_tests, o.max_tests);
+    EXPECT_LT(cut.num_tests, o.max_tests + 4096 * (parallel ? 1024 : 1));
+    EXPECT_LT(cut.num_tests, all.num_tests);
+    // Cut short among intersecting pairs, the pairs found are real ones.
+    o.max_tests = 1;
+    const IntersectionResult some = find_self_intersections(combs.vertices, combs.faces, o);
+    ASSERT_TRUE(some.truncated);
+    EXPECT_LE(some.num_pairs, exact.num_pairs);
+    EXPECT_EQ(some.pairs.size(), some.num_pairs);
+    for (const Pair& p : some.pairs)
+      EXPECT_TRUE(std::binary_search(exact.pairs.begin(), exact.pairs.end(), p));
+  }
+  const TriMesh a = icosphere(4);
+  const TriMesh spheres = concatenate(a, translated(a, Vec3(0.5, 0.0, 0.0)));
+  IntersectionOptions bounded = bounded_intersection_options(spheres.faces.size());
+  bounded.collect_pairs = true;
+  const IntersectionResult b = find_self_intersections(spheres.vertices, spheres.faces, bounded);
+  EXPECT_FALSE(b.truncated);
+  EXPECT_EQ(b.pairs, find(spheres).pairs);
+  EXPECT_LT(b.num_tests, spheres.faces.size());
+  EXPECT_EQ(bounded_intersection_options(0).max_tests, 50000000u);
+  EXPECT_EQ(bounded_intersection_options(1000).max_tests, 50200000u);
+  EXPECT_EQ(bounded_intersection_options(1000).max_pairs, 10000000u);
+}
+
+// count_new_intersections_at_least(): exact for complete results; for an "after" cut short, the
+// listed pairs that "before" lacks (at most the exact count); 0 for a "before" cut short.
+TEST(IntersectNew, AtLeastIsALowerBound) {
+  const TriMesh a = icosphere(2);
+  const TriMesh rest = concatenate(a, translated(a, Vec3(3.0, 0.0, 0.0)));  // apart: no pairs
+  const TriMesh moved = concatenate(a, translated(a, Vec3(0.5, 0.0, 0.0)));
+  const IntersectionResult before = find(rest), after = find(moved);
+  ASSERT_EQ(before.num_pairs, 0u);
+  ASSERT_GT(after.num_pairs, 20u);
+  EXPECT_EQ(count_new_intersections_at_least(before, after), count_new_intersections(before, after));
+  const IntersectionResult cut = find(moved, true, 20);
+  ASSERT_TRUE(cut.truncated);
+  EXPECT_THROW(count_new_intersections(before, cut), InvalidInput);
+  EXPECT_EQ(count_new_intersections_at_least(before, cut), 20u);
+  EXPECT_EQ(count_new_intersections_at_least(cut, after), 0u);
+  EXPECT_EQ(count_new_intersections_at_least(after, after), 0u);
+}
+
 // IntersectionOptions::cancel: set, the call throws Cancelled, on one thread and on many;
 // cleared, the same options give the full result. (A flag set before the call is caught before
 // the hierarchy's build; the polls inside the search, which a flag set midway reaches, have no

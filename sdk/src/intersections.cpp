@@ -232,6 +232,7 @@ class SelfIntersectionSearch {
         prims_(prims),
         collect_(options.collect_pairs),
         max_pairs_(options.max_pairs),
+        max_tests_(options.max_tests),
         cancel_(options.cancel) {}
 
   void run() {
@@ -240,6 +241,12 @@ class SelfIntersectionSearch {
 
   std::size_t found() const { return found_.load(); }
   bool truncated() const { return truncated_.load(); }
+  bool out_of_tests() const { return out_of_tests_.load(); }
+  std::size_t tests() const {
+    std::size_t n = tests_.load();
+    for (std::size_t t : pending_tests_) n += t;
+    return n;
+  }
 
   std::vector<Pair> take_pairs() {
     std::vector<Pair> all;
@@ -313,6 +320,16 @@ class SelfIntersectionSearch {
 
   void test(const Prim& p, const Prim& q) {
     if (!overlap(p.box, q.box) || share_vertex(p, q)) return;
+    // Counted per thread, and added to the shared count in batches (no contention per test).
+    std::size_t& pending = pending_tests_.local();
+    if (++pending == kTestBatch) {
+      pending = 0;
+      const std::size_t done = tests_.fetch_add(kTestBatch, std::memory_order_relaxed) + kTestBatch;
+      if (max_tests_ > 0 && done > max_tests_) {
+        out_of_tests_.store(true, std::memory_order_relaxed);
+        truncated_.store(true, std::memory_order_relaxed);
+      }
+    }
     const Vec3 &a0 = vertices_[p.v[0]], &a1 = vertices_[p.v[1]], &a2 = vertices_[p.v[2]];
     const Vec3 &b0 = vertices_[q.v[0]], &b1 = vertices_[q.v[1]], &b2 = vertices_[q.v[2]];
     if (separated(a0, a1, a2, b0, b1, b2)) return;
@@ -334,11 +351,16 @@ class SelfIntersectionSearch {
   const std::vector<Vec3>& vertices_;
   const std::vector<Node>& nodes_;
   const std::vector<Prim>& prims_;
+  static constexpr std::size_t kTestBatch = 4096;
   const bool collect_;
   const std::size_t max_pairs_;
+  const std::size_t max_tests_;
   const std::atomic<bool>* cancel_;
   std::atomic<std::size_t> found_{0};
   std::atomic<bool> truncated_{false};
+  std::atomic<bool> out_of_tests_{false};
+  std::atomic<std::size_t> tests_{0};
+  tbb::enumerable_thread_specific<std::size_t> pending_tests_{0};
   tbb::enumerable_thread_specific<std::vector<Pair>> pairs_;
 };
 
@@ -446,8 +468,16 @@ IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, co
     check_cancel();  // the search stopped at a node, and its count is short
     const std::size_t found = search.found();
     result.truncated = search.truncated();
+    result.out_of_tests = search.out_of_tests();
+    result.num_tests = search.tests();
     result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;
-    if (options.collect_pairs) result.pairs = search.take_pairs();
+    if (options.collect_pairs) {
+      result.pairs = search.take_pairs();
+      // Stopped by the test budget, the threads may have reported a few pairs past max_pairs.
+      if (options.max_pairs > 0 && result.pairs.size() > options.max_pairs)
+        result.pairs.resize(options.max_pairs);
+      result.num_pairs = result.pairs.size();
+    }
   };
   if (options.parallel) {
     work();
@@ -468,18 +498,32 @@ IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, co
   return result;
 }
 
+IntersectionOptions bounded_intersection_options(std::size_t num_faces) {
+  IntersectionOptions o;
+  o.max_pairs = 10'000'000;
+  o.max_tests = 50'000'000 + 200 * num_faces;
+  return o;
+}
+
 std::size_t count_new_intersections(const IntersectionResult& before, const IntersectionResult& after) {
+  for (const IntersectionResult* r : {&before, &after})
+    if (r->truncated)
+      throw InvalidInput(std::string("count_new_intersections: '") + (r == &before ? "before" : "after") +
+                         "' was cut short by a search limit, its pair list is incomplete");
+  return count_new_intersections_at_least(before, after);
+}
+
+std::size_t count_new_intersections_at_least(const IntersectionResult& before,
+                                             const IntersectionResult& after) {
   for (const IntersectionResult* r : {&before, &after}) {
     const char* name = r == &before ? "before" : "after";
-    if (r->truncated)
-      throw InvalidInput(std::string("count_new_intersections: '") + name +
-                         "' was truncated by max_pairs, its pair list is incomplete");
     if (!lists_all_pairs(*r))
       throw InvalidInput(std::string("count_new_intersections: '") + name +
                          "' does not list its pairs (compute it with collect_pairs)");
   }
   if (before.num_faces != after.num_faces || before.connectivity_hash != after.connectivity_hash)
     throw InvalidInput("count_new_intersections: the two results come from different face lists");
+  if (before.truncated) return 0;
 
   // Results from find_self_intersections() are sorted already; hand-made ones may not be.
   std::vector<Pair> b_storage, a_storage;

@@ -779,11 +779,14 @@ class VolumeReconstructor::Impl {
     o.tolerance = opt_.tolerance;
     o.converged = o.max_error <= opt_.tolerance;
     if ((o.converged || count_unconverged) && opt_.retry_on_new_intersections) {
-      IntersectionOptions io;
+      // Bounded: a rest detail whose triangles mostly cross (or whose long thin triangles' boxes
+      // mostly overlap) would cost O(n^2); its count cut short, no pair is known to be new.
+      IntersectionOptions io = bounded_intersection_options(enc_.detail_faces.size());
       io.collect_pairs = true;
       io.cancel = opt_.cancel;
       // On the solver's threads (ReconstructOptions::threads): the count is the same on any
-      // number of them (the pairs are sorted).
+      // number of them (the pairs are sorted), unless a search is cut short (which pairs it
+      // kept then depends on the threads; no mesh of the paper's kind or scan comes near).
       io.parallel = arena_ != nullptr;
       auto search = [&](const std::vector<Vec3>& p) {
         if (!arena_) return find_self_intersections(p, enc_.detail_faces, io);
@@ -791,11 +794,12 @@ class VolumeReconstructor::Impl {
       };
       if (!rest_pairs_) rest_pairs_ = std::make_unique<IntersectionResult>(search(enc_.detail_rest));
       const IntersectionResult now = search(s.P);
-      o.new_pairs = count_new_intersections(*rest_pairs_, now);
+      o.new_pairs = count_new_intersections_at_least(*rest_pairs_, now);
       o.counted = true;
       std::vector<std::pair<int, int>> fresh;
-      std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
-                          rest_pairs_->pairs.end(), std::back_inserter(fresh));
+      if (!rest_pairs_->truncated)
+        std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
+                            rest_pairs_->pairs.end(), std::back_inserter(fresh));
       for (const auto& [i, j] : fresh) {
         o.new_pair_faces.push_back(i);
         o.new_pair_faces.push_back(j);

@@ -174,6 +174,32 @@ expect_fail "build -q failure"      "truncated.obj" build -q truncated.obj -o ou
 grep -q "stray_out.stl: STL holds triangles only: 1 vertices in no face are not written" stderr.txt ||
   { echo "FAIL [stl stray]: no warning" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }
 
+# Never hangs: a 20k-face sheet of long parallel sheared triangles (their boxes nearly all overlap,
+# 2e8 exact tests, about 10 s before) and two combs of 20k triangles crossing everywhere (1e8
+# pairs, 27 s before) are counted within the search limits: a warning, a lower bound, exit 0.
+python3 - <<'PY'
+n = 10000
+with open("sheared.off", "w") as f:
+    f.write("OFF\n%d %d 0\n" % (2 * n + 2, 2 * n))
+    for i in range(n + 1): f.write("%d 0 0\n%d %d 0\n" % (i, i + n, n))
+    for i in range(n): f.write("3 %d %d %d\n3 %d %d %d\n" % (2*i, 2*i+2, 2*i+3, 2*i, 2*i+3, 2*i+1))
+with open("combs.off", "w") as f:
+    f.write("OFF\n%d %d 0\n" % (2 * n + 2 + 3 * n, 3 * n))
+    for i in range(n + 1): f.write("0 %d 0\n%d %d 0\n" % (i, n, i))
+    for j in range(n): f.write("%g -1 -1\n%g %d -1\n%g %g 1\n" % (j + .5, j + .5, n + 1, j + .6, n / 2))
+    for i in range(n): f.write("3 %d %d %d\n3 %d %d %d\n" % (2*i, 2*i+1, 2*i+3, 2*i, 2*i+3, 2*i+2))
+    for j in range(n): k = 2 * n + 2 + 3 * j; f.write("3 %d %d %d\n" % (k, k + 1, k + 2))
+PY
+for m in sheared combs; do
+  rc=0
+  timeout 60 "$STRATA" stats $m.off >stdout.txt 2>stderr.txt || rc=$?
+  if [ "$rc" -ne 0 ]; then
+    echo "FAIL [quadratic $m]: exit $rc" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+  elif ! grep -q "self-intersecting pairs  at least" stdout.txt ||
+       ! grep -q "$m.off: the self-intersection search stopped after" stderr.txt; then
+    echo "FAIL [quadratic $m]: no lower bound or no warning" >&2; cat stdout.txt stderr.txt >&2; failures=$((failures + 1))
+  fi
+done
 if [ "$failures" -ne 0 ]; then
   echo "bad_input: $failures check(s) failed" >&2
   exit 1

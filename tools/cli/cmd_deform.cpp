@@ -210,7 +210,7 @@ int run_deform(const DeformCmdOptions& o) {
 
   log.phase("counting self-intersections");
   const TimedIntersections output_pairs = find_intersections(current.vertices, current.faces);
-  const std::size_t new_pairs = count_new_intersections(input_pairs.result, output_pairs.result);
+  const std::size_t new_pairs = count_new_intersections_at_least(input_pairs.result, output_pairs.result);
   if (method == Method::Volumes && new_pairs > 0)
     warnings.push_back(std::to_string(new_pairs) + " new intersecting pairs of triangles");
 

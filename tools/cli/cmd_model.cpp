@@ -322,7 +322,7 @@ int run_change(const EditCmdOptions& o, const std::string& command,
     const TimedIntersections in = find_intersections(before, model.band(finest).mesh.faces);
     const TimedIntersections out =
         find_intersections(model.band(finest).mesh.vertices, model.band(finest).mesh.faces);
-    const std::size_t fresh = count_new_intersections(in.result, out.result);
+    const std::size_t fresh = count_new_intersections_at_least(in.result, out.result);
     r["finest_band_intersections"] = {{"input_pairs", in.result.num_pairs},
                                       {"output_pairs", out.result.num_pairs},
                                       {"new_pairs", fresh},

@@ -44,7 +44,7 @@ void print_summary(std::ostream& os, const json& r) {
      << "total volume   change " << sci(vm["total_volume_change"].get<double>()) << " (relative)\n"
      << "intersections  " << is["input_pairs"].get<std::size_t>() << " pairs in the input, "
      << is["output_pairs"].get<std::size_t>() << " in the output, " << is["new_pairs"].get<std::size_t>()
-     << " new\n";
+     << " new" << (is["cut_short"].get<bool>() ? " (at least: the search stopped early)" : "") << "\n";
   const json& it = r["iterations"];
   if (!it.is_null())
     os << "solver         " << r["solver"].get<std::string>()

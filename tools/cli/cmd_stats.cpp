@@ -39,9 +39,11 @@ int run_stats(const StatsCmdOptions& o) {
   const NamedMesh m = read_named_mesh(o.mesh);
   const std::size_t boundary = count_boundary_edges(m.mesh);
   Stopwatch sw;
-  IntersectionOptions io;
-  const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces, io);
+  const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces,
+                                                           bounded_intersection_options(m.mesh.faces.size()));
   const double isect_seconds = sw.seconds();
+  if (isect.truncated)
+    std::cerr << "strata: warning: " << m.name << ": " << cut_short_text(isect) << std::endl;
   const json r{{"mesh", m.name},
                {"vertices", m.mesh.num_vertices()},
                {"faces", m.mesh.num_faces()},
@@ -50,6 +52,8 @@ int run_stats(const StatsCmdOptions& o) {
                {"bbox_diagonal", bbox_diagonal(m.mesh.vertices)},
                {"signed_volume", signed_volume(m.mesh)},
                {"self_intersecting_pairs", isect.num_pairs},
+               {"self_intersections_cut_short", isect.truncated},
+               {"self_intersection_tests", isect.num_tests},
                {"intersection_seconds", isect_seconds}};
   if (o.json) {
     std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
@@ -62,8 +66,8 @@ int run_stats(const StatsCmdOptions& o) {
             << "bbox diagonal            " << r["bbox_diagonal"].get<double>() << "\n"
             << "signed volume            " << r["signed_volume"].get<double>()
             << (boundary == 0 ? "" : " (open mesh: not an enclosed volume)") << "\n"
-            << "self-intersecting pairs  " << isect.num_pairs << " (non-adjacent triangles, found in "
-            << fixed(isect_seconds, 3) << " s)" << std::endl;
+            << "self-intersecting pairs  " << (isect.truncated ? "at least " : "") << isect.num_pairs
+            << " (non-adjacent triangles, found in " << fixed(isect_seconds, 3) << " s)" << std::endl;
   return 0;
 }
 

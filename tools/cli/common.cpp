@@ -333,12 +333,21 @@ ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
   return o;
 }
 
+std::string cut_short_text(const IntersectionResult& r) {
+  return "the self-intersection search stopped after " + std::to_string(r.num_pairs) + " pairs and " +
+         std::to_string(r.num_tests) + " exact tests (" +
+         (r.out_of_tests ? "too many triangles whose boxes overlap: long, thin triangles?"
+                         : "too many intersecting pairs") +
+         "): its counts are lower bounds";
+}
+
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   TimedIntersections t;
   Stopwatch sw;
-  IntersectionOptions o;
+  IntersectionOptions o = bounded_intersection_options(faces.size());
   o.collect_pairs = true;
   t.result = find_self_intersections(vertices, faces, o);
+  if (t.result.truncated) std::cerr << "strata: warning: " << cut_short_text(t.result) << std::endl;
   t.seconds = sw.seconds();
   return t;
 }
@@ -422,7 +431,8 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
   out.volume = volume_metrics(encoding, frames, out.positions);
   const TimedIntersections after = find_intersections(out.positions, encoding.detail_faces);
   out.output_pairs = after.result.num_pairs;
-  out.new_pairs = count_new_intersections(in.input_intersections, after.result);
+  out.new_pairs = count_new_intersections_at_least(in.input_intersections, after.result);
+  out.counts_cut_short = in.input_intersections.truncated || after.result.truncated;
   out.intersection_seconds = after.seconds;
   out.times.metrics += mw.seconds();
   return out;
@@ -451,11 +461,9 @@ json volume_metrics_json(const VolumeMetrics& m) {
 }
 
 json intersections_json(std::size_t input_pairs, const MethodOutcome& o, double input_seconds) {
-  return json{{"input_pairs", input_pairs},
-              {"output_pairs", o.output_pairs},
-              {"new_pairs", o.new_pairs},
-              {"input_seconds", input_seconds},
-              {"output_seconds", o.intersection_seconds}};
+  return json{{"input_pairs", input_pairs},     {"output_pairs", o.output_pairs},
+              {"new_pairs", o.new_pairs},       {"cut_short", o.counts_cut_short},
+              {"input_seconds", input_seconds}, {"output_seconds", o.intersection_seconds}};
 }
 
 json iterations_json(const std::optional<ReconstructStats>& stats) {

@@ -194,12 +194,16 @@ std::string resolve_solver(const SolverChoice& choice, std::size_t prisms);
 //! threads (0: all cores), then the --set values (the last word, threads included).
 ReconstructOptions solver_options(const SolverChoice& choice, int threads = 0);
 
-//! Self-intersecting pairs of one mesh, with all pairs collected (for count_new_intersections).
+//! Self-intersecting pairs of one mesh, with all pairs collected (for count_new_intersections),
+//! within bounded_intersection_options(): a search cut short prints a warning (cut_short_text()),
+//! and its counts are lower bounds (count_new_intersections_at_least()).
 struct TimedIntersections {
   IntersectionResult result;
   double seconds = 0.0;
 };
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+//! "the self-intersection search stopped after N pairs (M exact tests): ...; counts are lower bounds".
+std::string cut_short_text(const IntersectionResult& r);
 
 //! What reconstruct and demo share before the methods run: the detail encoded over the base and
 //! the input detail's own intersections.
@@ -235,7 +239,8 @@ struct MethodOutcome {
   std::vector<Vec3> positions;
   VolumeMetrics volume;
   std::size_t output_pairs = 0;
-  std::size_t new_pairs = 0;
+  std::size_t new_pairs = 0;              //!< a lower bound if counts_cut_short
+  bool counts_cut_short = false;          //!< the input's or the output's search hit its limits
   double intersection_seconds = 0.0;      //!< of the output only (the input's is counted once per case)
   std::optional<ReconstructStats> stats;  //!< volumes only
   PhaseTimes times;                       //!< setup, frames, solve, metrics filled in here
@@ -258,7 +263,8 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
 json mesh_json(const TriMesh& mesh, const std::string& name);
 json encoding_json(const EncodeReport& report);
 json volume_metrics_json(const VolumeMetrics& metrics);
-//! {"input_pairs", "output_pairs", "new_pairs", "seconds"}.
+//! {"input_pairs", "output_pairs", "new_pairs", "cut_short", "input_seconds", "output_seconds"};
+//! with "cut_short" true the counts are lower bounds.
 json intersections_json(std::size_t input_pairs, const MethodOutcome& outcome, double input_seconds);
 //! ReconstructStats as JSON; null for the vectors method (no iterations).
 json iterations_json(const std::optional<ReconstructStats>& stats);

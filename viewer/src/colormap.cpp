@@ -35,7 +35,7 @@ std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
 }
 
 std::vector<Rgb> intersection_colors(const TriMesh& mesh, std::size_t& pairs) {
-  IntersectionOptions options;
+  IntersectionOptions options = bounded_intersection_options(mesh.faces.size());
   options.collect_pairs = true;
   options.max_pairs = 1000000;
   const IntersectionResult r = find_self_intersections(mesh.vertices, mesh.faces, options);

@@ -120,7 +120,8 @@ struct ReconstructOptions {
   int retry_volume_iterations = 5;
   //! Count the new intersecting pairs of a converged clean-start solve (exactly, on the solver's
   //! `threads`; at 100k prisms 0.05 s per count on one, the rest detail counted once) and retry
-  //! if there are any.
+  //! if there are any. The counts stay within bounded_intersection_options(): a rest detail whose
+  //! search is cut short (its triangles mostly cross each other) has no pair known to be new.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! With TangentialRegularization::RestLaplacian: a clean-start solve that ends unconverged or
