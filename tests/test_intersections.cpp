@@ -449,6 +449,18 @@ TEST(IntersectLimit, MaxTestsStopsTheSearch) {
   const IntersectionResult exact = find(combs);
   ASSERT_GT(exact.num_pairs, 5000u);
   ASSERT_GT(exact.num_tests, 2u * 4096u);  // room for a search cut short after a batch
+  // A strip of 24k faces forks the search across threads; whether it is cut short does not
+  // depend on them.
+  const TriMesh big = sheared_strip(12000);
+  for (bool parallel : {false, true}) {
+    IntersectionOptions o;
+    o.parallel = parallel;
+    o.max_tests = 1000000;
+    const IntersectionResult r = find_self_intersections(big.vertices, big.faces, o);
+    EXPECT_TRUE(r.truncated && r.out_of_tests);
+    EXPECT_GE(r.num_tests, o.max_tests);
+    EXPECT_LT(r.num_tests, o.max_tests + 4096 * (parallel ? 64 : 1));
+  }
   for (bool parallel : {false, true}) {
     IntersectionOptions o;
     o.collect_pairs = true;
@@ -460,7 +472,13 @@ TEST(IntersectLimit, MaxTestsStopsTheSearch) {
     EXPECT_EQ(cut.num_pairs, 0u);
     // Batches of 4096 a thread: the search stops within a batch per thread of the limit.
     EXPECT_GE(cut.num_tests, o.max_tests);
-    EXPECT_LT(cut.num_tests, o.max_tests + 4096 * (parallel ? 1024 : 1));
+    EXPECT_LT(cut.num_tests, o.max_tests + 4096 * (parallel ? 64 : 1));
+    // A limit the whole search stays within leaves it exact; one it exceeds by less than a batch
+    // still cuts it short (counted after the search), on any number of threads.
+    o.max_tests = all.num_tests;
+    EXPECT_FALSE(find_self_intersections(strip.vertices, strip.faces, o).truncated);
+    o.max_tests = all.num_tests - 1;
+    EXPECT_TRUE(find_self_intersections(strip.vertices, strip.faces, o).truncated);
     EXPECT_LT(cut.num_tests, all.num_tests);
     // Cut short among intersecting pairs, the pairs found are real ones.
     o.max_tests = 1;
@@ -500,6 +518,19 @@ TEST(IntersectNew, AtLeastIsALowerBound) {
   EXPECT_EQ(count_new_intersections_at_least(before, cut), 20u);
   EXPECT_EQ(count_new_intersections_at_least(cut, after), 0u);
   EXPECT_EQ(count_new_intersections_at_least(after, after), 0u);
+  // A "before" with pairs: only the listed pairs it lacks count, at most the exact number.
+  const TriMesh more = concatenate(a, translated(a, Vec3(0.3, 0.0, 0.0)));
+  const IntersectionResult more_all = find(more), more_cut = find(more, true, 30);
+  ASSERT_TRUE(more_cut.truncated);
+  const std::size_t exact = count_new_intersections(after, more_all);
+  ASSERT_GT(exact, 0u);
+  ASSERT_LT(exact, more_all.num_pairs);  // some pairs are in both
+  std::size_t listed_new = 0;
+  for (const Pair& p : more_cut.pairs)
+    listed_new += !std::binary_search(after.pairs.begin(), after.pairs.end(), p);
+  EXPECT_EQ(count_new_intersections_at_least(after, more_cut), listed_new);
+  EXPECT_LE(listed_new, exact);
+  EXPECT_EQ(count_new_intersections_at_least(after, more_all), exact);
 }
 
 // IntersectionOptions::cancel: set, the call throws Cancelled, on one thread and on many;

@@ -276,8 +276,9 @@ class SelfIntersectionSearch {
     if (stopped()) return;
     const Node& nd = nodes_[n];
     if (nd.count > 0) {
+      std::size_t& pending = pending_tests_.local();
       for (int i = nd.index, end = nd.index + nd.count; i < end; ++i)
-        for (int j = i + 1; j < end; ++j) test(prims_[i], prims_[j]);
+        for (int j = i + 1; j < end; ++j) test(prims_[i], prims_[j], pending);
       return;
     }
     const int l = n + 1, r = nd.index;
@@ -298,10 +299,11 @@ class SelfIntersectionSearch {
     const Node& nb = nodes_[b];
     if (!overlap(na.box, nb.box)) return;
     if (na.count > 0 && nb.count > 0) {
+      std::size_t& pending = pending_tests_.local();
       for (int i = na.index, ie = na.index + na.count; i < ie; ++i) {
         const Prim& p = prims_[i];
         if (!overlap(p.box, nb.box)) continue;
-        for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) test(p, prims_[j]);
+        for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) test(p, prims_[j], pending);
       }
       return;
     }
@@ -318,10 +320,10 @@ class SelfIntersectionSearch {
     }
   }
 
-  void test(const Prim& p, const Prim& q) {
+  // \p pending: this thread's tests not yet added to the shared count (added in batches, so that
+  // the threads do not contend for it at every test).
+  void test(const Prim& p, const Prim& q, std::size_t& pending) {
     if (!overlap(p.box, q.box) || share_vertex(p, q)) return;
-    // Counted per thread, and added to the shared count in batches (no contention per test).
-    std::size_t& pending = pending_tests_.local();
     if (++pending == kTestBatch) {
       pending = 0;
       const std::size_t done = tests_.fetch_add(kTestBatch, std::memory_order_relaxed) + kTestBatch;
@@ -467,9 +469,13 @@ IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, co
     search.run();
     check_cancel();  // the search stopped at a node, and its count is short
     const std::size_t found = search.found();
-    result.truncated = search.truncated();
-    result.out_of_tests = search.out_of_tests();
     result.num_tests = search.tests();
+    // The batches let a search finish a little past max_tests: it counts as cut short all the
+    // same, so that whether it is does not depend on the threads (a whole search makes the same
+    // tests on any number of them).
+    result.out_of_tests =
+        search.out_of_tests() || (options.max_tests > 0 && result.num_tests > options.max_tests);
+    result.truncated = search.truncated() || result.out_of_tests;
     result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;
     if (options.collect_pairs) {
       result.pairs = search.take_pairs();
@@ -505,24 +511,17 @@ IntersectionOptions bounded_intersection_options(std::size_t num_faces) {
   return o;
 }
 
-std::size_t count_new_intersections(const IntersectionResult& before, const IntersectionResult& after) {
-  for (const IntersectionResult* r : {&before, &after})
-    if (r->truncated)
-      throw InvalidInput(std::string("count_new_intersections: '") + (r == &before ? "before" : "after") +
-                         "' was cut short by a search limit, its pair list is incomplete");
-  return count_new_intersections_at_least(before, after);
-}
+namespace {
 
-std::size_t count_new_intersections_at_least(const IntersectionResult& before,
-                                             const IntersectionResult& after) {
-  for (const IntersectionResult* r : {&before, &after}) {
-    const char* name = r == &before ? "before" : "after";
+// The pairs of \p after that \p before lacks; 0 if \p before was cut short. \p caller names the
+// public function in the errors.
+std::size_t count_new(const IntersectionResult& before, const IntersectionResult& after, const char* caller) {
+  for (const IntersectionResult* r : {&before, &after})
     if (!lists_all_pairs(*r))
-      throw InvalidInput(std::string("count_new_intersections: '") + name +
+      throw InvalidInput(std::string(caller) + ": '" + (r == &before ? "before" : "after") +
                          "' does not list its pairs (compute it with collect_pairs)");
-  }
   if (before.num_faces != after.num_faces || before.connectivity_hash != after.connectivity_hash)
-    throw InvalidInput("count_new_intersections: the two results come from different face lists");
+    throw InvalidInput(std::string(caller) + ": the two results come from different face lists");
   if (before.truncated) return 0;
 
   // Results from find_self_intersections() are sorted already; hand-made ones may not be.
@@ -542,6 +541,21 @@ std::size_t count_new_intersections_at_least(const IntersectionResult& before,
     if (it == b.end() || *it != p) ++fresh;
   }
   return fresh;
+}
+
+}  // namespace
+
+std::size_t count_new_intersections(const IntersectionResult& before, const IntersectionResult& after) {
+  for (const IntersectionResult* r : {&before, &after})
+    if (r->truncated)
+      throw InvalidInput(std::string("count_new_intersections: '") + (r == &before ? "before" : "after") +
+                         "' was cut short by a search limit, its pair list is incomplete");
+  return count_new(before, after, "count_new_intersections");
+}
+
+std::size_t count_new_intersections_at_least(const IntersectionResult& before,
+                                             const IntersectionResult& after) {
+  return count_new(before, after, "count_new_intersections_at_least");
 }
 
 bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {

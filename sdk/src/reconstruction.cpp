@@ -779,27 +779,34 @@ class VolumeReconstructor::Impl {
     o.tolerance = opt_.tolerance;
     o.converged = o.max_error <= opt_.tolerance;
     if ((o.converged || count_unconverged) && opt_.retry_on_new_intersections) {
-      // Bounded: a rest detail whose triangles mostly cross (or whose long thin triangles' boxes
-      // mostly overlap) would cost O(n^2); its count cut short, no pair is known to be new.
+      // Within bounded_intersection_options(): a detail whose triangles mostly cross (or whose
+      // long thin triangles' boxes mostly overlap) would cost O(n^2). Whether a search is cut
+      // short does not depend on the threads (find_self_intersections()), and neither does what
+      // follows: a rest detail cut short leaves the check undone (no pair is known to be new, and
+      // counting the result would only spend the budget again); a result cut short counts as
+      // max_pairs new pairs, none listed (far above what the repair takes on).
       IntersectionOptions io = bounded_intersection_options(enc_.detail_faces.size());
       io.collect_pairs = true;
       io.cancel = opt_.cancel;
       // On the solver's threads (ReconstructOptions::threads): the count is the same on any
-      // number of them (the pairs are sorted), unless a search is cut short (which pairs it
-      // kept then depends on the threads; no mesh of the paper's kind or scan comes near).
+      // number of them (the pairs are sorted).
       io.parallel = arena_ != nullptr;
       auto search = [&](const std::vector<Vec3>& p) {
         if (!arena_) return find_self_intersections(p, enc_.detail_faces, io);
         return arena_->execute([&] { return find_self_intersections(p, enc_.detail_faces, io); });
       };
       if (!rest_pairs_) rest_pairs_ = std::make_unique<IntersectionResult>(search(enc_.detail_rest));
+      if (rest_pairs_->truncated) return o;  // not counted
       const IntersectionResult now = search(s.P);
-      o.new_pairs = count_new_intersections_at_least(*rest_pairs_, now);
       o.counted = true;
+      if (now.truncated) {
+        o.new_pairs = io.max_pairs;
+        return o;
+      }
+      o.new_pairs = count_new_intersections(*rest_pairs_, now);
       std::vector<std::pair<int, int>> fresh;
-      if (!rest_pairs_->truncated)
-        std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
-                            rest_pairs_->pairs.end(), std::back_inserter(fresh));
+      std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
+                          rest_pairs_->pairs.end(), std::back_inserter(fresh));
       for (const auto& [i, j] : fresh) {
         o.new_pair_faces.push_back(i);
         o.new_pair_faces.push_back(j);

@@ -96,7 +96,8 @@ int run_deform(const DeformCmdOptions& o) {
   const EditScript script = read_edit_script(o.edit);
   const NamedMesh input = read_named_mesh(o.input);
   const double read_seconds = sw.seconds();
-  const TimedIntersections input_pairs = find_intersections(input.mesh.vertices, input.mesh.faces);
+  const TimedIntersections input_pairs =
+      find_intersections(input.mesh.vertices, input.mesh.faces, input.name);
   PolyMesh cage;
   SubdivTags tags;
   json cage_json = nullptr;
@@ -209,10 +210,15 @@ int run_deform(const DeformCmdOptions& o) {
   }
 
   log.phase("counting self-intersections");
-  const TimedIntersections output_pairs = find_intersections(current.vertices, current.faces);
+  const TimedIntersections output_pairs = find_intersections(current.vertices, current.faces, "the output");
   const std::size_t new_pairs = count_new_intersections_at_least(input_pairs.result, output_pairs.result);
-  if (method == Method::Volumes && new_pairs > 0)
-    warnings.push_back(std::to_string(new_pairs) + " new intersecting pairs of triangles");
+  const bool cut_short = input_pairs.result.truncated || output_pairs.result.truncated;
+  if (method == Method::Volumes) {
+    if (cut_short)
+      warnings.push_back(uncounted_pairs_text(input_pairs.result, output_pairs.result));
+    else if (new_pairs > 0)
+      warnings.push_back(std::to_string(new_pairs) + " new intersecting pairs of triangles");
+  }
 
   log.phase("writing " + o.output);
   sw.restart();
@@ -243,6 +249,7 @@ int run_deform(const DeformCmdOptions& o) {
                {{"input_pairs", input_pairs.result.num_pairs},
                 {"output_pairs", output_pairs.result.num_pairs},
                 {"new_pairs", new_pairs},
+                {"cut_short", cut_short},
                 {"seconds", input_pairs.seconds + output_pairs.seconds}}},
               {"timing_seconds",
                {{"read", read_seconds},
@@ -273,7 +280,8 @@ int run_deform(const DeformCmdOptions& o) {
               << fixed(t["solve"].get<double>()) << " s\n";
   }
   std::cout << "intersections  " << input_pairs.result.num_pairs << " pairs in the input, "
-            << output_pairs.result.num_pairs << " in the output, " << new_pairs << " new\n"
+            << output_pairs.result.num_pairs << " in the output, " << new_pairs << " new"
+            << (cut_short ? " (at least: the search stopped early)" : "") << "\n"
             << "time           total " << fixed(report["timing_seconds"]["total"].get<double>()) << " s\n"
             << "output         " << o.output << "\n";
   if (!o.report.empty()) std::cout << "report         " << o.report << "\n";

@@ -271,7 +271,8 @@ void add_cascade_warnings(const layers::CascadeReport& r, const LayeredModel& mo
                          " rebuilt: " + not_converged_text(b.stats, tolerance));
 }
 
-json cascade_json(const layers::CascadeReport& r) {
+// \p volumes: whether the model's method is volumes (a vectors edit runs no solve).
+json cascade_json(const layers::CascadeReport& r, bool volumes) {
   json rebuilt = json::array();
   for (const layers::BandRebuild& b : r.rebuilt)
     rebuilt.push_back({{"band", b.band},
@@ -287,7 +288,8 @@ json cascade_json(const layers::CascadeReport& r) {
          {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
          {"rebuilt", rebuilt},
          {"total_seconds", r.total_seconds}};
-  if (r.edited_band > 0) j["edit_solver_converged"] = r.edit_stats.converged;
+  if (volumes && r.edited_band > 0 && r.edit_volume.mean_abs_target > 0)
+    j["edit_solver_converged"] = r.edit_stats.converged;  // only where an edit solve ran
   return j;
 }
 
@@ -319,18 +321,26 @@ int run_change(const EditCmdOptions& o, const std::string& command,
   r["changes"] = change(model, log, warnings);
   if (o.intersections) {
     log.phase("counting self-intersections of the finest band");
-    const TimedIntersections in = find_intersections(before, model.band(finest).mesh.faces);
-    const TimedIntersections out =
-        find_intersections(model.band(finest).mesh.vertices, model.band(finest).mesh.faces);
+    const TimedIntersections in =
+        find_intersections(before, model.band(finest).mesh.faces, "the finest band before");
+    const TimedIntersections out = find_intersections(model.band(finest).mesh.vertices,
+                                                      model.band(finest).mesh.faces, "the finest band after");
     const std::size_t fresh = count_new_intersections_at_least(in.result, out.result);
+    const bool cut_short = in.result.truncated || out.result.truncated;
     r["finest_band_intersections"] = {{"input_pairs", in.result.num_pairs},
                                       {"output_pairs", out.result.num_pairs},
                                       {"new_pairs", fresh},
+                                      {"cut_short", cut_short},
                                       {"seconds", in.seconds + out.seconds}};
     std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, "
-              << out.result.num_pairs << " after, " << fresh << " new\n";
-    if (fresh > 0 && model.options().method == EditOptions::Method::Volumes)
-      warnings.push_back("finest band: " + std::to_string(fresh) + " new intersecting pairs of triangles");
+              << out.result.num_pairs << " after, " << fresh << " new"
+              << (cut_short ? " (at least: the search stopped early)" : "") << "\n";
+    if (model.options().method == EditOptions::Method::Volumes) {
+      if (cut_short)
+        warnings.push_back("finest band: " + uncounted_pairs_text(in.result, out.result));
+      else if (fresh > 0)
+        warnings.push_back("finest band: " + std::to_string(fresh) + " new intersecting pairs of triangles");
+    }
   }
   r["warnings"] = warnings;
   sw.restart();
@@ -369,7 +379,7 @@ int run_edit(const EditCmdOptions& o) {
       try {
         const layers::CascadeReport c = model.edit(o.band, script.edits[i], prov.dump());
         print_cascade(c);
-        out.push_back(cascade_json(c));
+        out.push_back(cascade_json(c, model.options().method == EditOptions::Method::Volumes));
         add_cascade_warnings(c, model, "edit " + std::to_string(i + 1), warnings);
       } catch (const InvalidInput& e) {
         throw InvalidInput(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
@@ -388,7 +398,7 @@ int run_amplitude(const EditCmdOptions& o) {
     const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
     print_cascade(c);
     add_cascade_warnings(c, model, "amplitude", warnings);
-    return json::array({cascade_json(c)});
+    return json::array({cascade_json(c, model.options().method == EditOptions::Method::Volumes)});
   });
 }
 

@@ -122,7 +122,9 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   if (method == Method::Volumes) {
     if (outcome.stats && !outcome.stats->converged)
       warnings.push_back(not_converged_text(*outcome.stats, options.tolerance));
-    if (outcome.new_pairs > 0)
+    if (!outcome.pairs_warning.empty())
+      warnings.push_back(outcome.pairs_warning);
+    else if (outcome.new_pairs > 0)
       warnings.push_back(std::to_string(outcome.new_pairs) + " new intersecting pairs of triangles");
   }
   report["warnings"] = warnings;

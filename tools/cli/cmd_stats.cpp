@@ -42,8 +42,7 @@ int run_stats(const StatsCmdOptions& o) {
   const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces,
                                                            bounded_intersection_options(m.mesh.faces.size()));
   const double isect_seconds = sw.seconds();
-  if (isect.truncated)
-    std::cerr << "strata: warning: " << m.name << ": " << cut_short_text(isect) << std::endl;
+  if (isect.truncated) std::cerr << "strata: warning: " << cut_short_text(isect, m.name) << std::endl;
   const json r{{"mesh", m.name},
                {"vertices", m.mesh.num_vertices()},
                {"faces", m.mesh.num_faces()},

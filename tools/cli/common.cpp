@@ -57,9 +57,13 @@ std::string parse_number(const std::string& text, double& v) {
     return "'" + text + "' is not a number";
   return {};
 }
+// A bound as written: whole numbers in full ("50000000", where << printed "5e+07").
 std::string bound_text(double x) {
   std::ostringstream os;
-  os << x;
+  if (x == std::floor(x) && std::abs(x) < 1e15)
+    os << static_cast<long long>(x);
+  else
+    os << x;
   return os.str();
 }
 }  // namespace
@@ -333,21 +337,31 @@ ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
   return o;
 }
 
-std::string cut_short_text(const IntersectionResult& r) {
-  return "the self-intersection search stopped after " + std::to_string(r.num_pairs) + " pairs and " +
-         std::to_string(r.num_tests) + " exact tests (" +
+std::string cut_short_text(const IntersectionResult& r, const std::string& name) {
+  return name + ": the self-intersection search stopped after " + std::to_string(r.num_pairs) +
+         " pairs and " + std::to_string(r.num_tests) + " exact tests (" +
          (r.out_of_tests ? "too many triangles whose boxes overlap: long, thin triangles?"
                          : "too many intersecting pairs") +
          "): its counts are lower bounds";
 }
 
-TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+std::string uncounted_pairs_text(const IntersectionResult& before, const IntersectionResult& after) {
+  if (before.truncated)
+    return "new intersecting pairs not counted: the input's search was cut short (see the warning above)";
+  if (after.truncated)
+    return "at least " + std::to_string(count_new_intersections_at_least(before, after)) +
+           " new intersecting pairs: the output's search was cut short";
+  return {};
+}
+
+TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                      const std::string& name) {
   TimedIntersections t;
   Stopwatch sw;
   IntersectionOptions o = bounded_intersection_options(faces.size());
   o.collect_pairs = true;
   t.result = find_self_intersections(vertices, faces, o);
-  if (t.result.truncated) std::cerr << "strata: warning: " << cut_short_text(t.result) << std::endl;
+  if (t.result.truncated) std::cerr << "strata: warning: " << cut_short_text(t.result, name) << std::endl;
   t.seconds = sw.seconds();
   return t;
 }
@@ -390,7 +404,7 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
     std::cerr << "strata: warning: " << e.warning << std::endl;
   }
   log.phase("counting self-intersections of the input detail");
-  e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces);
+  e.input = find_intersections(detail.mesh.vertices, detail.mesh.faces, detail.name);
   return e;
 }
 
@@ -429,10 +443,12 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
   log.phase(std::string(to_string(method)) + ": measuring prism volumes and self-intersections");
   Stopwatch mw;
   out.volume = volume_metrics(encoding, frames, out.positions);
-  const TimedIntersections after = find_intersections(out.positions, encoding.detail_faces);
+  const TimedIntersections after = find_intersections(out.positions, encoding.detail_faces,
+                                                      std::string("the ") + to_string(method) + " result");
   out.output_pairs = after.result.num_pairs;
   out.new_pairs = count_new_intersections_at_least(in.input_intersections, after.result);
   out.counts_cut_short = in.input_intersections.truncated || after.result.truncated;
+  out.pairs_warning = uncounted_pairs_text(in.input_intersections, after.result);
   out.intersection_seconds = after.seconds;
   out.times.metrics += mw.seconds();
   return out;

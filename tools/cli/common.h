@@ -201,9 +201,15 @@ struct TimedIntersections {
   IntersectionResult result;
   double seconds = 0.0;
 };
-TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
-//! "the self-intersection search stopped after N pairs (M exact tests): ...; counts are lower bounds".
-std::string cut_short_text(const IntersectionResult& r);
+//! \p name: the mesh searched, for the warning (e.g. "scan.obj", "the output").
+TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                      const std::string& name);
+//! "NAME: the self-intersection search stopped after N pairs and M exact tests (why): its counts
+//! are lower bounds".
+std::string cut_short_text(const IntersectionResult& r, const std::string& name);
+//! A warning for the report when new pairs could not be counted in full: "" if neither search was
+//! cut short; otherwise which one was, and what the count of new pairs then means.
+std::string uncounted_pairs_text(const IntersectionResult& before, const IntersectionResult& after);
 
 //! What reconstruct and demo share before the methods run: the detail encoded over the base and
 //! the input detail's own intersections.
@@ -241,6 +247,7 @@ struct MethodOutcome {
   std::size_t output_pairs = 0;
   std::size_t new_pairs = 0;              //!< a lower bound if counts_cut_short
   bool counts_cut_short = false;          //!< the input's or the output's search hit its limits
+  std::string pairs_warning;              //!< uncounted_pairs_text(): "" unless counts_cut_short
   double intersection_seconds = 0.0;      //!< of the output only (the input's is counted once per case)
   std::optional<ReconstructStats> stats;  //!< volumes only
   PhaseTimes times;                       //!< setup, frames, solve, metrics filled in here

@@ -23,11 +23,13 @@ struct IntersectionOptions {
   //! Stop after this many exact triangle-pair tests (0 = no limit): the pairs whose boxes overlap
   //! and that share no vertex. Long thin triangles whose boxes mostly overlap cost O(n^2) tests
   //! even where none intersect (a 20k-face sheet of parallel sheared triangles: 2e8 tests, 9.5 s,
-  //! 0 pairs); a scan's compact triangles cost a few tests a face. Checked in batches of 4096 per
-  //! thread, so a search may run slightly past it.
+  //! 0 pairs); a scan's compact triangles cost under one test a face. The threads add their tests
+  //! to the shared count in batches of 4096, so a search may run up to a batch a thread past it;
+  //! a search whose tests exceed it counts as cut short even if it finished.
   std::size_t max_tests = 0;
   //! Run on the TBB thread pool; false runs on the calling thread only. The result is the same
-  //! either way, except which pairs are kept when max_pairs cuts the search short.
+  //! either way, except, in a search cut short (max_pairs, max_tests), which pairs are kept and
+  //! how many tests were made; whether it is cut short does not depend on the threads.
   bool parallel = true;
   //! Optional: a flag another thread may set to stop the search (read at every node of the
   //! hierarchy the search visits); once it reads true, find_self_intersections() throws Cancelled.
@@ -42,9 +44,9 @@ struct IntersectionResult {
   std::vector<std::pair<int, int>> pairs;
   //! The sorted distinct faces occurring in `pairs`; only if collect_pairs.
   std::vector<int> faces;
-  //! True iff the search stopped early: the mesh has more than max_pairs intersecting pairs, or
-  //! the search ran out of max_tests (out_of_tests). num_pairs is then only a lower bound, and
-  //! which pairs were kept is unspecified.
+  //! True iff the search was cut short: the mesh has more than max_pairs intersecting pairs, or
+  //! its search needs more than max_tests tests (out_of_tests). num_pairs is then only a lower
+  //! bound, and which pairs were kept is unspecified.
   bool truncated = false;
   //! True iff the search stopped because it ran out of max_tests.
   bool out_of_tests = false;
@@ -62,7 +64,8 @@ struct IntersectionResult {
 //!
 //! The triangle-pair test is exact (CGAL's filtered predicates on the double coordinates, no
 //! tolerance); a bounding-volume hierarchy over the faces prunes the candidate pairs, so a mesh
-//! with few intersections costs O(n log n).
+//! with few intersections and compact triangles costs O(n log n) (long thin triangles whose boxes
+//! mostly overlap cost O(n^2) tests: see IntersectionOptions::max_tests).
 //!
 //! Adjacency is by vertex index: two faces sharing one vertex or an edge are never counted, even
 //! when they do cross (a sharp fold around a shared vertex is a real self-intersection that this

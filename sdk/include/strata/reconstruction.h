@@ -120,8 +120,10 @@ struct ReconstructOptions {
   int retry_volume_iterations = 5;
   //! Count the new intersecting pairs of a converged clean-start solve (exactly, on the solver's
   //! `threads`; at 100k prisms 0.05 s per count on one, the rest detail counted once) and retry
-  //! if there are any. The counts stay within bounded_intersection_options(): a rest detail whose
-  //! search is cut short (its triangles mostly cross each other) has no pair known to be new.
+  //! if there are any. The searches stay within bounded_intersection_options(): a rest detail
+  //! whose search is cut short (its triangles mostly cross each other, or long thin triangles'
+  //! boxes mostly overlap) is not checked (ReconstructStats::new_intersecting_pairs -1), and a
+  //! result whose search is cut short counts as its max_pairs (10 million) new pairs.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! With TangentialRegularization::RestLaplacian: a clean-start solve that ends unconverged or
@@ -435,7 +437,8 @@ struct ReconstructStats {
   int fold_repair_polishes = 0;
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
   //! counted by the solver (retry_on_new_intersections: clean-start solves and exact solves from a
-  //! drag's state, converged or not); -1 if not counted.
+  //! drag's state, converged or not); -1 if not counted (also when the rest detail's search was
+  //! cut short), 10 million if the result's search was (see retry_on_new_intersections).
   long long new_intersecting_pairs = -1;
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
