@@ -276,9 +276,10 @@ class SelfIntersectionSearch {
     if (stopped()) return;
     const Node& nd = nodes_[n];
     if (nd.count > 0) {
-      std::size_t& pending = pending_tests_.local();
+      std::size_t tests = 0;
       for (int i = nd.index, end = nd.index + nd.count; i < end; ++i)
-        for (int j = i + 1; j < end; ++j) test(prims_[i], prims_[j], pending);
+        for (int j = i + 1; j < end; ++j) tests += test(prims_[i], prims_[j]);
+      count_tests(tests);
       return;
     }
     const int l = n + 1, r = nd.index;
@@ -299,12 +300,13 @@ class SelfIntersectionSearch {
     const Node& nb = nodes_[b];
     if (!overlap(na.box, nb.box)) return;
     if (na.count > 0 && nb.count > 0) {
-      std::size_t& pending = pending_tests_.local();
+      std::size_t tests = 0;
       for (int i = na.index, ie = na.index + na.count; i < ie; ++i) {
         const Prim& p = prims_[i];
         if (!overlap(p.box, nb.box)) continue;
-        for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) test(p, prims_[j], pending);
+        for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) tests += test(p, prims_[j]);
       }
+      count_tests(tests);
       return;
     }
     const bool parallel = ma + mb > kParallelGrain;
@@ -320,24 +322,32 @@ class SelfIntersectionSearch {
     }
   }
 
-  // \p pending: this thread's tests not yet added to the shared count (added in batches, so that
-  // the threads do not contend for it at every test).
-  void test(const Prim& p, const Prim& q, std::size_t& pending) {
-    if (!overlap(p.box, q.box) || share_vertex(p, q)) return;
-    if (++pending == kTestBatch) {
-      pending = 0;
-      const std::size_t done = tests_.fetch_add(kTestBatch, std::memory_order_relaxed) + kTestBatch;
-      if (max_tests_ > 0 && done > max_tests_) {
-        out_of_tests_.store(true, std::memory_order_relaxed);
-        truncated_.store(true, std::memory_order_relaxed);
-      }
+  // Adds a leaf block's exact tests to this thread's count, and that to the shared count in
+  // batches, so that the threads do not contend for it (most blocks make no test at all, and skip
+  // even the thread-local lookup).
+  void count_tests(std::size_t tests) {
+    if (tests == 0) return;
+    std::size_t& pending = pending_tests_.local();
+    pending += tests;
+    if (pending < kTestBatch) return;
+    const std::size_t done = tests_.fetch_add(pending, std::memory_order_relaxed) + pending;
+    pending = 0;
+    if (max_tests_ > 0 && done > max_tests_) {
+      out_of_tests_.store(true, std::memory_order_relaxed);
+      truncated_.store(true, std::memory_order_relaxed);
     }
+  }
+
+  // Whether the exact test ran (the boxes overlap and no vertex is shared); a hit is reported.
+  bool test(const Prim& p, const Prim& q) {
+    if (!overlap(p.box, q.box) || share_vertex(p, q)) return false;
     const Vec3 &a0 = vertices_[p.v[0]], &a1 = vertices_[p.v[1]], &a2 = vertices_[p.v[2]];
     const Vec3 &b0 = vertices_[q.v[0]], &b1 = vertices_[q.v[1]], &b2 = vertices_[q.v[2]];
-    if (separated(a0, a1, a2, b0, b1, b2)) return;
+    if (separated(a0, a1, a2, b0, b1, b2)) return true;
     const Triangle t(to_point(a0), to_point(a1), to_point(a2));
     const Triangle u(to_point(b0), to_point(b1), to_point(b2));
     if (CGAL::do_intersect(t, u)) report(p.face, q.face);
+    return true;
   }
 
   void report(int f, int g) {

@@ -24,7 +24,7 @@ struct IntersectionOptions {
   //! and that share no vertex. Long thin triangles whose boxes mostly overlap cost O(n^2) tests
   //! even where none intersect (a 20k-face sheet of parallel sheared triangles: 2e8 tests, 9.5 s,
   //! 0 pairs); a scan's compact triangles cost under one test a face. The threads add their tests
-  //! to the shared count in batches of 4096, so a search may run up to a batch a thread past it;
+  //! to the shared count in batches of at least 4096, so a search may run a batch a thread past it;
   //! a search whose tests exceed it counts as cut short even if it finished.
   std::size_t max_tests = 0;
   //! Run on the TBB thread pool; false runs on the calling thread only. The result is the same
