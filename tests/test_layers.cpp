@@ -266,6 +266,21 @@ TEST(Layers, AnEditUndoneByItsInverseGivesTheModelBackFarFromTheOrigin) {
   expect_inverse_edit_restores(LayeredModel::build(scan), offset);
 }
 
+// An edit of a triangle band by the identity changes nothing: the band's region is back at rest,
+// so the band keeps its positions bit for bit, and the finer bands are not solved. Before, band 1
+// was solved from the clean start (up to 9.5e-5 away on a 2k-face tube) and the finest band
+// followed, up to 0.15% of its diagonal away.
+TEST(Layers, AnIdentityEditOfATriangleBandChangesNothing) {
+  LayeredModel model = model_of("camel");
+  EditStep step = camel_neck_bend();
+  step.transform = EditTransform{};
+  const layers::CascadeReport r = model.edit(1, step);
+  for (int k = 1; k < model.num_bands(); ++k)
+    EXPECT_TRUE(same_bits(model.band(k).mesh.vertices, model_of("camel").band(k).mesh.vertices))
+        << "band " << k;
+  for (const layers::BandRebuild& b : r.rebuilt) EXPECT_EQ(b.solved_vertices, 0) << "band " << b.band;
+}
+
 TEST(Layers, EditOfAnIntermediateBandIsReencodedAndTheFinerBandFollows) {
   LayeredModel model = model_of("camel");
   const TriMesh band1 = model.band(1).mesh;

@@ -24,7 +24,8 @@ class DetailSolve {
   const DetailEncoding& encoding() const { return enc_; }
 
   //! The exact solve over \p base (the encoding's base vertices, or a cage's control points):
-  //! from the clean start for volumes. Fills res.stats, res.times.setup/solve and res.volume.
+  //! from the clean start for volumes. A base back at rest to within rounding gives the encoded
+  //! detail at rest exactly (no solve). Fills res.stats, res.times.setup/solve and res.volume.
   std::vector<Vec3> solve(const std::vector<Vec3>& base, EditResult& res) const;
 
   //! Starts a drag from the encoded detail at rest, over \p rest_base (the encoding's base vertices
