@@ -246,7 +246,7 @@ void expect_inverse_edit_restores(LayeredModel model, const Vec3& offset) {
             1e-2 * bbox_diagonal(original.band(2).mesh.vertices));
   const layers::CascadeReport r = model.edit(0, back);
   EXPECT_LT(max_distance(model.band(0).cage.vertices, cage),
-            1e-12 * bbox_diagonal(cage) + 1e-13 * offset.norm());
+            1e-12 * bbox_diagonal(cage) + 1e-14 * offset.norm());
   for (int k = 1; k < model.num_bands(); ++k)
     EXPECT_TRUE(same_bits(model.band(k).mesh.vertices, original.band(k).mesh.vertices)) << "band " << k;
   for (const layers::BandRebuild& b : r.rebuilt) {

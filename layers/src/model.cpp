@@ -25,10 +25,10 @@ double seconds_since(Clock::time_point t) {
 }
 
 // A base point this close to its rest position, relative to the base's rest diagonal, plus this
-// much relative to its own coordinates (about 450 units in the last place), is back at rest
+// much relative to its own coordinates (about 45 units in the last place), is back at rest
 // (LayeredModel::Impl::rebuild()).
 constexpr double kRestTolerance = 1e-12;
-constexpr double kRestRounding = 1e-13;
+constexpr double kRestRounding = 1e-14;
 
 bool same_bits(const Vec3& a, const Vec3& b) {
   return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;

@@ -91,7 +91,9 @@ class CageEditor {
   //!        reflecting.
   std::vector<Vec3> edited_cage(const EditTransform& transform) const;
 
-  //! The exact edit from the clean start. EditResult::base_positions holds the edited cage.
+  //! The exact edit from the clean start. EditResult::base_positions holds the edited cage. A
+  //! transform that leaves the limit surface's base points at rest to within rounding gives the
+  //! mesh back bit for bit, with no solve (as RegionEditor::apply()).
   //! \throw as edited_cage(); SolverError if the reconstruction fails.
   EditResult apply(const EditTransform& transform) const;
 

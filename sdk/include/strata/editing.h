@@ -206,7 +206,9 @@ class RegionEditor {
   std::vector<Vec3> edited_base(const EditTransform& transform) const;
 
   //! The exact edit from the clean start (volume scaling, the whole multigrid), with the
-  //! options' method.
+  //! options' method. A transform that leaves the region's base at rest to within rounding (the
+  //! identity: every base point within 1e-12 of the base's diagonal plus 1e-14 of its own
+  //! coordinates) gives the mesh back bit for bit, with no solve (stats: converged, no sweeps).
   //! \throw as edited_base(); SolverError if the reconstruction fails.
   EditResult apply(const EditTransform& transform) const;
 
@@ -218,7 +220,8 @@ class RegionEditor {
   const std::vector<Vec3>& update_drag(const EditTransform& transform);
   //! Ends the drag with the exact solve on the last transform, as EditOptions::drag_end says:
   //! from the drag's per-level state (default; checked for convergence and new intersecting
-  //! pairs, with apply()'s clean start as the fallback), or apply() itself.
+  //! pairs, with apply()'s clean start as the fallback), or apply() itself. A drag back to its
+  //! start (the base at rest, as for apply()) gives the mesh back bit for bit.
   //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails.
   EditResult end_drag();
   bool dragging() const;

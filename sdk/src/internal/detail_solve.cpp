@@ -13,7 +13,9 @@ double seconds_since(Clock::time_point t) {
 }
 
 // Whether every base point of \p f is back at its rest position to within rounding (1e-12 of the
-// rest base points' diagonal, plus 1e-13 of the point's own coordinates): an edit by the identity,
+// rest base points' diagonal, plus 1e-14, about 45 units in the last place, of the point's own
+// coordinates; the frames' normals are not compared, as a base moved by no more than that cannot
+// turn them beyond rounding either): an edit by the identity,
 // or a drag back to its start, moves the base by nothing or by the last bits, and the rest detail
 // is then the exact solution of its prisms, where a solve from the clean start lands elsewhere
 // (within the round trip's 0.5% of the diagonal), and a layered model's finer bands would follow.
@@ -21,7 +23,7 @@ bool base_at_rest(const DetailEncoding& e, const BaseFrames& f) {
   const double tol = 1e-12 * bbox_diagonal(e.base_rest_points);
   for (std::size_t i = 0; i < f.points.size(); ++i)
     if (!((f.points[i] - e.base_rest_points[i]).norm() <=
-          tol + 1e-13 * e.base_rest_points[i].cwiseAbs().maxCoeff()))
+          tol + 1e-14 * e.base_rest_points[i].cwiseAbs().maxCoeff()))
       return false;
   return true;
 }
@@ -35,18 +37,16 @@ double DetailSolve::ensure_reconstructor() const {
 }
 
 std::vector<Vec3> DetailSolve::solve(const std::vector<Vec3>& base, EditResult& res) const {
-  {
-    const BaseFrames frames = evaluate_base_frames(enc_, base);
-    if (base_at_rest(enc_, frames)) {
-      res.volume = volume_metrics(enc_, frames, enc_.detail_rest);
-      if (method_ == EditOptions::Method::Volumes) {
-        res.stats.max_relative_error = res.volume.max_relative_error;
-        res.stats.rms_relative_error = res.volume.rms_relative_error;
-        res.stats.converged = true;
-        res.stats.new_intersecting_pairs = 0;  // the rest detail itself
-      }
-      return enc_.detail_rest;
+  const BaseFrames frames = evaluate_base_frames(enc_, base);
+  if (base_at_rest(enc_, frames)) {
+    res.volume = volume_metrics(enc_, frames, enc_.detail_rest);
+    if (method_ == EditOptions::Method::Volumes) {
+      res.stats.max_relative_error = res.volume.max_relative_error;
+      res.stats.rms_relative_error = res.volume.rms_relative_error;
+      res.stats.converged = res.volume.max_relative_error <= reconstruct_.tolerance;
+      res.stats.new_intersecting_pairs = 0;  // the rest detail itself
     }
+    return enc_.detail_rest;
   }
   std::vector<Vec3> sub;
   if (method_ == EditOptions::Method::Volumes) {
@@ -61,7 +61,7 @@ std::vector<Vec3> DetailSolve::solve(const std::vector<Vec3>& base, EditResult& 
     sub = reconstruct_vectors(enc_, base);
     res.times.solve = seconds_since(t0);
   }
-  res.volume = volume_metrics(enc_, evaluate_base_frames(enc_, base), sub);
+  res.volume = volume_metrics(enc_, frames, sub);
   return sub;
 }
 

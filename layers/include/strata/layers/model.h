@@ -16,7 +16,7 @@
 //! rebuilds bands k+1 .. N-1 in order (the cascade). An amplitude a_k scales band k's target
 //! volumes. Only the vertices whose base actually changed are solved; every other vertex keeps its
 //! position bit for bit, and a vertex whose base and amplitude are back at rest (every base point
-//! within 1e-12 of the base's rest diagonal plus 1e-13 of its own largest coordinate from its rest
+//! within 1e-12 of the base's rest diagonal plus 1e-14 of its own largest coordinate from its rest
 //! position, so that an edit undone by its inverse, which cancels only to rounding, counts) takes
 //! its rest position exactly (the exact solution of its prisms), so nothing drifts and nothing is
 //! lost.
