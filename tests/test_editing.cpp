@@ -215,6 +215,19 @@ TEST(RegionEditor, DISABLED_TinyEditGivesTheMeshBackAtLowResolution) {
   expect_tiny_edit_round_trip(4000);
 }
 
+// back_at_rest(): rounding, not motion. A point moved by 1e-12 of the scale or by 45 units in the
+// last place of its coordinates is at rest; twice that is not; NaN never is.
+TEST(RegionEditor, BackAtRestIsWithinRoundingOnly) {
+  const Vec3 rest(0.3, -0.2, 0.1);
+  EXPECT_TRUE(back_at_rest(rest, rest, 1.0));
+  EXPECT_TRUE(back_at_rest(rest + Vec3(0.9e-12, 0, 0), rest, 1.0));
+  EXPECT_FALSE(back_at_rest(rest + Vec3(2e-12, 0, 0), rest, 1.0));
+  const Vec3 far(1e6, -2e6, 1e6);  // 1e-14 of 2e6: 2e-8
+  EXPECT_TRUE(back_at_rest(far + Vec3(0, 1.5e-8, 0), far, 1.0));
+  EXPECT_FALSE(back_at_rest(far + Vec3(0, 3e-8, 0), far, 1.0));
+  EXPECT_FALSE(back_at_rest(Vec3(std::nan(""), 0, 0), rest, 1.0));
+}
+
 // The identity, and a drag that comes back to its start, give the mesh back bit for bit with no
 // solve: the base is at rest, and so is the detail (a solve from the clean start would land up to
 // the round trip's 0.5% away, and a layered model's finer bands would follow it).

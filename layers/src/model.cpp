@@ -24,12 +24,6 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-// A base point this close to its rest position, relative to the base's rest diagonal, plus this
-// much relative to its own coordinates (about 45 units in the last place), is back at rest
-// (LayeredModel::Impl::rebuild()).
-constexpr double kRestTolerance = 1e-12;
-constexpr double kRestRounding = 1e-14;
-
 bool same_bits(const Vec3& a, const Vec3& b) {
   return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;
 }
@@ -259,15 +253,13 @@ class LayeredModel::Impl {
     const std::vector<Vec3>& base = points(k - 1);
     const int nb = static_cast<int>(base.size()), nv = b.mesh.num_vertices();
     std::vector<char> moved(nb, 0), at_rest(nb, 0);
-    // Back at rest within rounding: an edit and its inverse (a rotation by s a, then by -s a)
-    // bring the cage back only to the last bits, and the rest position is then the exact solution
-    // to within as much, where a solve from the clean start lands elsewhere. The rounding grows
-    // with the coordinates (a model far from the origin), hence the second term.
-    const double rest_tolerance = kRestTolerance * bbox_diagonal(b.base_rest);
+    // Back at rest up to rounding (back_at_rest()): an edit and its inverse (a rotation by s a,
+    // then by -s a) bring the cage back only to the last bits, and the rest position is then the
+    // exact solution to within as much, where a solve from the clean start lands elsewhere.
+    const double scale = bbox_diagonal(b.base_rest);
     for (int v = 0; v < nb; ++v) {
       moved[v] = !change || !same_bits(base[v], change->old[v]);
-      at_rest[v] = (base[v] - b.base_rest[v]).norm() <=
-                   rest_tolerance + kRestRounding * b.base_rest[v].cwiseAbs().maxCoeff();
+      at_rest[v] = back_at_rest(base[v], b.base_rest[v], scale);
     }
     const bool rigid_base = change && change->map && !change->rigid.empty();
     std::vector<char> affected = reached(k, moved);

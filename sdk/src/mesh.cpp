@@ -32,6 +32,10 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
   return (hi - lo).norm();
 }
 
+bool back_at_rest(const Vec3& p, const Vec3& rest, double scale) {
+  return (p - rest).norm() <= 1e-12 * scale + 1e-14 * rest.cwiseAbs().maxCoeff();
+}
+
 std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   std::vector<Vec3> normals(vertices.size(), Vec3::Zero());
   for (const Face& f : faces) {

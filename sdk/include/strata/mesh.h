@@ -26,6 +26,12 @@ struct TriMesh {
 //! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points).
 double bbox_diagonal(const std::vector<Vec3>& points);
 
+//! Whether \p p is \p rest up to rounding: within 1e-12 of \p scale (a diagonal of the points
+//! it is one of) plus 1e-14 (about 45 units in the last place) of rest's largest coordinate. An
+//! edit and its inverse, or an edit by the identity, bring a base back only to such rounding; the
+//! editors and layered models then put the detail back at rest exactly. False for NaN.
+bool back_at_rest(const Vec3& p, const Vec3& rest, double scale);
+
 //! The largest coordinate magnitude the engine takes. Prism volumes are cubic in the coordinates
 //! and the solver's inner products hold higher powers: a 3 x 6 tube case scaled as a whole
 //! reconstructs alike from 1e-20 to 1e25, while a detail 1e28 from a unit base overflowed the

@@ -12,19 +12,16 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-// Whether every base point of \p f is back at its rest position to within rounding (1e-12 of the
-// rest base points' diagonal, plus 1e-14, about 45 units in the last place, of the point's own
-// coordinates; the frames' normals are not compared, as a base moved by no more than that cannot
-// turn them beyond rounding either): an edit by the identity,
+// Whether every base point of \p f is back at its rest position up to rounding (back_at_rest(),
+// relative to the rest base points' diagonal; the frames' normals are not compared, as a base
+// moved by no more than that cannot turn them beyond rounding either): an edit by the identity,
 // or a drag back to its start, moves the base by nothing or by the last bits, and the rest detail
 // is then the exact solution of its prisms, where a solve from the clean start lands elsewhere
 // (within the round trip's 0.5% of the diagonal), and a layered model's finer bands would follow.
 bool base_at_rest(const DetailEncoding& e, const BaseFrames& f) {
-  const double tol = 1e-12 * bbox_diagonal(e.base_rest_points);
+  const double scale = bbox_diagonal(e.base_rest_points);
   for (std::size_t i = 0; i < f.points.size(); ++i)
-    if (!((f.points[i] - e.base_rest_points[i]).norm() <=
-          tol + 1e-14 * e.base_rest_points[i].cwiseAbs().maxCoeff()))
-      return false;
+    if (!back_at_rest(f.points[i], e.base_rest_points[i], scale)) return false;
   return true;
 }
 }  // namespace
