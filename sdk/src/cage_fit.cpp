@@ -124,10 +124,31 @@ class CageFitter {
 
 }  // namespace
 
+namespace {
+// fit_cage() on a scan centred at the origin.
+CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options);
+}  // namespace
+
 CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   check_options(options);
   validate_mesh(scan, "scan");
   check_coordinates(scan.vertices, "scan");
+  // Fitted relative to the centre of the scan's bounding box, then moved back: a scan far from the
+  // origin (a georeferenced one, 1e6 away) lost precision in the decimation's quadrics and the
+  // fit's solves, and its cage came out other than the one the scan at the origin gets.
+  std::vector<Vec3> used;
+  for (const Face& f : scan.faces)
+    for (int v : f) used.push_back(scan.vertices[v]);
+  const Vec3 centre = bbox_centre(used);
+  TriMesh centred = scan;
+  for (Vec3& p : centred.vertices) p -= centre;
+  CageFit fit = fit_centred(centred, options);
+  for (Vec3& p : fit.cage.vertices) p += centre;
+  return fit;
+}
+
+namespace {
+CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
   const int target = options.faces > 0
                          ? options.faces
                          : std::max(options.min_faces,
@@ -178,5 +199,6 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   fit.seconds_fit = seconds_since(t0);
   return fit;
 }
+}  // namespace
 
 }  // namespace strata

@@ -402,8 +402,24 @@ std::uint64_t fingerprint(const std::vector<Face>& faces) {
   return h;
 }
 
-// The non-degenerate faces, in face order.
-std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+// The centre of the used vertices' bounding box: boxes and centroids are stored in float relative
+// to it. In absolute coordinates, a scan 1e6 from the origin (a georeferenced one) got float boxes
+// a float step (0.06) wide at least and split on centroids that coincide: the camel 1e6 away took
+// 20.7M exact tests and 0.73 s where it takes 11k and 0.02 s at the origin.
+Vec3 local_origin(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  if (faces.empty()) return Vec3::Zero();
+  Vec3 lo = vertices[faces[0][0]], hi = lo;
+  for (const Face& f : faces)
+    for (int v : f) {
+      lo = lo.cwiseMin(vertices[v]);
+      hi = hi.cwiseMax(vertices[v]);
+    }
+  return lo / 2.0 + hi / 2.0;  // halves first: no overflow
+}
+
+// The non-degenerate faces, in face order; centroids relative to \p origin.
+std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                             const Vec3& origin) {
   std::vector<Item> items(faces.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces.size(), 1024), [&](const auto& range) {
     for (std::size_t f = range.begin(); f < range.end(); ++f) {
@@ -417,8 +433,9 @@ std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vecto
         continue;
       }
       item.face = static_cast<int>(f);
-      // Divide first so that huge coordinates cannot overflow; the centroid only guides the split.
-      const Vec3 centroid = a / 3.0 + b / 3.0 + c / 3.0;
+      // Divide first so that huge coordinates cannot overflow (the difference with the origin may
+      // be infinite, never NaN); the centroid only guides the split.
+      const Vec3 centroid = a / 3.0 + b / 3.0 + c / 3.0 - origin;
       for (int k = 0; k < 3; ++k) item.c[k] = static_cast<float>(centroid[k]);
     }
   });
@@ -427,9 +444,12 @@ std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vecto
   return items;
 }
 
-// The faces of `items` (in leaf order) with their outward-rounded boxes.
+// The faces of `items` (in leaf order) with their outward-rounded boxes relative to \p origin.
+// The difference with the origin is rounded in double (by at most half a unit in its last
+// place), then to float outward, and one float step more, which covers that rounding: the boxes
+// still hold the triangles.
 std::vector<Prim> make_prims(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                             const std::vector<Item>& items) {
+                             const std::vector<Item>& items, const Vec3& origin) {
   std::vector<Prim> prims(items.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items.size(), 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
@@ -439,9 +459,10 @@ std::vector<Prim> make_prims(const std::vector<Vec3>& vertices, const std::vecto
       const Vec3& a = vertices[p.v[0]];
       const Vec3& b = vertices[p.v[1]];
       const Vec3& c = vertices[p.v[2]];
+      constexpr float kInf = std::numeric_limits<float>::infinity();
       for (int k = 0; k < 3; ++k) {
-        p.box.lo[k] = round_down(std::min({a[k], b[k], c[k]}));
-        p.box.hi[k] = round_up(std::max({a[k], b[k], c[k]}));
+        p.box.lo[k] = std::nextafter(round_down(std::min({a[k], b[k], c[k]}) - origin[k]), -kInf);
+        p.box.hi[k] = std::nextafter(round_up(std::max({a[k], b[k], c[k]}) - origin[k]), kInf);
       }
     }
   });
@@ -467,12 +488,13 @@ IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, co
   };
   auto work = [&] {
     check_cancel();
-    std::vector<Item> items = make_items(vertices, faces);
+    const Vec3 origin = local_origin(vertices, faces);
+    std::vector<Item> items = make_items(vertices, faces, origin);
     check_cancel();
     std::vector<Node> nodes;
     BvhBuilder(items, nodes).build();
     check_cancel();
-    const std::vector<Prim> prims = make_prims(vertices, faces, items);
+    const std::vector<Prim> prims = make_prims(vertices, faces, items, origin);
     std::vector<Item>().swap(items);  // keep the peak memory down on big meshes
     fit_boxes(nodes, prims);
     SelfIntersectionSearch search(vertices, nodes, prims, options);

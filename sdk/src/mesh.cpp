@@ -32,6 +32,16 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
   return (hi - lo).norm();
 }
 
+Vec3 bbox_centre(const std::vector<Vec3>& points) {
+  if (points.empty()) return Vec3::Zero();
+  Vec3 lo = points.front(), hi = points.front();
+  for (const Vec3& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return lo / 2.0 + hi / 2.0;  // halves first: no overflow
+}
+
 bool back_at_rest(const Vec3& p, const Vec3& rest, double scale) {
   return (p - rest).norm() <= 1e-12 * scale + 1e-14 * rest.cwiseAbs().maxCoeff();
 }

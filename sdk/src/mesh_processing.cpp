@@ -52,10 +52,15 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
 
 TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
+  // Relative to the centre of the bounding box: the quadrics' error terms are squares of plane
+  // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
+  // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed
+  // the scan by 4.9e-3 RMS where it misses it by 3.6e-3 at the origin).
+  const Vec3 centre = bbox_centre(mesh.vertices);
   OMesh om;
   std::vector<OMesh::VertexHandle> vh(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Vec3& p = mesh.vertices[i];
+    const Vec3 p = mesh.vertices[i] - centre;
     vh[i] = om.add_vertex(OMesh::Point(p.x(), p.y(), p.z()));
   }
   // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
@@ -97,7 +102,7 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   out.vertices.reserve(om.n_vertices());
   for (auto v : om.vertices()) {
     const OMesh::Point& p = om.point(v);
-    out.vertices.emplace_back(p[0], p[1], p[2]);
+    out.vertices.push_back(Vec3(p[0], p[1], p[2]) + centre);
   }
   out.faces.reserve(om.n_faces());
   for (auto f : om.faces()) {
