@@ -136,10 +136,7 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   // Fitted relative to the centre of the scan's bounding box, then moved back: a scan far from the
   // origin (a georeferenced one, 1e6 away) lost precision in the decimation's quadrics and the
   // fit's solves, and its cage came out other than the one the scan at the origin gets.
-  std::vector<Vec3> used;
-  for (const Face& f : scan.faces)
-    for (int v : f) used.push_back(scan.vertices[v]);
-  const Vec3 centre = bbox_centre(used);
+  const Vec3 centre = bbox_centre(scan.vertices, scan.faces);
   TriMesh centred = scan;
   for (Vec3& p : centred.vertices) p -= centre;
   CageFit fit = fit_centred(centred, options);

@@ -32,13 +32,14 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
   return (hi - lo).norm();
 }
 
-Vec3 bbox_centre(const std::vector<Vec3>& points) {
-  if (points.empty()) return Vec3::Zero();
-  Vec3 lo = points.front(), hi = points.front();
-  for (const Vec3& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  if (faces.empty()) return Vec3::Zero();
+  Vec3 lo = vertices[faces[0][0]], hi = lo;
+  for (const Face& f : faces)
+    for (int v : f) {
+      lo = lo.cwiseMin(vertices[v]);
+      hi = hi.cwiseMax(vertices[v]);
+    }
   return lo / 2.0 + hi / 2.0;  // halves first: no overflow
 }
 

@@ -56,7 +56,7 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
   // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed
   // the scan by 4.9e-3 RMS where it misses it by 3.6e-3 at the origin).
-  const Vec3 centre = bbox_centre(mesh.vertices);
+  const Vec3 centre = bbox_centre(mesh.vertices, mesh.faces);
   OMesh om;
   std::vector<OMesh::VertexHandle> vh(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {

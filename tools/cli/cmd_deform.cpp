@@ -213,12 +213,9 @@ int run_deform(const DeformCmdOptions& o) {
   const TimedIntersections output_pairs = find_intersections(current.vertices, current.faces, "the output");
   const std::size_t new_pairs = count_new_intersections_at_least(input_pairs.result, output_pairs.result);
   const bool cut_short = input_pairs.result.truncated || output_pairs.result.truncated;
-  if (method == Method::Volumes) {
-    if (cut_short)
-      warnings.push_back(uncounted_pairs_text(input_pairs.result, output_pairs.result));
-    else if (new_pairs > 0)
-      warnings.push_back(std::to_string(new_pairs) + " new intersecting pairs of triangles");
-  }
+  if (method == Method::Volumes)
+    if (std::string w = new_pairs_warning(input_pairs.result, output_pairs.result); !w.empty())
+      warnings.push_back(w);
 
   log.phase("writing " + o.output);
   sw.restart();
@@ -281,7 +278,7 @@ int run_deform(const DeformCmdOptions& o) {
   }
   std::cout << "intersections  " << input_pairs.result.num_pairs << " pairs in the input, "
             << output_pairs.result.num_pairs << " in the output, " << new_pairs << " new"
-            << (cut_short ? " (at least: the search stopped early)" : "") << "\n"
+            << cut_short_note(cut_short) << "\n"
             << "time           total " << fixed(report["timing_seconds"]["total"].get<double>()) << " s\n"
             << "output         " << o.output << "\n";
   if (!o.report.empty()) std::cout << "report         " << o.report << "\n";

@@ -256,13 +256,23 @@ struct EditCmdOptions {
   bool strict = false;  // exit 3 when the result misses a target (the report's "warnings")
 };
 
+bool volumes(const LayeredModel& model) {
+  return model.options().method == EditOptions::Method::Volumes;
+}
+
+// Whether the change solved the edited band's own region by volumes (an edit of a triangle
+// band; not amplitude changes, cage edits or vectors).
+bool edit_solved(const layers::CascadeReport& r, const LayeredModel& model) {
+  return volumes(model) && r.edited_band > 0 && r.edit_volume.mean_abs_target > 0;
+}
+
 // What makes a change miss a target (volumes): the edited band's solve or a rebuilt band's not
 // converged; \p where names the change (e.g. "edit 3").
 void add_cascade_warnings(const layers::CascadeReport& r, const LayeredModel& model, const std::string& where,
                           json& warnings) {
-  if (model.options().method != EditOptions::Method::Volumes) return;
+  if (!volumes(model)) return;
   const double tolerance = model.options().reconstruct.tolerance;
-  if (r.edited_band > 0 && r.edit_volume.mean_abs_target > 0 && !r.edit_stats.converged)
+  if (edit_solved(r, model) && !r.edit_stats.converged)
     warnings.push_back(where + ": band " + std::to_string(r.edited_band) + ": " +
                        not_converged_text(r.edit_stats, tolerance));
   for (const layers::BandRebuild& b : r.rebuilt)
@@ -271,8 +281,7 @@ void add_cascade_warnings(const layers::CascadeReport& r, const LayeredModel& mo
                          " rebuilt: " + not_converged_text(b.stats, tolerance));
 }
 
-// \p volumes: whether the model's method is volumes (a vectors edit runs no solve).
-json cascade_json(const layers::CascadeReport& r, bool volumes) {
+json cascade_json(const layers::CascadeReport& r, const LayeredModel& model) {
   json rebuilt = json::array();
   for (const layers::BandRebuild& b : r.rebuilt)
     rebuilt.push_back({{"band", b.band},
@@ -288,8 +297,7 @@ json cascade_json(const layers::CascadeReport& r, bool volumes) {
          {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
          {"rebuilt", rebuilt},
          {"total_seconds", r.total_seconds}};
-  if (volumes && r.edited_band > 0 && r.edit_volume.mean_abs_target > 0)
-    j["edit_solver_converged"] = r.edit_stats.converged;  // only where an edit solve ran
+  if (edit_solved(r, model)) j["edit_solver_converged"] = r.edit_stats.converged;
   return j;
 }
 
@@ -333,14 +341,10 @@ int run_change(const EditCmdOptions& o, const std::string& command,
                                       {"cut_short", cut_short},
                                       {"seconds", in.seconds + out.seconds}};
     std::cout << "finest band: " << in.result.num_pairs << " intersecting pairs before, "
-              << out.result.num_pairs << " after, " << fresh << " new"
-              << (cut_short ? " (at least: the search stopped early)" : "") << "\n";
-    if (model.options().method == EditOptions::Method::Volumes) {
-      if (cut_short)
-        warnings.push_back("finest band: " + uncounted_pairs_text(in.result, out.result));
-      else if (fresh > 0)
-        warnings.push_back("finest band: " + std::to_string(fresh) + " new intersecting pairs of triangles");
-    }
+              << out.result.num_pairs << " after, " << fresh << " new" << cut_short_note(cut_short) << "\n";
+    if (volumes(model))
+      if (std::string w = new_pairs_warning(in.result, out.result); !w.empty())
+        warnings.push_back("finest band: " + w);
   }
   r["warnings"] = warnings;
   sw.restart();
@@ -379,7 +383,7 @@ int run_edit(const EditCmdOptions& o) {
       try {
         const layers::CascadeReport c = model.edit(o.band, script.edits[i], prov.dump());
         print_cascade(c);
-        out.push_back(cascade_json(c, model.options().method == EditOptions::Method::Volumes));
+        out.push_back(cascade_json(c, model));
         add_cascade_warnings(c, model, "edit " + std::to_string(i + 1), warnings);
       } catch (const InvalidInput& e) {
         throw InvalidInput(o.edit + ": edit " + std::to_string(i + 1) + ": " + e.what());
@@ -398,7 +402,7 @@ int run_amplitude(const EditCmdOptions& o) {
     const layers::CascadeReport c = model.set_amplitude(o.band, o.scale);
     print_cascade(c);
     add_cascade_warnings(c, model, "amplitude", warnings);
-    return json::array({cascade_json(c, model.options().method == EditOptions::Method::Volumes)});
+    return json::array({cascade_json(c, model)});
   });
 }
 

@@ -44,7 +44,7 @@ void print_summary(std::ostream& os, const json& r) {
      << "total volume   change " << sci(vm["total_volume_change"].get<double>()) << " (relative)\n"
      << "intersections  " << is["input_pairs"].get<std::size_t>() << " pairs in the input, "
      << is["output_pairs"].get<std::size_t>() << " in the output, " << is["new_pairs"].get<std::size_t>()
-     << " new" << (is["cut_short"].get<bool>() ? " (at least: the search stopped early)" : "") << "\n";
+     << " new" << cut_short_note(is["cut_short"].get<bool>()) << "\n";
   const json& it = r["iterations"];
   if (!it.is_null())
     os << "solver         " << r["solver"].get<std::string>()
@@ -122,10 +122,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   if (method == Method::Volumes) {
     if (outcome.stats && !outcome.stats->converged)
       warnings.push_back(not_converged_text(*outcome.stats, options.tolerance));
-    if (!outcome.pairs_warning.empty())
-      warnings.push_back(outcome.pairs_warning);
-    else if (outcome.new_pairs > 0)
-      warnings.push_back(std::to_string(outcome.new_pairs) + " new intersecting pairs of triangles");
+    if (!outcome.pairs_warning.empty()) warnings.push_back(outcome.pairs_warning);
   }
   report["warnings"] = warnings;
   if (!o.report.empty()) {

@@ -345,13 +345,13 @@ std::string cut_short_text(const IntersectionResult& r, const std::string& name)
          "): its counts are lower bounds";
 }
 
-std::string uncounted_pairs_text(const IntersectionResult& before, const IntersectionResult& after) {
+std::string new_pairs_warning(const IntersectionResult& before, const IntersectionResult& after) {
   if (before.truncated)
     return "new intersecting pairs not counted: the input's search was cut short (see the warning above)";
+  const std::size_t n = count_new_intersections_at_least(before, after);
   if (after.truncated)
-    return "at least " + std::to_string(count_new_intersections_at_least(before, after)) +
-           " new intersecting pairs: the output's search was cut short";
-  return {};
+    return "at least " + std::to_string(n) + " new intersecting pairs: the output's search was cut short";
+  return n > 0 ? std::to_string(n) + " new intersecting pairs of triangles" : std::string();
 }
 
 TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
@@ -448,7 +448,7 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
   out.output_pairs = after.result.num_pairs;
   out.new_pairs = count_new_intersections_at_least(in.input_intersections, after.result);
   out.counts_cut_short = in.input_intersections.truncated || after.result.truncated;
-  out.pairs_warning = uncounted_pairs_text(in.input_intersections, after.result);
+  out.pairs_warning = new_pairs_warning(in.input_intersections, after.result);
   out.intersection_seconds = after.seconds;
   out.times.metrics += mw.seconds();
   return out;

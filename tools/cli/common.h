@@ -207,9 +207,14 @@ TimedIntersections find_intersections(const std::vector<Vec3>& vertices, const s
 //! "NAME: the self-intersection search stopped after N pairs and M exact tests (why): its counts
 //! are lower bounds".
 std::string cut_short_text(const IntersectionResult& r, const std::string& name);
-//! A warning for the report when new pairs could not be counted in full: "" if neither search was
-//! cut short; otherwise which one was, and what the count of new pairs then means.
-std::string uncounted_pairs_text(const IntersectionResult& before, const IntersectionResult& after);
+//! The report's warning about the pairs of \p after that \p before lacks: "" if there are none;
+//! "N new intersecting pairs of triangles"; or, when a search was cut short, which one and what
+//! the count then means.
+std::string new_pairs_warning(const IntersectionResult& before, const IntersectionResult& after);
+//! Appended to a summary's count of new pairs when a search was cut short.
+inline const char* cut_short_note(bool cut_short) {
+  return cut_short ? " (at least: the search stopped early)" : "";
+}
 
 //! What reconstruct and demo share before the methods run: the detail encoded over the base and
 //! the input detail's own intersections.
@@ -247,7 +252,7 @@ struct MethodOutcome {
   std::size_t output_pairs = 0;
   std::size_t new_pairs = 0;              //!< a lower bound if counts_cut_short
   bool counts_cut_short = false;          //!< the input's or the output's search hit its limits
-  std::string pairs_warning;              //!< uncounted_pairs_text(): "" unless counts_cut_short
+  std::string pairs_warning;              //!< new_pairs_warning()
   double intersection_seconds = 0.0;      //!< of the output only (the input's is counted once per case)
   std::optional<ReconstructStats> stats;  //!< volumes only
   PhaseTimes times;                       //!< setup, frames, solve, metrics filled in here

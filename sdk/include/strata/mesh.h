@@ -25,10 +25,12 @@ struct TriMesh {
 
 //! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points).
 double bbox_diagonal(const std::vector<Vec3>& points);
-//! Centre of the axis-aligned bounding box of \p points (the origin for no points). Algorithms
-//! whose precision depends on the coordinates' size (quadrics, float boxes, least squares) work
-//! relative to it, so that a scan far from the origin (a georeferenced one) is treated as at it.
-Vec3 bbox_centre(const std::vector<Vec3>& points);
+//! Centre of the axis-aligned bounding box of the vertices that \p faces use (the origin for no
+//! faces; vertices in no face, which may hold anything, are left out). Algorithms whose precision
+//! depends on the coordinates' size (quadrics, float boxes, least squares) work relative to it,
+//! so that a scan far from the origin (a georeferenced one) is treated as at it.
+//! \pre every face index is in range.
+Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
 
 //! Whether \p p is \p rest up to rounding: within 1e-12 of \p scale (a diagonal of the points
 //! it is one of) plus 1e-14 (about 45 units in the last place) of rest's largest coordinate. An
