@@ -33,6 +33,13 @@ namespace {
 using Bytes = std::vector<std::uint8_t>;
 using OJson = nlohmann::ordered_json;
 
+// A JSON object of \p n keys "0", "1", ..., each with the value 0.
+std::string many_keys(int n) {
+  std::string s = "{";
+  for (int k = 0; k < n; ++k) s += (k ? ",\"" : "\"") + std::to_string(k) + "\":0";
+  return s + "}";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Helpers independent of the code under test
 
@@ -420,6 +427,15 @@ TEST(StrataFile, WriteRejectsBadInputAndLeavesTheTargetUntouched) {
     c.model_json = "{\"a\":" + std::string(300, '[') + std::string(300, ']') + "}";
     expect_rejected(c, "too deep");
   }
+  {
+    StrataContainer c;
+    c.model_json = many_keys(1025);
+    expect_rejected(c, "1025 keys");
+    c.model_json = many_keys(1024);  // the limit itself is accepted
+    strata::test::ScratchDir other{"strata_file_keys"};
+    write_strata_container(c, other.file("keys.strata"));
+    EXPECT_EQ(read_strata_container(other.file("keys.strata")).model_json, c.model_json);
+  }
   // A missing directory is an I/O error, and the target elsewhere is still untouched.
   EXPECT_THROW(write_strata_container(StrataContainer{}, dir.file("no/such/dir/x.strata")), IoError);
   EXPECT_EQ(slurp(path), before);
@@ -630,6 +646,19 @@ TEST(StrataFile, MalformedHeadersAreReported) {
     deep.replace(deep.find("\"model\":{}"), 10,
                  "\"model\":{\"a\":" + std::string(400, '[') + std::string(400, ']') + "}");
     check(deep, both, "deeper");
+    // A deep value followed by a key: the parse went on past the limit, and copying the value
+    // as the object grew overflowed the stack (a crash at 100k levels).
+    deep = good.dump();
+    deep.replace(deep.find("\"model\":{}"), 10,
+                 "\"model\":{\"a\":" + std::string(100000, '[') + std::string(100000, ']') + ",\"b\":1}");
+    check(deep, both, "deeper");
+  }
+  {
+    // 300k keys in one object took 49 s to read (a linear search per key); the parse stops at the
+    // 1025th key. Not a timed test: a regression shows as a run of minutes.
+    std::string many = good.dump();
+    many.replace(many.find("\"model\":{}"), 10, "\"model\":" + many_keys(300000));
+    check(many, both, "more than 1024 keys");
   }
   // Section table entries. (Changing a header field can change the header's length and so the
   // canonical offsets: those cases expect whichever offset or length error follows.)

@@ -35,6 +35,10 @@ constexpr std::size_t kAlignment = 8;
 constexpr std::size_t kMaxNameLength = 64;
 // Deeper JSON is refused on both sides: serializing it recurses once per level.
 constexpr int kMaxJsonDepth = 256;
+// Objects with more keys are refused on both sides: ordered_json finds a key by a linear search,
+// so an object of n keys takes n^2 / 2 string comparisons to read (300k keys: 49 s). A model
+// writes a few dozen keys an object.
+constexpr std::size_t kMaxJsonKeys = 1024;
 
 std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size) {
   uLong crc = ::crc32(0L, Z_NULL, 0);
@@ -82,17 +86,31 @@ std::string name_problem(const std::string& name) {
   return "";
 }
 
-//! Parses \p text, recording in \p too_deep whether it nests deeper than kMaxJsonDepth.
-//! Throws nlohmann's exceptions on malformed JSON.
-Json parse_json_limited(const char* begin, const char* end, bool& too_deep) {
-  too_deep = false;
-  const Json::parser_callback_t depth_check = [&too_deep](int depth, Json::parse_event_t event, Json&) {
-    if (depth >= kMaxJsonDepth &&
-        (event == Json::parse_event_t::object_start || event == Json::parse_event_t::array_start))
-      too_deep = true;
+//! Parses \p text; returns "" or, if it nests deeper than kMaxJsonDepth or has an object of more
+//! than kMaxJsonKeys keys, the problem (\p out is then left unset). The parse stops at the first
+//! such level or key: the values built up to there stay shallow and small (a deeper value, copied
+//! once the parse went on, overflowed the stack). Throws nlohmann's exceptions on malformed JSON.
+std::string parse_json_limited(const char* begin, const char* end, Json& out) {
+  struct Exceeded {
+    std::string problem;
+  };
+  std::vector<std::size_t> keys;  // per open object, its keys so far
+  const Json::parser_callback_t limits = [&keys](int depth, Json::parse_event_t event, Json&) {
+    using E = Json::parse_event_t;
+    if ((event == E::object_start || event == E::array_start) && depth >= kMaxJsonDepth)
+      throw Exceeded{"nested deeper than " + std::to_string(kMaxJsonDepth) + " levels"};
+    if (event == E::object_start) keys.push_back(0);
+    if (event == E::object_end) keys.pop_back();
+    if (event == E::key && ++keys.back() > kMaxJsonKeys)
+      throw Exceeded{"an object has more than " + std::to_string(kMaxJsonKeys) + " keys"};
     return true;
   };
-  return Json::parse(begin, end, depth_check);
+  try {
+    out = Json::parse(begin, end, limits);
+  } catch (const Exceeded& e) {
+    return e.problem;
+  }
+  return "";
 }
 
 //! The file-level header text of \p container, whose sections start \p first_offset bytes into
@@ -172,13 +190,13 @@ class Reader {
 
   Json parse_header(const char* begin, const char* end) const {
     Json header;
-    bool too_deep = false;
+    std::string problem;
     try {
-      header = parse_json_limited(begin, end, too_deep);
+      problem = parse_json_limited(begin, end, header);
     } catch (const Json::exception& e) {
       malformed(std::string("invalid JSON: ") + e.what());
     }
-    if (too_deep) malformed("nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+    if (!problem.empty()) malformed(problem);
     if (!header.is_object()) malformed("not a JSON object");
     static const std::set<std::string> kKeys = {"format", "version", "sections", "model"};
     for (const std::string& key : kKeys)
@@ -310,16 +328,14 @@ const Section& StrataContainer::require(const std::string& name, const std::stri
 void write_strata_container(const StrataContainer& container, const std::string& path) {
   // Validate everything before the target is touched.
   Json model;
-  bool too_deep = false;
+  std::string problem;
   try {
-    model = parse_json_limited(container.model_json.data(),
-                               container.model_json.data() + container.model_json.size(), too_deep);
+    problem = parse_json_limited(container.model_json.data(),
+                                 container.model_json.data() + container.model_json.size(), model);
   } catch (const Json::exception& e) {
     throw InvalidInput(path + ": model_json is not valid JSON: " + e.what());
   }
-  if (too_deep)
-    throw InvalidInput(path + ": model_json is nested deeper than " + std::to_string(kMaxJsonDepth) +
-                       " levels");
+  if (!problem.empty()) throw InvalidInput(path + ": model_json: " + problem);
   if (!model.is_object()) throw InvalidInput(path + ": model_json is not a JSON object");
   std::set<std::string> names;
   for (const Section& s : container.sections) {
