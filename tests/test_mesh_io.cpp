@@ -435,6 +435,29 @@ TEST(MeshIoRoundTrip, OffAndPlySyntaxVariants) {
   EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
 }
 
+// Elements the reader does not use, however many, are skipped; the same name twice is refused.
+// (200k empty ones took 24 s to read before the names went into a set: each was compared with all
+// the earlier ones.)
+TEST(MeshIoRoundTrip, PlyWithManyUnusedElements) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  std::string head = "ply\nformat ascii 1.0\n";
+  for (int e = 0; e < 200000; ++e) head += "element e" + std::to_string(e) + " 0\n";
+  const std::string tail =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  write_bytes(dir.file("many.ply"), head + tail);
+  const TriMesh r = read_mesh(dir.file("many.ply"));
+  EXPECT_EQ(r.num_vertices(), 3);
+  EXPECT_EQ(r.faces, (std::vector<Face>{{0, 1, 2}}));
+  write_bytes(dir.file("twice.ply"), head + "element e199999 0\n" + tail);
+  try {
+    read_mesh(dir.file("twice.ply"));
+    ADD_FAILURE() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("element 'e199999' declared twice"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MeshIoRoundTrip, BinaryStlWhoseHeaderStartsWithSolid) {
   Fixture fx;
   std::string bytes = encode(tetra(), Fmt::StlBinary);

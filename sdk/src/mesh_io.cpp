@@ -27,6 +27,7 @@
 #include <string_view>
 #include <system_error>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "internal/polygon.h"
 #include "internal/read_file.h"
@@ -692,6 +693,7 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
   if (!lines.next(line) || !(line == "ply" || line == "ply\r"))
     fail_io(name, "not a PLY file: it does not start with the line 'ply'");
   bool have_format = false, ended = false;
+  std::unordered_set<std::string> element_names;
   while (lines.next(line)) {
     const std::string where = "header " + lines.where();
     if (line.find('\0') != std::string_view::npos)
@@ -722,8 +724,9 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
       e.name = std::string(a);
       e.count = need_int(b, name, where);
       if (e.count < 0) fail_io(name, where + ": negative element count");
-      for (const PlyElement& other : h.elements)
-        if (other.name == e.name) fail_io(name, where + ": element " + quote_token(a) + " declared twice");
+      // A set, not a search of the earlier elements: 300k declarations of empty elements took 53 s.
+      if (!element_names.insert(e.name).second)
+        fail_io(name, where + ": element " + quote_token(a) + " declared twice");
       h.elements.push_back(std::move(e));
     } else if (key == "property") {
       if (h.elements.empty()) fail_io(name, where + ": property before any element");
