@@ -533,6 +533,27 @@ TEST(Subdiv, RejectsBadCages) {
   SubdivOptions iso;
   iso.isolation_level = 0;
   EXPECT_NE(msg(cube_cage(), {}, iso).find("isolation level"), std::string::npos);
+  {
+    // Semi-sharp creases on every edge refine nearly everywhere, 3 times the faces a level under
+    // Loop (a 400-face cage at level 10: 4.5 GB); refused at the level where the refinement passes
+    // max_refined_faces (here 20,000, so that the test stays small), and fine at level 4.
+    const PolyMesh octa = octahedron();
+    SubdivTags sharp;
+    for (const auto& f : octa.faces)
+      for (std::size_t c = 0; c < f.size(); ++c)
+        if (f[c] < f[(c + 1) % f.size()]) sharp.creases.push_back({f[c], f[(c + 1) % f.size()], 9.99});
+    SubdivOptions deep;
+    deep.isolation_level = 10;
+    deep.max_refined_faces = 20000;
+    const std::string m = msg(octa, sharp, deep);
+    EXPECT_NE(m.find("isolation level 10 refines this cage (8 faces, 12 creases) into more than 20000 faces"),
+              std::string::npos)
+        << m;
+    deep.isolation_level = 4;
+    EXPECT_NO_THROW(SubdivSurface(octa, sharp, deep));
+    deep.max_refined_faces = -1;
+    EXPECT_NE(msg(octa, sharp, deep).find("max_refined_faces"), std::string::npos);
+  }
   // Faces of over 64 corners and vertices in over 64 faces (a 300-corner face took 30 s): a prism
   // whose caps have k corners, and a bipyramid whose apexes are in k faces; 64 is accepted.
   auto prism = [](int k) {

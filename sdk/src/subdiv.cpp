@@ -159,6 +159,31 @@ class SubdivSurface::Impl {
     }
     if (opt_.isolation_level < 1 || opt_.isolation_level > 10)
       throw InvalidInput("subdivision isolation level must be in 1..10, got " + vtx(opt_.isolation_level));
+    if (opt_.max_refined_faces < 0)
+      throw InvalidInput("max_refined_faces must be at least 0, got " +
+                         std::to_string(opt_.max_refined_faces));
+  }
+
+  // The adaptive refinement, refused once it has more faces than SubdivOptions::max_refined_faces.
+  // Above level 4 the levels are refined one at a time (each 3-4 times the last at most), so that
+  // the refusal comes before the memory is taken; up to level 4, as before, at once.
+  void refine_within_budget(const Far::PatchTableFactory::Options& po) {
+    const long long budget = opt_.max_refined_faces > 0
+                                 ? opt_.max_refined_faces
+                                 : std::max<long long>(1 << 20, 256LL * cage_.num_faces());
+    const int level = opt_.isolation_level;
+    for (int l = std::min(level, 4);; ++l) {
+      Far::TopologyRefiner::AdaptiveOptions ao = po.GetRefineAdaptiveOptions();
+      ao.SetIsolationLevel(l);
+      refiner_->Unrefine();
+      refiner_->RefineAdaptive(ao);
+      if (refiner_->GetNumFacesTotal() > budget)
+        throw InvalidInput("subdivision isolation level " + vtx(level) + " refines this cage (" +
+                           vtx(cage_.num_faces()) + " faces, " + vtx(static_cast<int>(tags_.creases.size())) +
+                           " creases) into more than " + std::to_string(budget) + " faces by level " +
+                           vtx(l) + "; a lower isolation level or fewer creases would do");
+      if (l >= level) return;
+    }
   }
 
   void build_refiner() {
@@ -206,7 +231,7 @@ class SubdivSurface::Impl {
     po.generateVaryingTables = false;
     po.generateVaryingLocalPoints = false;
     po.SetPatchPrecision<double>();
-    refiner_->RefineAdaptive(po.GetRefineAdaptiveOptions());
+    refine_within_budget(po);
     table_.reset(Far::PatchTableFactory::Create(*refiner_, po));
     if (!table_) throw SolverError("OpenSubdiv could not build the patch table: " + g_osd_error);
     map_ = std::make_unique<Far::PatchMap>(*table_);

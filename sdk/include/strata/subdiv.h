@@ -60,6 +60,12 @@ struct SubdivOptions {
   //! remaining irregular patches; 4 keeps them within round-off of the true limit on typical
   //! cages (depth 2 leaves errors of ~1e-2 of an edge near extraordinary vertices).
   int isolation_level = 4;
+  //! Most faces the adaptive refinement may make (all levels); 0: max(2^20, 256 x the cage's
+  //! faces), which admits every face refined to level 4. Semi-sharp creases on every edge refine
+  //! nearly everywhere, 3 (Loop) or 4 times the faces a level: a 400-face Loop cage so creased,
+  //! isolated to level 10, took 4.5 GB. Checked level by level above level 4, before the memory
+  //! is taken.
+  long long max_refined_faces = 0;
 };
 
 //! A point of the limit surface's parameter domain: a ptex face and (u, v) in it. Loop ptex faces
@@ -106,8 +112,9 @@ class SubdivSurface {
   //!        indices, a face of fewer than 3 corners, a non-triangle under Loop, a non-manifold or
   //!        inconsistently oriented edge, a crease on a pair of vertices that is not a cage edge, a
   //!        corner on a missing vertex, a negative sharpness, an isolation level outside 1..10,
-  //!        coordinates beyond kMaxCoordinate, or a face of over kMaxCageValence corners or a
-  //!        vertex in over kMaxCageValence faces.
+  //!        coordinates beyond kMaxCoordinate, a face of over kMaxCageValence corners or a
+  //!        vertex in over kMaxCageValence faces, or an isolation whose refinement exceeds
+  //!        SubdivOptions::max_refined_faces.
   //! \throw SolverError if OpenSubdiv fails to build the topology or the patch table.
   explicit SubdivSurface(const PolyMesh& cage, const SubdivTags& tags = {},
                          const SubdivOptions& options = {});
