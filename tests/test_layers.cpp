@@ -529,6 +529,29 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
     for (layers::Section& s : v.sections)
       if (s.name == "band0.points") std::fill(s.bytes.begin(), s.bytes.end(), 0);
   });
+  // A fourth pass: a triangle band with a repeated face was read, and info, amplitude and edit
+  // wrote it on; the same in the cage was blamed on band 1 (whose base the cage's surface is).
+  auto says = [&](const std::string& name, const std::string& needle) {
+    try {
+      layers::read_model(tmp.file(name + ".strata"));
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << name << ": " << e.what();
+    }
+  };
+  variant("repeated_face", [](nlohmann::json&, layers::StrataContainer& v) {
+    for (layers::Section& s : v.sections)
+      if (s.name == "band1.faces") std::memcpy(s.bytes.data() + 12, s.bytes.data(), 12);
+  });
+  says("repeated_face", "band 1: faces 0 and 1 both run from vertex");
+  variant("repeated_cage_face", [](nlohmann::json&, layers::StrataContainer& v) {
+    const layers::Section* sizes = v.find("band0.face_sizes");
+    ASSERT_NE(sizes, nullptr);
+    const std::vector<std::int32_t> n = layers::unpack_i32(*sizes, -1, "sizes");
+    ASSERT_EQ(n[0], n[1]);
+    for (layers::Section& s : v.sections)
+      if (s.name == "band0.face_indices") std::memcpy(s.bytes.data() + 4 * n[0], s.bytes.data(), 4 * n[0]);
+  });
+  says("repeated_cage_face", "band 0: cage edge");
   // The untouched container still reads.
   EXPECT_NO_THROW(layers::read_model(good));
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <unordered_map>
 
 #include "strata/cage_editing.h"
 #include "strata/exceptions.h"
@@ -532,6 +533,21 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                              "," + std::to_string(t[1]) + "," + std::to_string(t[2]) +
                              "), not 3 distinct vertices of " + std::to_string(nv));
     }
+    // Each directed edge in one face at most: a repeated face, an edge of three faces or
+    // neighbours of opposite orientation passed info, amplitude and edit, which wrote them on.
+    std::unordered_map<std::uint64_t, std::size_t> directed;
+    directed.reserve(3 * b.mesh.faces.size());
+    for (std::size_t f = 0; f < b.mesh.faces.size(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int u = b.mesh.faces[f][c], v = b.mesh.faces[f][(c + 1) % 3];
+        const auto [it, fresh] =
+            directed.emplace((static_cast<std::uint64_t>(u) << 32) | static_cast<std::uint32_t>(v), f);
+        if (!fresh)
+          throw InvalidInput(name + ": faces " + std::to_string(it->second) + " and " + std::to_string(f) +
+                             " both run from vertex " + std::to_string(u) + " to " + std::to_string(v) +
+                             " (a repeated face, an edge of more than two faces, or an inconsistent "
+                             "orientation)");
+      }
     check_coordinates(b.mesh.vertices, name + ":");
     if (!(bbox_diagonal(b.mesh.vertices) > 0) || !(bbox_diagonal(e.detail_rest) > 0) ||
         !(bbox_diagonal(b.base_rest) > 0))

@@ -4,6 +4,7 @@
 // first, so a model read back is bit for bit the model written.
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "strata/exceptions.h"
@@ -12,6 +13,12 @@
 
 namespace strata::layers {
 namespace {
+
+// Band 1's base surface is band 0's cage at band 1's rest base points: a cage that fails on its
+// own points too is band 0's fault, reported as such.
+struct CageFault {
+  std::string problem;
+};
 
 using json = nlohmann::json;
 
@@ -493,8 +500,19 @@ LayeredModel read_model(const std::string& path) {
         if (static_cast<long long>(base_cage.vertices.size()) != nb)
           h.fail(w + ": base_vertices differs from the cage");
         base_cage.vertices = band.base_rest;
-        const SubdivSurface surface(base_cage, bands[0].tags, bands[0].subdiv);
-        band.encoding = encode_detail_at(rest, surface, std::move(lp));
+        std::unique_ptr<SubdivSurface> surface;
+        try {
+          surface = std::make_unique<SubdivSurface>(base_cage, bands[0].tags, bands[0].subdiv);
+        } catch (const InvalidInput&) {
+          // Band 0's fault (its faces, tags or options) or band 1's (its base points at rest).
+          try {
+            const SubdivSurface cage(bands[0].cage, bands[0].tags, bands[0].subdiv);
+          } catch (const InvalidInput& own) {
+            throw CageFault{own.what()};
+          }
+          throw;
+        }
+        band.encoding = encode_detail_at(rest, *surface, std::move(lp));
       } else {
         const std::vector<double> bc =
             unpack_f64(section(p + "base_coords"), 3 * nv, what(p + "base_coords"));
@@ -506,6 +524,8 @@ LayeredModel read_model(const std::string& path) {
           h.fail(w + ": base_vertices differs from band " + std::to_string(k - 1));
         band.encoding = encode_detail_at(rest, base, std::move(bp));
       }
+    } catch (const CageFault& e) {
+      h.fail("band 0: " + e.problem);
     } catch (const InvalidInput& e) {
       h.fail(w + ": " + e.what());
     } catch (const SolverError& e) {

@@ -127,8 +127,10 @@ class LayeredModel {
   //!        out of range; SolverError if fitting or decimation fails.
   static LayeredModel build(const TriMesh& scan, const BuildOptions& options = {});
 
-  //! Assembles a model from its parts (the file reader): checks that every band's encoding fits
-  //! its mesh and its base.
+  //! Assembles a model from its parts (the file reader): checks that the cage makes a limit
+  //! surface, that every triangle band's faces have 3 distinct vertices and each directed edge
+  //! in one face at most (no repeated face, no edge of more than two faces, one orientation), and
+  //! that every band's encoding fits its mesh and its base.
   //! \throw InvalidInput naming the band and the problem.
   static LayeredModel assemble(std::vector<Band> bands, ModelOptions options,
                                std::vector<std::string> history);
