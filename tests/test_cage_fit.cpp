@@ -9,6 +9,7 @@
 #include "strata/cage_fit.h"
 #include "strata/cage_io.h"
 #include "strata/exceptions.h"
+#include "strata/mesh_processing.h"
 #include "strata/subdiv.h"
 #include "test_meshes.h"
 
@@ -143,6 +144,46 @@ TEST(CageFit, RejectsBadInput) {
   TriMesh far = scan;
   for (Vec3& v : far.vertices) v *= 1e160;
   EXPECT_THROW(fit_cage(far, with([](CageFitOptions&) {})), InvalidInput);
+}
+
+// The decimation, the cage fit and the builder do not depend on the scan's size: OpenMesh keeps
+// the quadrics' errors in single precision, which overflowed for a scan scaled by 1e12 and
+// underflowed at 1e-100, so that nothing collapsed (the "cage" was the whole scan). Scaled by a
+// power of two the decimation is the same to the bit; by 1e12 it still reaches its target. A scan
+// whose extent is below kMinExtent is refused (at 1e-200 a model was built that its reader then
+// refused); bbox_diagonal() still measures it.
+TEST(CageFit, TheScansSizeDoesNotMatter) {
+  const TriMesh scan = icosphere(3);  // 1280 faces
+  const TriMesh unit = decimate_mesh(scan, 200);
+  ASSERT_EQ(unit.num_faces(), 200);
+  for (const int e : {40, -40, 330, -330}) {
+    TriMesh scaled = scan;
+    for (Vec3& v : scaled.vertices) v = std::ldexp(1.0, e) * v;
+    const TriMesh d = decimate_mesh(scaled, 200);
+    ASSERT_EQ(d.faces, unit.faces) << "2^" << e;
+    for (int i = 0; i < d.num_vertices(); ++i)
+      ASSERT_EQ(std::ldexp(1.0, -e) * d.vertices[i], unit.vertices[i]) << "2^" << e;
+  }
+  for (const double s : {1e12, 1e18, 1e-19, 1e-100}) {
+    TriMesh scaled = scan;
+    for (Vec3& v : scaled.vertices) v *= s;
+    EXPECT_EQ(decimate_mesh(scaled, 200).num_faces(), 200) << s;
+  }
+  CageFitOptions o;
+  o.faces = 100;
+  TriMesh big = scan;
+  for (Vec3& v : big.vertices) v *= 1e12;
+  const CageFit fit = fit_cage(big, o);
+  EXPECT_LE(fit.cage.num_faces(), 110);
+  TriMesh tiny = scan;
+  for (Vec3& v : tiny.vertices) v *= 1e-200;
+  EXPECT_NEAR(bbox_diagonal(tiny.vertices) / (1e-200 * bbox_diagonal(scan.vertices)), 1.0, 1e-12);
+  try {
+    fit_cage(tiny, o);
+    ADD_FAILURE() << "a scan of extent 3.5e-200 was fitted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("below the engine's range (1e-20)"), std::string::npos) << e.what();
+  }
 }
 
 // A scan may hold vertices in no face (validate_mesh() allows them): the decimation drops them

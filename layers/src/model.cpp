@@ -424,6 +424,7 @@ DetailMagnitude LayeredModel::detail_magnitude(int k) const {
 LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   const auto t0 = Clock::now();
   validate_mesh(scan, "scan");
+  check_extent(scan.vertices, scan.faces, "scan");
   if (o.bands < 2 || o.bands > 8)
     throw InvalidInput("build: bands must be 2 to 8, not " + std::to_string(o.bands));
   if (o.band_smoothing_steps < 0) throw InvalidInput("build: band_smoothing_steps must be >= 0");

@@ -133,6 +133,7 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   check_options(options);
   validate_mesh(scan, "scan");
   check_coordinates(scan.vertices, "scan");
+  check_extent(scan.vertices, scan.faces, "scan");
   // Fitted relative to the centre of the scan's bounding box, then moved back: a scan far from the
   // origin (a georeferenced one, 1e6 away) lost precision in the decimation's quadrics and the
   // fit's solves, and its cage came out other than the one the scan at the origin gets.

@@ -26,6 +26,7 @@ void check_mesh(const TriMesh& m, const char* what) {
     for (int v : f)
       if (v < 0 || v >= m.num_vertices())
         throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
+  check_extent(m.vertices, m.faces, std::string(what) + " mesh");
 }
 
 // Working state of one encode_detail() call.

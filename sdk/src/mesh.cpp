@@ -22,6 +22,18 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
+namespace {
+// |v|, with v scaled by a power of two (exact) first, so that its squares neither underflow nor
+// overflow: the same bits as v.norm() wherever that does neither.
+double scaled_norm(const Vec3& v) {
+  const double m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return v.norm();
+  int e = 0;
+  std::frexp(m, &e);
+  return std::ldexp((v * std::ldexp(1.0, -e)).norm(), e);
+}
+}  // namespace
+
 double bbox_diagonal(const std::vector<Vec3>& points) {
   if (points.empty()) return 0.0;
   Vec3 lo = points.front(), hi = points.front();
@@ -29,7 +41,24 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  return (hi - lo).norm();
+  return scaled_norm(hi - lo);
+}
+
+void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                  const std::string& what) {
+  if (faces.empty()) return;
+  Vec3 lo = vertices[faces[0][0]], hi = lo;
+  for (const Face& f : faces)
+    for (int v : f) {
+      lo = lo.cwiseMin(vertices[v]);
+      hi = hi.cwiseMax(vertices[v]);
+    }
+  const double extent = scaled_norm(hi - lo);
+  if (extent >= kMinExtent) return;
+  std::ostringstream s;
+  s << what << " has an extent (bounding box diagonal) of " << extent << ", below the engine's range ("
+    << kMinExtent << "): its prism volumes, cubic in it, would underflow";
+  throw InvalidInput(s.str());
 }
 
 Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {

@@ -7,6 +7,8 @@
 #include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <algorithm>
+#include <cmath>
 
 #include "internal/topology.h"
 #include "strata/exceptions.h"
@@ -56,11 +58,21 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
   // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed
   // the scan by 4.9e-3 RMS where it misses it by 3.6e-3 at the origin).
+  // And scaled by a power of two (exact, so the decimation of a scan of ordinary size is the
+  // same to the bit) to at most 1 in each coordinate: OpenMesh's decimater keeps its priorities,
+  // the quadrics' errors, in single precision, which overflowed for a scan scaled by 1e12 and
+  // underflowed at 1e-100 (nothing was collapsed, and `strata build` made the whole scan its cage).
   const Vec3 centre = bbox_centre(mesh.vertices, mesh.faces);
+  double radius = 0.0;
+  for (const Face& f : mesh.faces)
+    for (int v : f) radius = std::max(radius, (mesh.vertices[v] - centre).cwiseAbs().maxCoeff());
+  int exponent = 0;
+  std::frexp(radius, &exponent);
+  const double to_unit = std::ldexp(1.0, -exponent), from_unit = std::ldexp(1.0, exponent);
   OMesh om;
   std::vector<OMesh::VertexHandle> vh(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Vec3 p = mesh.vertices[i] - centre;
+    const Vec3 p = (mesh.vertices[i] - centre) * to_unit;
     vh[i] = om.add_vertex(OMesh::Point(p.x(), p.y(), p.z()));
   }
   // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
@@ -102,7 +114,7 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   out.vertices.reserve(om.n_vertices());
   for (auto v : om.vertices()) {
     const OMesh::Point& p = om.point(v);
-    out.vertices.push_back(Vec3(p[0], p[1], p[2]) + centre);
+    out.vertices.push_back(Vec3(p[0], p[1], p[2]) * from_unit + centre);
   }
   out.faces.reserve(om.n_faces());
   for (auto f : om.faces()) {

@@ -23,7 +23,8 @@ struct TriMesh {
   int num_faces() const { return static_cast<int>(faces.size()); }
 };
 
-//! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points).
+//! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points),
+//! computed without squares that underflow or overflow (points of 1e-200 have a diagonal).
 double bbox_diagonal(const std::vector<Vec3>& points);
 //! Centre of the axis-aligned bounding box of the vertices that \p faces use (the origin for no
 //! faces; vertices in no face, which may hold anything, are left out). Algorithms whose precision
@@ -43,6 +44,18 @@ bool back_at_rest(const Vec3& p, const Vec3& rest, double scale);
 //! reconstructs alike from 1e-20 to 1e25, while a detail 1e28 from a unit base overflowed the
 //! solver and one 1e80 away crashed the encoding (2026-11-28). Real scans are far inside.
 constexpr double kMaxCoordinate = 1e20;
+
+//! The smallest extent (bounding box diagonal) of a mesh the engine takes: its prism volumes are
+//! cubic in it and the solver's inner products hold their squares, which underflow far below it
+//! (a scan scaled by 1e-200 was decimated as is, its cage the whole scan, and its model then
+//! refused by the reader). The paper's cases reconstruct alike down to 1e-20.
+constexpr double kMinExtent = 1e-20;
+
+//! Checks that the vertices \p faces use span at least kMinExtent (nothing for no faces).
+//! \pre every face index is in range.
+//! \throw InvalidInput "<what> has an extent (bounding box diagonal) of <x>, below the engine's
+//!        range (1e-20): ...".
+void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& faces, const std::string& what);
 
 //! Checks that every coordinate of \p points is finite and of magnitude at most kMaxCoordinate.
 //! \throw InvalidInput "<what> vertex <i> has a non-finite coordinate" or "<what> vertex <i> has
