@@ -66,14 +66,17 @@ json edit_json(const EditFacts& editor, Method method, const EditResult& r, doub
   return j;
 }
 
-// The editor's apply(), its input errors prefixed with the script and the edit (a transform that
-// moves a vertex out of range was named without either).
-template <class Editor>
-EditResult apply_named(const Editor& editor, const EditTransform& t, const std::string& where) {
+// f(), with \p where (the script and the edit) named in the InvalidInput or SolverError it throws
+// (a transform that moved a vertex out of range, and a fairing system that could not be
+// factorized, were reported without either).
+template <class F>
+auto named(const std::string& where, F&& f) -> decltype(f()) {
   try {
-    return editor.apply(t);
+    return f();
   } catch (const InvalidInput& ex) {
     throw InvalidInput(where + ": " + ex.what());
+  } catch (const SolverError& ex) {
+    throw SolverError(where + ": " + ex.what());
   }
 }
 
@@ -184,29 +187,24 @@ int run_deform(const DeformCmdOptions& o) {
       co.handle_solved_rings = o.handle_rings;
       co.reconstruct = solver_options(o.solver, o.threads);
       co.reconstruct.progress = log.progress(label + ": " + to_string(method));
-      std::unique_ptr<CageEditor> editor;
-      try {
-        editor = std::make_unique<CageEditor>(current, SubdivSurface(cage, tags), region, handle, co);
-      } catch (const InvalidInput& ex) {
-        throw InvalidInput(where + ": " + ex.what());
-      }
+      const auto editor = named(where, [&] {
+        return std::make_unique<CageEditor>(current, SubdivSurface(cage, tags), region, handle, co);
+      });
       log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region cage vertices, " +
                 std::to_string(editor->handle_vertices().size()) + " handle; reconstructing " +
                 std::to_string(editor->region_faces()) + " prisms");
-      record(*editor, apply_named(*editor, e.transform, where), select_seconds, cage.vertices);
+      record(*editor, named(where, [&] { return editor->apply(e.transform); }), select_seconds,
+             cage.vertices);
       continue;
     }
     log.phase(label + ": decomposing the region");
     options.reconstruct.progress = log.progress(label + ": " + to_string(method));
-    std::unique_ptr<RegionEditor> editor;
-    try {
-      editor = std::make_unique<RegionEditor>(current, region, handle, options);
-    } catch (const InvalidInput& ex) {
-      throw InvalidInput(where + ": " + ex.what());
-    }
+    const auto editor =
+        named(where, [&] { return std::make_unique<RegionEditor>(current, region, handle, options); });
     log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region vertices, " +
               std::to_string(editor->handle_vertices().size()) + " handle vertices; reconstructing");
-    record(*editor, apply_named(*editor, e.transform, where), select_seconds, base_out.vertices);
+    record(*editor, named(where, [&] { return editor->apply(e.transform); }), select_seconds,
+           base_out.vertices);
   }
 
   log.phase("counting self-intersections");
@@ -220,6 +218,7 @@ int run_deform(const DeformCmdOptions& o) {
   log.phase("writing " + o.output);
   sw.restart();
   StagedOutputs staged;  // the outputs land together, or none does
+  validate_result(current, "the mesh edited by " + o.edit, o.output);
   warn_stl_drops_vertices(current, o.output);
   staged.write(o.output, [&](const std::string& p) { write_mesh(current, p); });
   if (!o.base_output.empty()) {

@@ -435,12 +435,7 @@ int run_export(const ExportCmdOptions& o) {
   }
   const TriMesh mesh = model.band_mesh(k, o.resolution);
   warn_stl_drops_vertices(mesh, o.output);
-  // The writer validates the mesh under the output's name; a degenerate band is the model's.
-  try {
-    validate_mesh(mesh, o.model + ": band " + std::to_string(k));
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(std::string(e.what()) + " (not written to " + o.output + ")");
-  }
+  validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault
   write_mesh(mesh, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces)" << std::endl;

@@ -96,6 +96,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   result.vertices = std::move(outcome.positions);
   result.faces = detail.mesh.faces;
   StagedOutputs staged;  // the mesh lands only with its report
+  validate_result(result, "the reconstructed detail", o.output);
   warn_stl_drops_vertices(result, o.output);
   staged.write(o.output, [&](const std::string& p) { write_mesh(result, p); });
   times.write = sw.seconds();

@@ -98,6 +98,14 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+void validate_result(const TriMesh& mesh, const std::string& what, const std::string& output) {
+  try {
+    validate_mesh(mesh, what);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string(e.what()) + " (not written to " + output + ")");
+  }
+}
+
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
   if (lower_extension(path) != ".stl") return;
   std::vector<char> used(mesh.vertices.size(), 0);

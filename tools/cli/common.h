@@ -109,6 +109,13 @@ std::string lower_extension(const std::string& path);
 //! in no face: STL holds triangles only, so they would be lost without a word.
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
+//! Checks a computed mesh (validate_mesh) before it is written to \p output: an error names the
+//! result (\p what) and says that \p output was not written, where the writer's own check names
+//! the output as if its file were at fault (an edit that scaled a region by 1e6 left the rest of
+//! the mesh zero area relative to it: "d.obj: face 0 has zero area").
+//! \throw InvalidInput "<what>: <problem> (not written to <output>)".
+void validate_result(const TriMesh& mesh, const std::string& what, const std::string& output);
+
 //! A base S and its edited S2, read as read_named_mesh(). A polygon of more than 3 corners is cut
 //! into triangles by its shape, so S and S2 listing the same polygons may be cut differently: S2
 //! then takes S's triangles (validated at S2's positions), so that its connectivity is S's.
