@@ -98,6 +98,7 @@ std::string supported_list() {
 }
 
 Format format_of(const std::string& path) {
+  if (path.empty()) fail_io("\"\"", "an empty path names no mesh file");  // was ": no file extension"
   const std::string ext = to_lower(fs::path(path).extension().string());
   if (ext == ".obj") return Format::Obj;
   if (ext == ".off") return Format::Off;

@@ -83,6 +83,14 @@ expect_fail "cage fit output dir"   nodir/cage.obj   cage fit $G/base.obj -o out
 expect_fail "cage, no subcommand"   "subcommand is required" cage
 expect_fail "generate unknown case" sphere           generate --case sphere --out-dir out/case
 expect_fail "generate bad bend"     bend-degrees     generate --case bumps --bend-degrees 400 --out-dir out/case
+# generate's three meshes land together: with the third unwritable (a directory in its place),
+# detail.obj was left behind.
+mkdir -p gen/edited_base.obj
+expect_fail "generate, third output" edited_base.obj generate --case bumps --triangles 500 --out-dir gen
+if [ "$(ls -A gen)" != edited_base.obj ] || [ -n "$(ls -A gen/edited_base.obj)" ]; then
+  echo "FAIL [generate, third output]: left $(ls -A gen)" >&2; failures=$((failures + 1))
+fi
+expect_fail "empty path"            "an empty path names no mesh file" stats ""
 # A PLY vertex element without coordinates (a quad's fan read the missing vertices: a crash).
 printf 'ply\nformat ascii 1.0\nelement vertex 4\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n4 0 1 2 3\n' >noxyz.ply
 expect_fail "PLY without x"         "noxyz.ply: vertex element has no property x" stats noxyz.ply

@@ -76,6 +76,35 @@ PY
 # tolerance. Every solve the report lists as not converged has a warning naming its edit and
 # band, and only those; --strict then exits 3 with the model written.
 "$STRATA" generate --case bumps --triangles 2000 --out-dir tube >/dev/null
+# A history entry is the file's text: `info` shows its control characters escaped, so that a
+# newline or a terminal escape in it cannot fake lines of the output (a fuzzing pass found both).
+python3 - camel.strata forged.strata <<'PY'
+import json, struct, sys, zlib
+data = open(sys.argv[1], "rb").read()
+H = struct.unpack_from("<I", data, 12)[0]
+header = json.loads(data[20:20 + H])
+old = [(s, data[s["offset"]:s["offset"] + s["size"]]) for s in header["sections"]]
+header["model"]["history"].append("x\nstrata: error: forged\u001b[2J")
+align = lambda n: (n + 7) // 8 * 8
+length = 0
+while True:
+    pos = align(20 + length)
+    for s, b in old:
+        s["offset"] = pos
+        pos = align(pos + len(b))
+    text = json.dumps(header, separators=(",", ":")).encode()
+    if len(text) == length:
+        break
+    length = len(text)
+out = bytearray(data[:12]) + struct.pack("<II", len(text), zlib.crc32(text)) + text
+for s, b in old:
+    out += bytes(s["offset"] - len(out)) + b
+open(sys.argv[2], "wb").write(bytes(out))
+PY
+"$STRATA" info forged.strata >forged.txt || fail "the forged history was not read"
+grep -q '^strata: error' forged.txt && fail "a history entry printed a fake error line"
+grep -qF 'x\x0astrata: error: forged\x1b[2J' forged.txt || fail "the history entry is not shown escaped: $(tail -2 forged.txt)"
+
 "$STRATA" build tube/detail.obj -o tube.strata -q >/dev/null || fail "build of the tube failed"
 python3 - <<'PY' || fail "could not write the back-and-forth script"
 import json

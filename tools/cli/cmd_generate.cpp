@@ -30,12 +30,13 @@ int run_generate(const GenerateCmdOptions& o) {
   const std::filesystem::path dir(o.out_dir);
   const std::pair<const TriMesh*, const char*> files[] = {
       {&c.detail, "detail.obj"}, {&c.base, "base.obj"}, {&c.edited_base, "edited_base.obj"}};
-  for (const auto& [mesh, file] : files) {
-    const std::string path = (dir / file).string();
-    write_mesh(*mesh, path);
-    std::cout << "wrote " << path << ": " << mesh->num_vertices() << " vertices, " << mesh->num_faces()
-              << " faces\n";
-  }
+  StagedOutputs staged;  // the three meshes land together, or none does (detail.obj was left alone)
+  for (const auto& [mesh, file] : files)
+    staged.write((dir / file).string(), [&, m = mesh](const std::string& p) { write_mesh(*m, p); });
+  staged.commit();
+  for (const auto& [mesh, file] : files)
+    std::cout << "wrote " << (dir / file).string() << ": " << mesh->num_vertices() << " vertices, "
+              << mesh->num_faces() << " faces\n";
   std::cout << "case " << c.name << ": bend " << o.bend_degrees << " degrees, inner bend radius "
             << c.inner_bend_radius << ", max detail height " << c.max_detail_height << std::endl;
   return 0;

@@ -236,7 +236,22 @@ int run_info(const InfoCmdOptions& o) {
                "band k-1. Detail magnitudes are |p - q| at rest (finest band bbox diagonal "
             << sci(diag) << ").\n"
             << "history: " << model.history().size() << " operations\n";
-  for (const std::string& e : model.history()) std::cout << "  " << e << "\n";
+  // Control characters escaped: a history entry is the file's text, and raw newlines or terminal
+  // escapes in it could fake lines of this output ("strata: error: ...").
+  for (const std::string& e : model.history()) {
+    std::string shown;
+    for (const char c : e) {
+      const auto u = static_cast<unsigned char>(c);
+      if (u < 0x20 || u == 0x7f) {
+        char esc[8];
+        std::snprintf(esc, sizeof esc, "\\x%02x", u);
+        shown += esc;
+      } else {
+        shown += c;
+      }
+    }
+    std::cout << "  " << shown << "\n";
+  }
   std::cout << std::flush;
   return 0;
 }
