@@ -178,6 +178,8 @@ TEST(CageFit, TheScansSizeDoesNotMatter) {
   TriMesh tiny = scan;
   for (Vec3& v : tiny.vertices) v *= 1e-200;
   EXPECT_NEAR(bbox_diagonal(tiny.vertices) / (1e-200 * bbox_diagonal(scan.vertices)), 1.0, 1e-12);
+  EXPECT_EQ(bbox_diagonal({Vec3::Zero(), Vec3(1e-310, 0, 0)}), 1e-310);  // subnormal: was NaN
+  EXPECT_EQ(bbox_diagonal({Vec3::Zero(), Vec3(0, 3e300, 4e300)}), 5e300);
   try {
     fit_cage(tiny, o);
     ADD_FAILURE() << "a scan of extent 3.5e-200 was fitted";

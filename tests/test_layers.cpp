@@ -313,6 +313,30 @@ TEST(Layers, AnIdentityEditOfATriangleBandChangesNothing) {
   for (const layers::BandRebuild& b : r.rebuilt) EXPECT_EQ(b.solved_vertices, 0) << "band " << b.band;
 }
 
+// An edit's provenance that is JSON is kept in the history as JSON, unless it exceeds the file
+// format's limits (an object of 1,025 keys or more, 257 levels): then as text, so that the model
+// still writes (a caller's JSON of 2,000 keys made every later write_model() fail).
+TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
+  LayeredModel model = model_of("camel");
+  EditStep step = camel_neck_bend();
+  step.transform = EditTransform{};  // the identity: nothing to solve
+  std::string keys = "{";
+  for (int k = 0; k < 2000; ++k) keys += (k ? ",\"" : "\"") + std::to_string(k) + "\":0";
+  keys += "}";
+  const std::string deep = std::string(300, '[') + std::string(300, ']');
+  model.edit(1, step, keys);
+  model.edit(1, step, deep);
+  model.edit(1, step, "{\"script\":\"bend.json\"}");
+  test::ScratchDir tmp("strata_layers");
+  layers::write_model(model, tmp.file("p.strata"));
+  const std::vector<std::string> h = layers::read_model(tmp.file("p.strata")).history();
+  ASSERT_GE(h.size(), 3u);
+  const auto edit_of = [](const std::string& entry) { return nlohmann::json::parse(entry).at("edit"); };
+  EXPECT_EQ(edit_of(h[h.size() - 3]), nlohmann::json(keys));
+  EXPECT_EQ(edit_of(h[h.size() - 2]), nlohmann::json(deep));
+  EXPECT_EQ(edit_of(h[h.size() - 1]), nlohmann::json::parse("{\"script\":\"bend.json\"}"));
+}
+
 TEST(Layers, EditOfAnIntermediateBandIsReencodedAndTheFinerBandFollows) {
   LayeredModel model = model_of("camel");
   const TriMesh band1 = model.band(1).mesh;

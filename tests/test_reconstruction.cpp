@@ -501,6 +501,12 @@ TEST(Reconstruction, RejectsBadInput) {
   DetailEncoding broken = e;
   broken.target_volumes.pop_back();
   EXPECT_THROW(VolumeReconstructor{broken}, InvalidInput);
+  // Non-finite rest detail (an encoding made by hand): two vertices at +inf made an edge of NaN
+  // length, whose bucket in the decimation's queue lay past its end.
+  broken = e;
+  broken.detail_rest[c.detail.faces[0][0]] = broken.detail_rest[c.detail.faces[0][1]] =
+      Vec3::Constant(std::numeric_limits<double>::infinity());
+  EXPECT_THROW(VolumeReconstructor{broken}, InvalidInput);
 }
 
 // Interactive drags (paper, section 5) through a DragState.

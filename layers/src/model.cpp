@@ -9,8 +9,10 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
+#include "json_limits.h"
 #include "strata/cage_editing.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
@@ -602,9 +604,13 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   report.edit_seconds = seconds_since(t0);
   if (k + 1 < work.n()) work.cascade(k + 1, std::move(change), report);
   json h = {{"op", "edit"}, {"band", k}};
+  // Provenance that is JSON is kept as JSON, within the file format's limits; otherwise as text
+  // (a caller's JSON of 2,000 keys would have made every later write of the model fail).
   try {
+    if (!internal::json_limit_problem(provenance.data(), provenance.data() + provenance.size()).empty())
+      throw std::length_error("over the file's JSON limits");
     h["edit"] = json::parse(provenance);
-  } catch (const json::exception&) {
+  } catch (const std::exception&) {
     h["edit"] = provenance;
   }
   work.history.push_back(h.dump());

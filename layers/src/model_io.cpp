@@ -498,7 +498,7 @@ LayeredModel read_model(const std::string& path) {
         for (long long i = 0; i < nv; ++i) lp[i] = LimitPoint{bf[i], uv[2 * i], uv[2 * i + 1]};
         PolyMesh base_cage = bands[0].cage;
         if (static_cast<long long>(base_cage.vertices.size()) != nb)
-          h.fail(w + ": base_vertices differs from the cage");
+          throw InvalidInput("base_vertices differs from the cage");  // prefixed below
         base_cage.vertices = band.base_rest;
         std::unique_ptr<SubdivSurface> surface;
         try {
@@ -521,7 +521,7 @@ LayeredModel read_model(const std::string& path) {
           bp[i] = BasePoint{bf[i], Vec3(bc[3 * i], bc[3 * i + 1], bc[3 * i + 2])};
         const TriMesh base{band.base_rest, bands[k - 1].mesh.faces};
         if (static_cast<long long>(bands[k - 1].mesh.vertices.size()) != nb)
-          h.fail(w + ": base_vertices differs from band " + std::to_string(k - 1));
+          throw InvalidInput("base_vertices differs from band " + std::to_string(k - 1));  // prefixed below
         band.encoding = encode_detail_at(rest, base, std::move(bp));
       }
     } catch (const CageFault& e) {

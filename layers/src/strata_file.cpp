@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "json_limits.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
 
@@ -33,12 +34,7 @@ constexpr unsigned char kMagic[8] = {0x89, 'S', 'T', 'R', 'A', 'T', 'A', 0x0A};
 constexpr std::size_t kPrefixSize = 20;  // magic, version, header length, header CRC-32
 constexpr std::size_t kAlignment = 8;
 constexpr std::size_t kMaxNameLength = 64;
-// Deeper JSON is refused on both sides: serializing it recurses once per level.
-constexpr int kMaxJsonDepth = 256;
-// Objects with more keys are refused on both sides: ordered_json finds a key by a linear search,
-// so an object of n keys takes n^2 / 2 string comparisons to read (300k keys: 49 s). A model
-// writes a few dozen keys an object.
-constexpr std::size_t kMaxJsonKeys = 1024;
+using internal::json_limit_problem;
 
 std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size) {
   uLong crc = ::crc32(0L, Z_NULL, 0);
@@ -87,30 +83,12 @@ std::string name_problem(const std::string& name) {
 }
 
 //! Parses \p text; returns "" or, if it nests deeper than kMaxJsonDepth or has an object of more
-//! than kMaxJsonKeys keys, the problem (\p out is then left unset). The parse stops at the first
-//! such level or key: the values built up to there stay shallow and small (a deeper value, copied
-//! once the parse went on, overflowed the stack). Throws nlohmann's exceptions on malformed JSON.
+//! than kMaxJsonKeys keys, the problem (\p out is then left unset; no value is built). Throws
+//! nlohmann's exceptions on malformed JSON.
 std::string parse_json_limited(const char* begin, const char* end, Json& out) {
-  struct Exceeded {
-    std::string problem;
-  };
-  std::vector<std::size_t> keys;  // per open object, its keys so far
-  const Json::parser_callback_t limits = [&keys](int depth, Json::parse_event_t event, Json&) {
-    using E = Json::parse_event_t;
-    if ((event == E::object_start || event == E::array_start) && depth >= kMaxJsonDepth)
-      throw Exceeded{"nested deeper than " + std::to_string(kMaxJsonDepth) + " levels"};
-    if (event == E::object_start) keys.push_back(0);
-    if (event == E::object_end) keys.pop_back();
-    if (event == E::key && ++keys.back() > kMaxJsonKeys)
-      throw Exceeded{"an object has more than " + std::to_string(kMaxJsonKeys) + " keys"};
-    return true;
-  };
-  try {
-    out = Json::parse(begin, end, limits);
-  } catch (const Exceeded& e) {
-    return e.problem;
-  }
-  return "";
+  std::string problem = json_limit_problem(begin, end);
+  if (problem.empty()) out = Json::parse(begin, end);
+  return problem;
 }
 
 //! The file-level header text of \p container, whose sections start \p first_offset bytes into

@@ -30,7 +30,9 @@ double scaled_norm(const Vec3& v) {
   if (!(m > 0) || !std::isfinite(m)) return v.norm();
   int e = 0;
   std::frexp(m, &e);
-  return std::ldexp((v * std::ldexp(1.0, -e)).norm(), e);
+  // Each component by ldexp(): 2^-e itself overflows for a subnormal m (e below -1022).
+  const Vec3 unit(std::ldexp(v.x(), -e), std::ldexp(v.y(), -e), std::ldexp(v.z(), -e));
+  return std::ldexp(unit.norm(), e);
 }
 }  // namespace
 

@@ -68,12 +68,12 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
     for (int v : f) radius = std::max(radius, (mesh.vertices[v] - centre).cwiseAbs().maxCoeff());
   int exponent = 0;
   std::frexp(radius, &exponent);
-  const double to_unit = std::ldexp(1.0, -exponent), from_unit = std::ldexp(1.0, exponent);
   OMesh om;
   std::vector<OMesh::VertexHandle> vh(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Vec3 p = (mesh.vertices[i] - centre) * to_unit;
-    vh[i] = om.add_vertex(OMesh::Point(p.x(), p.y(), p.z()));
+    const Vec3 p = mesh.vertices[i] - centre;  // by ldexp(): 2^-exponent overflows for subnormals
+    vh[i] = om.add_vertex(OMesh::Point(std::ldexp(p.x(), -exponent), std::ldexp(p.y(), -exponent),
+                                       std::ldexp(p.z(), -exponent)));
   }
   // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
   // is rejected by OpenMesh's add_face, and that face is left out of the decimation input.
@@ -114,7 +114,8 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   out.vertices.reserve(om.n_vertices());
   for (auto v : om.vertices()) {
     const OMesh::Point& p = om.point(v);
-    out.vertices.push_back(Vec3(p[0], p[1], p[2]) * from_unit + centre);
+    out.vertices.push_back(
+        Vec3(std::ldexp(p[0], exponent), std::ldexp(p[1], exponent), std::ldexp(p[2], exponent)) + centre);
   }
   out.faces.reserve(om.n_faces());
   for (auto f : om.faces()) {

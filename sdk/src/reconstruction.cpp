@@ -477,6 +477,8 @@ class VolumeReconstructor::Impl {
     for (const Face& f : enc_.detail_faces)
       for (int v : f)
         if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
+    // The hierarchy's decimation orders edges by length: a non-finite one has no place there.
+    check_coordinates(enc_.detail_rest, "encoding's detail at rest:");
     if (enc_.over_limit_surface() ? static_cast<int>(enc_.limit_points.size()) != n
                                   : static_cast<int>(enc_.base_points.size()) != n)
       throw InvalidInput(

@@ -164,20 +164,22 @@ class SubdivSurface::Impl {
                          std::to_string(opt_.max_refined_faces));
   }
 
-  // The adaptive refinement, refused once it has more faces than SubdivOptions::max_refined_faces.
-  // Above level 4 the levels are refined one at a time (each 3-4 times the last at most), so that
-  // the refusal comes before the memory is taken; up to level 4, as before, at once.
+  // The adaptive refinement. Up to level 4 as before, at once and unchecked. Deeper, one level at
+  // a time, refused once the faces pass SubdivOptions::max_refined_faces: each level has at most
+  // 4 times the faces of the one before, so at most about 4 times the budget is taken before the
+  // refusal, where isolating a deep level at once took it all.
   void refine_within_budget(const Far::PatchTableFactory::Options& po) {
-    const long long budget = opt_.max_refined_faces > 0
-                                 ? opt_.max_refined_faces
-                                 : std::max<long long>(1 << 20, 256LL * cage_.num_faces());
+    long long corners = 0;
+    for (const auto& f : cage_.faces) corners += static_cast<long long>(f.size());
+    const long long budget =
+        opt_.max_refined_faces > 0 ? opt_.max_refined_faces : std::max<long long>(1 << 20, 512 * corners);
     const int level = opt_.isolation_level;
     for (int l = std::min(level, 4);; ++l) {
       Far::TopologyRefiner::AdaptiveOptions ao = po.GetRefineAdaptiveOptions();
       ao.SetIsolationLevel(l);
       refiner_->Unrefine();
       refiner_->RefineAdaptive(ao);
-      if (refiner_->GetNumFacesTotal() > budget)
+      if (l > 4 && refiner_->GetNumFacesTotal() > budget)
         throw InvalidInput("subdivision isolation level " + vtx(level) + " refines this cage (" +
                            vtx(cage_.num_faces()) + " faces, " + vtx(static_cast<int>(tags_.creases.size())) +
                            " creases) into more than " + std::to_string(budget) + " faces by level " +

@@ -225,6 +225,7 @@ int run_deform(const DeformCmdOptions& o) {
     if (subdiv)
       staged.write(o.base_output, [&](const std::string& p) { write_cage(cage, p); });
     else {
+      validate_result(base_out, "the smooth base edited by " + o.edit, o.base_output);
       warn_stl_drops_vertices(base_out, o.base_output);
       staged.write(o.base_output, [&](const std::string& p) { write_mesh(base_out, p); });
     }

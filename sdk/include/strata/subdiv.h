@@ -60,11 +60,13 @@ struct SubdivOptions {
   //! remaining irregular patches; 4 keeps them within round-off of the true limit on typical
   //! cages (depth 2 leaves errors of ~1e-2 of an edge near extraordinary vertices).
   int isolation_level = 4;
-  //! Most faces the adaptive refinement may make (all levels); 0: max(2^20, 256 x the cage's
-  //! faces), which admits every face refined to level 4. Semi-sharp creases on every edge refine
-  //! nearly everywhere, 3 (Loop) or 4 times the faces a level: a 400-face Loop cage so creased,
-  //! isolated to level 10, took 4.5 GB. Checked level by level above level 4, before the memory
-  //! is taken.
+  //! Most faces the adaptive refinement may make (all levels) when it isolates deeper than level
+  //! 4; 0: max(2^20, 512 x the cage's face corners), above what any cage refined everywhere to
+  //! level 4 makes (341 x its faces for triangles and quads, 85 n + 1 for an n-gon). Semi-sharp
+  //! creases on every edge refine nearly everywhere, 3 to 4 times the faces a level: a 400-face
+  //! Loop cage so creased, isolated to level 10, took 4.5 GB. Levels up to 4 are not checked (they
+  //! refine at once, as they always did); deeper ones are refined one at a time and refused once
+  //! past the budget, having taken at most about 4 times it.
   long long max_refined_faces = 0;
 };
 

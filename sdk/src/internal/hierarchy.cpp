@@ -103,7 +103,8 @@ class EdgeQueue {
   static std::size_t bucket(double length2) {
     std::uint64_t bits;
     std::memcpy(&bits, &length2, sizeof bits);
-    return static_cast<std::size_t>(bits >> kShift);  // length2 >= 0: the sign bit is 0
+    // length2 >= 0 has the sign bit 0; a NaN with it set (inf - inf) goes last, in range.
+    return std::min(static_cast<std::size_t>(bits >> kShift), kBuckets - 1);
   }
 
   // A 4-ary heap: half the depth of a binary one, and a node's children are adjacent, so a sift
