@@ -30,7 +30,7 @@ int run_generate(const GenerateCmdOptions& o) {
   const std::filesystem::path dir(o.out_dir);
   const std::pair<const TriMesh*, const char*> files[] = {
       {&c.detail, "detail.obj"}, {&c.base, "base.obj"}, {&c.edited_base, "edited_base.obj"}};
-  StagedOutputs staged;  // the three meshes land together, or none does (detail.obj was left alone)
+  StagedOutputs staged;  // a failed write leaves none of the three (detail.obj was left alone)
   for (const auto& [mesh, file] : files)
     staged.write((dir / file).string(), [&, m = mesh](const std::string& p) { write_mesh(*m, p); });
   staged.commit();
