@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "strata/exceptions.h"
 
@@ -34,6 +35,17 @@ double scaled_norm(const Vec3& v) {
   const Vec3 unit(std::ldexp(v.x(), -e), std::ldexp(v.y(), -e), std::ldexp(v.z(), -e));
   return std::ldexp(unit.norm(), e);
 }
+
+// The bounding box (lo, hi) of the vertices \p faces use. \pre !faces.empty()
+std::pair<Vec3, Vec3> face_box(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  Vec3 lo = vertices[faces[0][0]], hi = lo;
+  for (const Face& f : faces)
+    for (int v : f) {
+      lo = lo.cwiseMin(vertices[v]);
+      hi = hi.cwiseMax(vertices[v]);
+    }
+  return {lo, hi};
+}
 }  // namespace
 
 double bbox_diagonal(const std::vector<Vec3>& points) {
@@ -49,12 +61,7 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
 void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                   const std::string& what) {
   if (faces.empty()) return;
-  Vec3 lo = vertices[faces[0][0]], hi = lo;
-  for (const Face& f : faces)
-    for (int v : f) {
-      lo = lo.cwiseMin(vertices[v]);
-      hi = hi.cwiseMax(vertices[v]);
-    }
+  const auto [lo, hi] = face_box(vertices, faces);
   const double extent = scaled_norm(hi - lo);
   if (extent >= kMinExtent) return;
   std::ostringstream s;
@@ -65,12 +72,7 @@ void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& fa
 
 Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   if (faces.empty()) return Vec3::Zero();
-  Vec3 lo = vertices[faces[0][0]], hi = lo;
-  for (const Face& f : faces)
-    for (int v : f) {
-      lo = lo.cwiseMin(vertices[v]);
-      hi = hi.cwiseMax(vertices[v]);
-    }
+  const auto [lo, hi] = face_box(vertices, faces);
   return lo / 2.0 + hi / 2.0;  // halves first: no overflow
 }
 

@@ -71,16 +71,19 @@ void DetailSolve::begin_drag(const std::vector<Vec3>& rest_base) {
 
 std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResult& res) {
   if (method_ != EditOptions::Method::Volumes || drag_end_ != EditOptions::DragEnd::FromDragState ||
-      !drag_state_.started() || base_at_rest(enc_, evaluate_base_frames(enc_, base)))
+      !drag_state_.started())
     return solve(base, res);
   const auto t0 = Clock::now();
+  // One evaluation of the frames serves the check, the solve and the metrics.
+  const BaseFrames frames = rec_->base_frames(base);
+  if (base_at_rest(enc_, frames)) return solve(base, res);
   // The finest level from the drag's state to the exact tolerance, with the reconstructor's own
   // check for new intersecting pairs (and fold repair).
   WarmStartOptions exact;
   exact.coarse_levels_only = false;
   exact.tolerance = reconstruct_.tolerance;
   exact.max_cycles = drag_end_cycles_;
-  ReconstructResult r = rec_->drag_step(base, drag_state_, exact);
+  ReconstructResult r = rec_->drag_step(frames, drag_state_, exact);
   const double warm_seconds = seconds_since(t0);
   if (!r.stats.converged || r.stats.new_intersecting_pairs != 0) {
     // Not converged, folded, or not checked (the options count no pairs): the clean start. If
@@ -94,12 +97,12 @@ std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResul
         r.stats.new_intersecting_pairs > res.stats.new_intersecting_pairs)
       return sub;
     res.stats = std::move(r.stats);
-    res.volume = volume_metrics(enc_, rec_->base_frames(base), r.positions);
+    res.volume = volume_metrics(enc_, frames, r.positions);
     return std::move(r.positions);
   }
   res.times.solve = warm_seconds;
   res.stats = std::move(r.stats);
-  res.volume = volume_metrics(enc_, rec_->base_frames(base), r.positions);
+  res.volume = volume_metrics(enc_, frames, r.positions);
   return std::move(r.positions);
 }
 
