@@ -180,6 +180,61 @@ TEST(VertexMultigrid, ConvergesToTheDenseSolutionOfTheDampedStep) {
   }
 }
 
+namespace {
+// Adds to \p s's regularization graph an edge from every 37th vertex to the vertex half the mesh
+// away (no face has it: a hand-made encoding's neighbours need not be the 1-ring), weight 0.5.
+void add_non_face_edges(StepSystem& s) {
+  DetailEncoding& e = s.enc;
+  const int n = e.num_detail_vertices();
+  std::vector<int> off{0}, nb;
+  std::vector<double> w;
+  for (int v = 0; v < n; ++v) {
+    for (int t = e.weight_offsets[v]; t < e.weight_offsets[v + 1]; ++t) {
+      nb.push_back(e.weight_neighbors[t]);
+      w.push_back(e.weights[t]);
+    }
+    if (v % 37 == 0) {
+      nb.push_back((v + n / 2) % n);
+      w.push_back(0.5);
+    }
+    off.push_back(static_cast<int>(nb.size()));
+  }
+  e.weight_offsets = off;
+  e.weight_neighbors = nb;
+  e.weights = w;
+}
+}  // namespace
+
+// The smoothness term over a graph with edges that no face has: the product applies the faces'
+// edges in its face pass and the others per vertex; together they are the reference's Laplacian,
+// and one thread or three give the same step.
+TEST(VertexMultigrid, ARegularizationGraphBeyondTheFacesIsAppliedWhole) {
+  StepSystem s = make_system(cases::DetailKind::Bumps, 1200, 0.4);
+  const double d = s.diag();
+  std::vector<Vec3> plain, extra;
+  internal::VertexMultigrid::Workspace ws;
+  s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, plain, ws, nullptr);
+  add_non_face_edges(s);
+  s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, extra, ws, nullptr);
+  EXPECT_LT(relative_difference(extra, dense_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
+  EXPECT_GT(relative_difference(extra, plain), 1e-3);  // the extra edges do change the step
+
+  StepSystem big = make_system(cases::DetailKind::Rings, 20000, 0.4);
+  add_non_face_edges(big);
+  const internal::VertexMultigrid mg = big.hierarchy();
+  const double db = big.diag();
+  tbb::task_arena arena(3);
+  for (bool single : {false, true}) {
+    SCOPED_TRACE(single ? "single precision" : "double precision");
+    std::vector<Vec3> one, three;
+    internal::VertexMultigrid::Workspace w1, w3;
+    mg.solve(big.view(1e-6 * db, 1e-2 * db), 0.0, 8, one, w1, nullptr, single);
+    mg.solve(big.view(1e-6 * db, 1e-2 * db), 0.0, 8, three, w3, &arena, single);
+    ASSERT_EQ(one.size(), three.size());
+    for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
+  }
+}
+
 // Fixed (pinned) vertices: delta is exactly 0 there, and the rest is the reference solution of
 // the free vertices' system.
 TEST(VertexMultigrid, FixedVerticesDoNotMove) {

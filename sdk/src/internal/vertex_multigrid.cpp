@@ -97,6 +97,8 @@ void pattern_graph(const std::vector<int>& row, const std::vector<int>& col, std
 }
 
 constexpr int kCorners[6][2] = {{0, 1}, {1, 0}, {0, 2}, {2, 0}, {1, 2}, {2, 1}};
+// Face edge e = (f[e], f[e + 1]) -> its two entries of kCorners (both directions).
+constexpr int kEdgeSlots[3][2] = {{0, 1}, {4, 5}, {2, 3}};
 
 }  // namespace
 
@@ -107,6 +109,8 @@ VertexMultigrid::VertexMultigrid(int num_vertices, const std::vector<Face>& face
   if (n0_ == 0) return;
   // The smoothness term's graph: w_kl = (w(k,l) + w(l,k)) / 2 over the union of both directions,
   // each row's halves gathered into a bucket and summed in column order.
+  std::vector<int> lap_off, lap_nb;
+  std::vector<double> lap_w;
   {
     std::vector<int> start(n0_ + 1, 0);
     for (int k = 0; k < n0_; ++k)
@@ -124,7 +128,7 @@ VertexMultigrid::VertexMultigrid(int num_vertices, const std::vector<Face>& face
           bucket[fill[nb[t]]++] = {k, 0.5 * weights[t]};
         }
     }
-    lap_offsets_.assign(n0_ + 1, 0);
+    lap_off.assign(n0_ + 1, 0);
     for (int k = 0; k < n0_; ++k) {
       const auto b = bucket.begin() + start[k], e = bucket.begin() + start[k + 1];
       std::sort(b, e, [](const auto& x, const auto& y) { return x.first < y.first; });
@@ -133,12 +137,42 @@ VertexMultigrid::VertexMultigrid(int num_vertices, const std::vector<Face>& face
         double w = 0.0;
         for (; next != e && next->first == it->first; ++next) w += next->second;
         if (it->first != k) {
-          lap_nb_.push_back(it->first);
-          lap_w_.push_back(w);
+          lap_nb.push_back(it->first);
+          lap_w.push_back(w);
         }
         it = next;
       }
-      lap_offsets_[k + 1] = static_cast<int>(lap_nb_.size());
+      lap_off[k + 1] = static_cast<int>(lap_nb.size());
+    }
+  }
+  // Each graph edge onto the first face that has it (face_lap_w_); the rest per vertex.
+  {
+    std::vector<char> taken(lap_nb.size(), 0);
+    auto slot = [&](int a, int b) {
+      const auto first = lap_nb.begin() + lap_off[a], last = lap_nb.begin() + lap_off[a + 1];
+      const auto it = std::lower_bound(first, last, b);
+      return it != last && *it == b ? static_cast<int>(it - lap_nb.begin()) : -1;
+    };
+    face_lap_w_.assign(3 * faces.size(), 0.0f);
+    for (std::size_t j = 0; j < faces.size(); ++j)
+      for (int e = 0; e < 3; ++e) {
+        const int a = faces[j][e], b = faces[j][(e + 1) % 3];
+        const int ab = a == b ? -1 : slot(a, b), ba = ab < 0 ? -1 : slot(b, a);
+        if (ab < 0 || ba < 0 || taken[ab]) continue;
+        taken[ab] = taken[ba] = 1;
+        face_lap_w_[3 * j + e] = static_cast<float>(lap_w[ab]);
+      }
+    rest_offsets_.assign(n0_ + 1, 0);
+    lap_diag_.assign(n0_, 0.0);
+    for (int k = 0; k < n0_; ++k) {
+      for (int t = lap_off[k]; t < lap_off[k + 1]; ++t) {
+        lap_diag_[k] += lap_w[t];
+        if (!taken[t]) {
+          rest_nb_.push_back(lap_nb[t]);
+          rest_w_.push_back(lap_w[t]);
+        }
+      }
+      rest_offsets_[k + 1] = static_cast<int>(rest_nb_.size());
     }
   }
   // Level 0 -> 1: aggregates of the mesh's vertex graph.
@@ -149,16 +183,15 @@ VertexMultigrid::VertexMultigrid(int num_vertices, const std::vector<Face>& face
   for (const Face& f : faces)
     for (const auto& c : kCorners) pairs.emplace_back(agg0_[f[c[0]]], agg0_[f[c[1]]]);
   for (int k = 0; k < n0_; ++k)
-    for (int t = lap_offsets_[k]; t < lap_offsets_[k + 1]; ++t)
-      pairs.emplace_back(agg0_[k], agg0_[lap_nb_[t]]);
+    for (int t = lap_off[k]; t < lap_off[k + 1]; ++t) pairs.emplace_back(agg0_[k], agg0_[lap_nb[t]]);
   coarse_.emplace_back();
   Coarse* c = &coarse_.back();
   c->n = n1;
   build_pattern(n1, pairs, c->row, c->col, c->diag);
-  lap_slot_.resize(lap_nb_.size());
+  rest_slot_.resize(rest_nb_.size());
   for (int k = 0; k < n0_; ++k)
-    for (int t = lap_offsets_[k]; t < lap_offsets_[k + 1]; ++t)
-      lap_slot_[t] = slot_of(c->row, c->col, agg0_[k], agg0_[lap_nb_[t]]);
+    for (int t = rest_offsets_[k]; t < rest_offsets_[k + 1]; ++t)
+      rest_slot_[t] = slot_of(c->row, c->col, agg0_[k], agg0_[rest_nb_[t]]);
   face_slot_.resize(faces.size());
   for (std::size_t j = 0; j < faces.size(); ++j)
     for (int k = 0; k < 6; ++k)
@@ -227,14 +260,9 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     const float* g = gf + 3 * entry;
     return Vec3(g[0], g[1], g[2]);
   };
-  auto lap_sum = [&](std::size_t v) {
-    double w = 0.0;
-    for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t) w += lap_w_[t];
-    return w;
-  };
   ws.fine.dinv.resize(n);
   parallel_for_each(arena, n, [&](std::size_t v) {
-    Mat3 d = (eps + eps_lap * lap_sum(v)) * Mat3::Identity();
+    Mat3 d = (eps + eps_lap * lap_diag_[v]) * Mat3::Identity();
     for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
       const Vec3 g = g_at(vf[t]);
       d.noalias() += g * g.transpose();
@@ -253,10 +281,19 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       for (int k = 0; k < 6; ++k)
         val[face_slot_[j][k]] += (g[kCorners[k][0]] * g[kCorners[k][1]].transpose()).cast<float>();
     }
+    // The smoothness term's off-diagonal blocks: each face's edges (both directions), then the
+    // rest edges; its diagonal with eps.
+    if (eps_lap > 0)
+      for (std::size_t j = 0; j < m; ++j)
+        for (int e = 0; e < 3; ++e) {
+          const float w = static_cast<float>(eps_lap * face_lap_w_[3 * j + e]);
+          if (w == 0.0f) continue;
+          for (int k : kEdgeSlots[e]) val[face_slot_[j][k]].diagonal().array() -= w;
+        }
     for (std::size_t v = 0; v < n; ++v) {
-      for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
-        val[lap_slot_[t]].diagonal().array() -= static_cast<float>(eps_lap * lap_w_[t]);
-      val[c.diag[agg0_[v]]].diagonal().array() += static_cast<float>(eps + eps_lap * lap_sum(v));
+      for (int t = rest_offsets_[v]; t < rest_offsets_[v + 1]; ++t)
+        val[rest_slot_[t]].diagonal().array() -= static_cast<float>(eps_lap * rest_w_[t]);
+      val[c.diag[agg0_[v]]].diagonal().array() += static_cast<float>(eps + eps_lap * lap_diag_[v]);
     }
   }
   for (int l = 0; l + 1 < nc; ++l) {
@@ -283,19 +320,24 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
 
   // --- Products with the level operators.
   // y = (J^T J + eps I + eps_lap L) x on the fine level, and J x into *jx_out if given. Per
-  // vertex the terms are summed in one order, eps x and L x first, then the faces' J^T J terms in
-  // ascending face order, in the serial pass (faces scattered) as in the threaded one (faces
-  // gathered, J x kept in between). T is double for the conjugate gradients' product and the
-  // polish's V-cycle, float for the cycle steps' V-cycle.
-  auto fine_product = [&](const auto& x, auto& y, auto* jx_out) {
+  // vertex the terms are summed in one order, eps x and the rest edges' L x first, then per face
+  // in ascending face order its J^T J term and its edges' L x terms (edges in face order), in the
+  // serial pass (faces scattered) as in the threaded one (faces gathered, J x kept in between). T
+  // is double for the conjugate gradients' product and the polish's V-cycle, float for the cycle
+  // steps' V-cycle.
+  const float* flw = face_lap_w_.data();
+  // Lap: whether the smoothness term is applied, a compile-time flag so that the pass without it
+  // (the polish's) is compiled as if the term did not exist.
+  auto fine_product_with = [&](auto lap_flag, const auto& x, auto& y, auto* jx_out) {
+    constexpr bool lap = decltype(lap_flag)::value;
     using V3 = std::decay_t<decltype(x[0])>;
     using T = typename V3::Scalar;
     y.resize(n);
     auto start = [&](std::size_t v) {
       V3 acc = static_cast<T>(eps) * x[v];
-      if (eps_lap > 0)
-        for (int t = lap_offsets_[v]; t < lap_offsets_[v + 1]; ++t)
-          acc += static_cast<T>(eps_lap * lap_w_[t]) * (x[v] - x[lap_nb_[t]]);
+      if constexpr (lap)
+        for (int t = rest_offsets_[v]; t < rest_offsets_[v + 1]; ++t)
+          acc += static_cast<T>(eps_lap * rest_w_[t]) * (x[v] - x[rest_nb_[t]]);
       return acc;
     };
     auto jdot = [&](std::size_t j) {
@@ -305,6 +347,28 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       return (g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) + (g[3] * b[0] + g[4] * b[1] + g[5] * b[2]) +
              (g[6] * c[0] + g[7] * c[1] + g[8] * c[2]);
     };
+    // With the smoothness term, face j's edges add eps_lap w (x_a - x_b) at a = f[e] and subtract
+    // it at b = f[e + 1]; lap_terms() gives their sum at each corner, one expression for both
+    // passes, so that they sum the same numbers. Without it the passes are as before it existed.
+    auto lap_terms = [&](std::size_t j, V3& l0, V3& l1, V3& l2) {
+      const Face& f = faces[j];
+      const float* w = flw + 3 * j;
+      const V3 d0 = static_cast<T>(eps_lap * w[0]) * (x[f[0]] - x[f[1]]);
+      const V3 d1 = static_cast<T>(eps_lap * w[1]) * (x[f[1]] - x[f[2]]);
+      const V3 d2 = static_cast<T>(eps_lap * w[2]) * (x[f[2]] - x[f[0]]);
+      l0 = d0 - d2;
+      l1 = d1 - d0;
+      l2 = d2 - d1;
+    };
+    // y_c += t g_c (+ l_c): the face's J^T J term at a corner and its smoothness terms there.
+    auto add = [](V3& y_c, T t, const float* g_c) {
+      y_c[0] += t * g_c[0];
+      y_c[1] += t * g_c[1];
+      y_c[2] += t * g_c[2];
+    };
+    auto add_lap = [](V3& y_c, T t, const float* g_c, const V3& l_c) {
+      y_c += V3(t * g_c[0], t * g_c[1], t * g_c[2]) + l_c;
+    };
     if (!arena || n < 4096) {
       for (std::size_t v = 0; v < n; ++v) y[v] = start(v);
       for (std::size_t j = 0; j < m; ++j) {
@@ -312,11 +376,16 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
         if (jx_out) (*jx_out)[j] = t;
         const Face& f = faces[j];
         const float* g = gf + 9 * j;
-        for (int c = 0; c < 3; ++c) {
-          V3& yc = y[f[c]];
-          yc[0] += t * g[3 * c];
-          yc[1] += t * g[3 * c + 1];
-          yc[2] += t * g[3 * c + 2];
+        if constexpr (lap) {
+          V3 l0, l1, l2;
+          lap_terms(j, l0, l1, l2);
+          add_lap(y[f[0]], t, g, l0);
+          add_lap(y[f[1]], t, g + 3, l1);
+          add_lap(y[f[2]], t, g + 6, l2);
+        } else {
+          add(y[f[0]], t, g);
+          add(y[f[1]], t, g + 3);
+          add(y[f[2]], t, g + 6);
         }
       }
     } else {
@@ -326,15 +395,25 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       parallel_for_each(arena, n, [&](std::size_t v) {
         V3 acc = start(v);
         for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
-          const T s = jx[vf[t] / 3];
+          const std::size_t j = static_cast<std::size_t>(vf[t] / 3);
           const float* g = gf + 3 * vf[t];
-          acc[0] += s * g[0];
-          acc[1] += s * g[1];
-          acc[2] += s * g[2];
+          if constexpr (lap) {
+            V3 l[3];
+            lap_terms(j, l[0], l[1], l[2]);
+            add_lap(acc, jx[j], g, l[vf[t] % 3]);
+          } else {
+            add(acc, jx[j], g);
+          }
         }
         y[v] = acc;
       });
     }
+  };
+  auto fine_product = [&](const auto& x, auto& y, auto* jx_out) {
+    if (eps_lap > 0)
+      fine_product_with(std::true_type{}, x, y, jx_out);
+    else
+      fine_product_with(std::false_type{}, x, y, jx_out);
   };
   // The V-cycle, in scalar type T (float or double): its vectors are ws's T-typed ones.
   auto coarse_apply = [&](int l, const auto& x, auto& y) {
