@@ -45,7 +45,8 @@ class PhaseTimer {
   Clock::time_point t0_ = Clock::now();
 };
 
-// One multigrid level: its prisms (in original vertex ids, so all levels share the position
+// One multigrid level: its prisms (in the ids of the state it is solved in: original vertex ids
+// on the finest level, compact ids on the coarser ones, so that they share the coarse state's
 // arrays), per-level targets, adjacency and regularization weights (in level-local ids).
 struct Level {
   std::vector<int> verts;
@@ -123,8 +124,10 @@ void release_step_scratch(GnScratch& g) {
   w.fine = {};
 }
 
-// The per-reconstruction working arrays, indexed by original vertex id, and the scratch of
-// the sweeps (one State per call, so calls share nothing but the levels' factorizations).
+// The per-reconstruction working arrays, indexed by original vertex id (or, in the coarse
+// levels' state, by compact id: see VolumeReconstructor::Impl::compact_to_orig_), and the
+// scratch of the sweeps (one State per call, so calls share nothing but the levels'
+// factorizations).
 struct State {
   // The tangential regularization in use: the options', or RestOffset in the retry of
   // ReconstructOptions::retry_other_regularization.
@@ -150,6 +153,11 @@ struct State {
   const char* phase = "reconstruct";  // the progress reports' phase (ReconstructOptions::progress)
   double work_done = 0.0, work_total = 0.0;  // a clean start's progress, in weighted prisms
   GnScratch gn;
+  // The guarded displacement lengths and the pinned flags (null: none pinned), indexed as the
+  // arrays above: by original vertex id, or by compact id in the coarse levels' state.
+  const std::vector<double>* f = nullptr;
+  const std::vector<char>* pin = nullptr;
+  bool pinned(int i) const { return pin && (*pin)[i]; }
 };
 
 // p carried along from the frame (from) of vertex i to its frame (to): the displacement keeps
@@ -236,6 +244,7 @@ class VolumeReconstructor::Impl {
       make_level(h.levels[l], l == nl - 1, levels_[l]);
       report("setup", kDecimation + (1.0 - kDecimation) * done / prisms);
     }
+    compact_coarse_levels();
     if (enc_.over_limit_surface()) {
       std::vector<Vec3> rest(enc_.base_num_vertices, Vec3::Zero());
       limit_ = std::make_unique<SubdivSurface>(limit_surface_for(enc_, rest));
@@ -376,19 +385,24 @@ class VolumeReconstructor::Impl {
     init_state(fr, request, s);
     const int nl = static_cast<int>(levels_.size());
     level_stats(st);
+    // Level l's state ids -> original ids (the coarse levels' are compact: gather_coarse()).
+    auto orig = [&](int l, int i) { return l + 1 < nl ? compact_to_orig_[i] : i; };
+    const int nc = static_cast<int>(compact_to_orig_.size());
     if (ds.level.empty()) {
       // The first step: every level starts from the drag's start positions.
       ds.level.assign(nl, {});
       for (int l = 0; l < nl; ++l) {
-        ds.level[l].assign(n, Vec3::Zero());
-        for (int i : levels_[l].verts) ds.level[l][i] = ds.start[i];
+        ds.level[l].assign(l + 1 < nl ? nc : n, Vec3::Zero());
+        for (int i : levels_[l].verts) ds.level[l][i] = ds.start[orig(l, i)];
       }
       ds.start = {};
     }
     // Every level's last solution, carried along with the base frames.
     for (int l = 0; l < nl; ++l)
-      for (int i : levels_[l].verts)
-        ds.level[l][i] = pinned(i) ? s.pinned_at[i] : carry(ds.level[l][i], ds.frames, fr, i);
+      for (int i : levels_[l].verts) {
+        const int o = orig(l, i);
+        ds.level[l][i] = pinned(o) ? s.pinned_at[o] : carry(ds.level[l][i], ds.frames, fr, o);
+      }
     ds.frames = fr;
     st.seconds_frames = seconds_since(t0);
     t0 = Clock::now();
@@ -397,39 +411,49 @@ class VolumeReconstructor::Impl {
     s.P.assign(n, Vec3::Zero());
     s.P0.assign(n, Vec3::Zero());
     s.gn.cg_max_iterations = warm.cg_max_iterations;
+    // The coarse levels in their own compact state (as a clean start's multigrid_pass()).
+    State c;
+    if (nl > 1) gather_coarse(s, c);
     for (int l = 0; l < nl; ++l) {
       check_cancel();
       const Level& L = levels_[l];
+      const bool finest = l + 1 == nl;
+      State& ls = finest ? s : c;
       const std::vector<Vec3>& start = ds.level[l];
       std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
       if (l == 0) {
-        for (int i : L.verts) s.P[i] = s.P0[i] = start[i];
+        for (int i : L.verts) ls.P[i] = ls.P0[i] = start[i];
       } else {
         // The coarser level's correction (its solution minus its start) carried to this level's
         // own start: added as is on the shared vertices, prolongated to the inserted ones.
-        const Level& C = levels_[l - 1];
-        for (int i : L.inserted) s.P[i] = s.P0[i] = start[i];
-        prolongate(L, C, s);
-        for (int i : C.verts) {
-          s.P[i] = pinned(i) ? start[i] : Vec3(start[i] + (s.P[i] - s.P0[i]));
-          s.P0[i] = start[i];
+        const std::vector<int>* coarse_verts = &levels_[l - 1].verts;
+        if (finest) {
+          scatter_coarse(c, s);
+          for (int k = 0; k < nc; ++k) s.P0[compact_to_orig_[k]] = c.P0[k];
+          c = State{};
+          coarse_verts = &compact_to_orig_;
+        }
+        for (int i : L.inserted) ls.P[i] = ls.P0[i] = start[i];
+        prolongate(L, *coarse_verts, ls);
+        for (int i : *coarse_verts) {
+          ls.P[i] = ls.pinned(i) ? start[i] : Vec3(start[i] + (ls.P[i] - ls.P0[i]));
+          ls.P0[i] = start[i];
         }
       }
-      const bool finest = l + 1 == nl;
       if (a == 0.0) {
-        for (int i : L.verts) s.P[i] = pinned(i) ? s.pinned_at[i] : s.Q[i];
+        for (int i : L.verts) ls.P[i] = ls.pinned(i) ? ls.pinned_at[i] : ls.Q[i];
       } else if (!finest && !warm.coarse_levels_only) {
         // The exact solve: the coarse levels only serve the previews; carried along, unsolved.
       } else if (finest && warm.coarse_levels_only && nl > 1) {
         regularize_sweeps(L, s, st);
       } else if (!finest && warm.level_steps > 0) {
-        regularize_sweeps(L, s, st);
-        project(L, s, a, opt_.level_tolerance, warm.level_steps, cycle_solve(L), st, V);
+        regularize_sweeps(L, ls, st);
+        project(L, ls, a, opt_.level_tolerance, warm.level_steps, cycle_solve(L), st, V);
         ++st.cycles;
       } else {
-        s.volume_iterations = opt_.volume_iterations;
+        ls.volume_iterations = opt_.volume_iterations;
         const int final_cycles = warm.max_cycles > 0 ? warm.max_cycles : opt_.final_max_cycles;
-        const int cycles = solve_level(L, s, a, finest ? warm.tolerance : opt_.level_tolerance,
+        const int cycles = solve_level(L, ls, a, finest ? warm.tolerance : opt_.level_tolerance,
                                        finest ? final_cycles : opt_.max_cycles, st, V);
         if (finest) {
           st.finest_cycles_per_scale.push_back(cycles);
@@ -446,7 +470,7 @@ class VolumeReconstructor::Impl {
           st.new_intersecting_pairs = o.counted ? static_cast<long long>(o.new_pairs) : -1;
         }
       }
-      for (int i : L.verts) ds.level[l][i] = s.P[i];
+      for (int i : L.verts) ds.level[l][i] = ls.P[i];
     }
     finish(s, warm.tolerance, t0, V, res);
     return res;
@@ -495,6 +519,36 @@ class VolumeReconstructor::Impl {
           "encoding has no base rest frames (base_rest_normals, base_rest_tangents), which the "
           "reconstruction option tangential_regularization = rest_laplacian needs");
     check_reconstruct_options(opt_);
+  }
+
+  // The coarse levels' vertex ids from original to compact (gather_coarse()): each coarse
+  // level's vertices are among the second-finest level's.
+  void compact_coarse_levels() {
+    const int nl = static_cast<int>(levels_.size());
+    if (nl < 2) return;
+    compact_to_orig_ = levels_[nl - 2].verts;
+    std::vector<int> compact(enc_.num_detail_vertices(), -1);
+    for (std::size_t k = 0; k < compact_to_orig_.size(); ++k)
+      compact[compact_to_orig_[k]] = static_cast<int>(k);
+    auto remap = [&compact](int& i) {
+      i = compact[i];
+      assert(i >= 0);
+    };
+    for (int l = 0; l + 1 < nl; ++l) {
+      Level& L = levels_[l];
+      for (int& i : L.verts) remap(i);
+      for (Face& f : L.faces)
+        for (int& i : f) remap(i);
+      for (int& i : L.inserted) remap(i);
+      for (int& i : L.ring_vertices) remap(i);
+    }
+    compact_f_.resize(compact_to_orig_.size());
+    for (std::size_t k = 0; k < compact_to_orig_.size(); ++k) compact_f_[k] = guarded_f_[compact_to_orig_[k]];
+    if (!enc_.pinned.empty()) {
+      compact_pinned_.resize(compact_to_orig_.size());
+      for (std::size_t k = 0; k < compact_to_orig_.size(); ++k)
+        compact_pinned_[k] = enc_.pinned[compact_to_orig_[k]];
+    }
   }
 
   void make_level(internal::Hierarchy::Level& hl, bool finest, Level& L) {
@@ -658,6 +712,8 @@ class VolumeReconstructor::Impl {
     }
     s.amplitude = request.amplitude;
     s.cycle_volume_iterations = opt_.volume_iterations;
+    s.f = &guarded_f_;
+    s.pin = enc_.pinned.empty() ? nullptr : &enc_.pinned;
     const int n = enc_.num_detail_vertices();
     if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
         static_cast<int>(fr.tangents.size()) != n)
@@ -1189,12 +1245,22 @@ class VolumeReconstructor::Impl {
                       ReconstructStats& st, std::vector<double>& V) const {
     s.P0 = s.P;
     const int nl = static_cast<int>(levels_.size());
+    // The coarse levels are solved in their own compact state, released after the pass.
+    State c;
+    if (nl > 1) gather_coarse(s, c);
     for (int l = 0; l < nl; ++l) {
       check_cancel();
       const Level& L = levels_[l];
-      std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
-      if (l > 0) prolongate(L, levels_[l - 1], s);
       const bool finest = l + 1 == nl;
+      State& ls = finest ? s : c;  // the level's state
+      std::optional<PhaseTimer> level_timer(std::in_place, st.seconds_levels[l]);
+      if (finest && l > 0) {
+        scatter_coarse(c, s);
+        c = State{};
+        prolongate(L, compact_to_orig_, s);
+      } else if (l > 0) {
+        prolongate(L, levels_[l - 1].verts, ls);
+      }
       // After the level (solved, or regularized only), a clean start reports its progress.
       auto level_done = [&] {
         if (s.work_total <= 0) return;
@@ -1208,8 +1274,9 @@ class VolumeReconstructor::Impl {
         continue;
       }
       const int max_cycles = finest && full_scale ? opt_.final_max_cycles : opt_.max_cycles;
-      s.volume_iterations = finest && !full_scale ? opt_.finest_volume_iterations : s.cycle_volume_iterations;
-      const int cycles = solve_level(L, s, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
+      ls.volume_iterations =
+          finest && !full_scale ? opt_.finest_volume_iterations : s.cycle_volume_iterations;
+      const int cycles = solve_level(L, ls, h, finest ? final_tol : opt_.level_tolerance, max_cycles, st, V);
       level_timer.reset();
       if (finest) {
         st.finest_cycles_per_scale.push_back(cycles);
@@ -1495,7 +1562,7 @@ class VolumeReconstructor::Impl {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g =
           prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      for (int c = 0; c < 3; ++c) w.grad[j][c] = pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
+      for (int c = 0; c < 3; ++c) w.grad[j][c] = s.pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
     });
     if (!use_mg) vertex_gradients(L, w);
@@ -1680,11 +1747,12 @@ class VolumeReconstructor::Impl {
     s.rho.resize(nv);
     s.tdev.resize(nv);
     if (positions) s.pk.resize(nv);  // the positions before the sweep (a Jacobi sweep reads those)
+    const std::vector<double>& guarded_f = *s.f;
     for_each(nv, [&](std::size_t k) {
       const int i = L.verts[k];
       const Vec3 d = s.P[i] - s.Q[i];
       const double hgt = d.dot(s.N[i]);
-      s.rho[k] = hgt / guarded_f_[i];
+      s.rho[k] = hgt / guarded_f[i];
       s.tdev[k] = d - hgt * s.N[i] - s.R[i];
       if (positions) s.pk[k] = s.P[i];
     });
@@ -1703,9 +1771,9 @@ class VolumeReconstructor::Impl {
         if (!positions) avg_t += L.weights[t] * s.tdev[L.nb[t]];
       }
       const int i = L.verts[k];
-      if (pinned(i)) return;
+      if (s.pinned(i)) return;
       const Vec3& n = s.N[i];
-      const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f_[i];
+      const double hgt = (s.rho[k] + ll * (avg_rho - s.rho[k])) * guarded_f[i];
       Vec3 lap;
       if (positions) {
         lap.setZero();
@@ -1727,16 +1795,18 @@ class VolumeReconstructor::Impl {
   // Carries the coarse level's change since the pass started to the vertices the finer level
   // adds, in reverse removal order: each takes the mean change of its removal ring, as a change
   // of d/f along its own normal and of the tangential displacement in its own tangent plane.
-  void prolongate(const Level& fine, const Level& coarse, State& s) const {
-    for (int i : coarse.verts) {
+  // \p coarse_verts: the coarse level's vertices, in \p s's ids (as \p fine's).
+  void prolongate(const Level& fine, const std::vector<int>& coarse_verts, State& s) const {
+    const std::vector<double>& guarded_f = *s.f;
+    for (int i : coarse_verts) {
       const Vec3 d = s.P[i] - s.P0[i];
       const double dn = d.dot(s.N[i]);
-      s.dRho[i] = dn / guarded_f_[i];
+      s.dRho[i] = dn / guarded_f[i];
       s.dT[i] = d - dn * s.N[i];
     }
     for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
       const int i = fine.inserted[k];
-      if (pinned(i)) {
+      if (s.pinned(i)) {
         // Placed, not solved: unchanged since the pass started (the rings of later inserted
         // vertices read this, which must not be a previous pass's change).
         s.dRho[i] = 0.0;
@@ -1757,8 +1827,48 @@ class VolumeReconstructor::Impl {
       t -= t.dot(s.N[i]) * s.N[i];
       s.dRho[i] = rho;
       s.dT[i] = t;
-      s.P[i] = s.P0[i] + rho * guarded_f_[i] * s.N[i] + t;
+      s.P[i] = s.P0[i] + rho * guarded_f[i] * s.N[i] + t;
     }
+  }
+
+  // The coarse levels' state (compact ids) from \p s: every array at the second-finest level's
+  // vertices, and the settings the level solves read. Solved in it, the coarse levels' sweeps
+  // read a few MB where they read the whole detail's arrays at strides (at 1M prisms their
+  // prisms cost 1.4-1.6 times the 100k's each).
+  void gather_coarse(const State& s, State& c) const {
+    const std::vector<int>& ids = compact_to_orig_;
+    auto take = [&ids](const auto& from, auto& to) {
+      if (from.empty()) return to.clear();
+      to.resize(ids.size());
+      for (std::size_t k = 0; k < ids.size(); ++k) to[k] = from[ids[k]];
+    };
+    take(s.P, c.P);
+    take(s.Q, c.Q);
+    take(s.N, c.N);
+    take(s.R, c.R);
+    take(s.T, c.T);
+    take(s.P0, c.P0);
+    take(s.pinned_at, c.pinned_at);
+    c.dRho.assign(ids.size(), 0.0);
+    c.dT.assign(ids.size(), Vec3::Zero());
+    c.f = &compact_f_;
+    c.pin = s.pin ? &compact_pinned_ : nullptr;
+    c.tangential = s.tangential;
+    c.amplitude = s.amplitude;
+    c.clean_start = s.clean_start;
+    c.volume_iterations = s.volume_iterations;
+    c.cycle_volume_iterations = s.cycle_volume_iterations;
+    c.phase = s.phase;
+    c.gn.damping = s.gn.damping;
+    c.gn.cg_max_iterations = s.gn.cg_max_iterations;
+    c.gn.mg_iterations = s.gn.mg_iterations;
+  }
+
+  // The coarse levels' solution back into \p s (their positions, and the damping their exact
+  // steps adapted, as if solved in \p s).
+  void scatter_coarse(const State& c, State& s) const {
+    for (std::size_t k = 0; k < compact_to_orig_.size(); ++k) s.P[compact_to_orig_[k]] = c.P[k];
+    s.gn.damping = c.gn.damping;
   }
 
   DetailEncoding enc_;
@@ -1766,6 +1876,11 @@ class VolumeReconstructor::Impl {
   std::vector<double> guarded_f_;
   double mean_abs_f_ = 0.0;
   std::vector<Level> levels_;
+  // The coarse levels' compact ids: the second-finest level's vertices, compact id -> original
+  // id (empty with one level), and guarded_f_ and the pinned flags by compact id.
+  std::vector<int> compact_to_orig_;
+  std::vector<double> compact_f_;
+  std::vector<char> compact_pinned_;
   // Over a subdivision base: the cage's limit surface, kept so that a reconstruction from edited
   // control points does not rebuild the patch table. Mutable like the levels' factorizations.
   mutable std::unique_ptr<SubdivSurface> limit_;
