@@ -509,6 +509,72 @@ TEST(Reconstruction, RejectsBadInput) {
   EXPECT_THROW(VolumeReconstructor{broken}, InvalidInput);
 }
 
+// An encoding made or altered by hand is checked before anything indexes with it or solves with
+// it: a regularization graph whose rows or neighbours are out of range, and any non-finite
+// number the solve reads, are invalid input naming the array (not a crash, and not a solve that
+// diverges into non-finite positions).
+TEST(Reconstruction, RejectsAnEncodingWithABrokenWeightGraphOrNonFiniteValues) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const double nan = std::nan("");
+  auto rejected = [](const DetailEncoding& broken, const std::string& names) {
+    try {
+      VolumeReconstructor rec(broken);
+      ADD_FAILURE() << "accepted; expected an error naming " << names;
+    } catch (const InvalidInput& x) {
+      EXPECT_NE(std::string(x.what()).find(names), std::string::npos) << x.what();
+    }
+  };
+  DetailEncoding broken = e;
+  broken.weight_neighbors[7] = e.num_detail_vertices();
+  rejected(broken, "weight_neighbors");
+  broken = e;
+  broken.weight_neighbors[3] = -1;
+  rejected(broken, "weight_neighbors");
+  broken = e;
+  std::swap(broken.weight_offsets[10], broken.weight_offsets[11]);
+  rejected(broken, "weight_offsets");
+  broken = e;
+  broken.weight_offsets.back() += 5;
+  rejected(broken, "weight_offsets");
+  broken = e;
+  broken.weights.pop_back();
+  rejected(broken, "weights");
+  broken = e;
+  broken.weights[20] = nan;
+  rejected(broken, "weights");
+  broken = e;
+  broken.normal_offsets[4] = nan;
+  rejected(broken, "normal_offsets");
+  broken = e;
+  broken.tangential_offsets[4].y() = std::numeric_limits<double>::infinity();
+  rejected(broken, "tangential_offsets");
+  broken = e;
+  broken.target_volumes[9] = nan;
+  rejected(broken, "target_volumes");
+  broken = e;
+  broken.base_rest_points[2].x() = nan;
+  rejected(broken, "base_rest_points");
+  broken = e;
+  broken.base_points[6].bary[1] = nan;
+  rejected(broken, "base point");
+}
+
+// A solve that diverges (regularization weights at 1e300: finite, but no solve follows them) is a
+// SolverError naming the divergence, not non-finite positions handed on.
+TEST(Reconstruction, ADivergingSolveIsASolverError) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
+  DetailEncoding e = encode_detail(c.detail, c.base);
+  for (double& w : e.weights) w *= 1e300;
+  const VolumeReconstructor rec(e);
+  try {
+    rec.reconstruct(c.edited_base.vertices);
+    ADD_FAILURE() << "no error";
+  } catch (const SolverError& x) {
+    EXPECT_NE(std::string(x.what()).find("diverged"), std::string::npos) << x.what();
+  }
+}
+
 // Interactive drags (paper, section 5) through a DragState.
 TEST(DragState, StepsBeforeResetOrOfAnotherSizeAreRejected) {
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 2000);

@@ -14,6 +14,7 @@
 #include <iterator>
 #include <optional>
 #include <sstream>
+#include <type_traits>
 
 #include "internal/hierarchy.h"
 #include "internal/parallel.h"
@@ -509,9 +510,41 @@ class VolumeReconstructor::Impl {
           "encoding has " +
           std::to_string(enc_.over_limit_surface() ? enc_.limit_points.size() : enc_.base_points.size()) +
           " base points for " + std::to_string(n) + " detail vertices");
-    for (const BasePoint& b : enc_.base_points)
+    for (const BasePoint& b : enc_.base_points) {
       if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
         throw InvalidInput("encoding has a base point on a missing base face");
+      if (!b.bary.allFinite()) throw InvalidInput("encoding has a base point with non-finite barycentrics");
+    }
+    // The regularization graph (compressed rows) indexes the solver's arrays: rows in order within
+    // weight_neighbors, neighbours within the detail.
+    const std::vector<int>& off = enc_.weight_offsets;
+    if (off.front() != 0 || off.back() != static_cast<int>(enc_.weight_neighbors.size()) ||
+        !std::is_sorted(off.begin(), off.end()))
+      throw InvalidInput("encoding's weight_offsets are not the rows of weight_neighbors (" +
+                         std::to_string(enc_.weight_neighbors.size()) + " entries)");
+    if (enc_.weights.size() != enc_.weight_neighbors.size())
+      throw InvalidInput("encoding has " + std::to_string(enc_.weights.size()) + " weights for " +
+                         std::to_string(enc_.weight_neighbors.size()) + " weight_neighbors");
+    for (int v : enc_.weight_neighbors)
+      if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range index in weight_neighbors");
+    // Every number the solve reads.
+    auto finite = [](const auto& values, const char* name) {
+      for (const auto& x : values) {
+        bool ok;
+        if constexpr (std::is_arithmetic_v<std::decay_t<decltype(x)>>)
+          ok = std::isfinite(x);
+        else
+          ok = x.allFinite();
+        if (!ok) throw InvalidInput(std::string("encoding has a non-finite value in ") + name);
+      }
+    };
+    finite(enc_.weights, "weights");
+    finite(enc_.normal_offsets, "normal_offsets");
+    finite(enc_.tangential_offsets, "tangential_offsets");
+    finite(enc_.target_volumes, "target_volumes");
+    finite(enc_.base_rest_points, "base_rest_points");
+    finite(enc_.base_rest_normals, "base_rest_normals");
+    finite(enc_.base_rest_tangents, "base_rest_tangents");
     if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian &&
         (static_cast<int>(enc_.base_rest_normals.size()) != n ||
          static_cast<int>(enc_.base_rest_tangents.size()) != n))
