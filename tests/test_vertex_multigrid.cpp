@@ -38,11 +38,16 @@ struct StepSystem {
   std::vector<double> r;
   std::vector<int> vf_offsets, vf;
   std::vector<char> fixed;
+  mutable std::vector<float> gf;  // grad in single precision, as the solver takes J
 
   internal::VertexStepSystem view(double eps, double eps_lap) const {
+    gf.resize(9 * grad.size());
+    for (std::size_t j = 0; j < grad.size(); ++j)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) gf[9 * j + 3 * c + k] = static_cast<float>(grad[j][c][k]);
     internal::VertexStepSystem s;
     s.faces = &enc.detail_faces;
-    s.grad = &grad;
+    s.gf = &gf;
     s.vf_offsets = &vf_offsets;
     s.vf = &vf;
     s.r = &r;

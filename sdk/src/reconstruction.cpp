@@ -105,8 +105,9 @@ struct GnScratch {
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   int mg_iterations = 0;         // multigrid cycle steps' iterations; 0: MultigridStepOptions::iterations
   double motion = 0.0;           // the last exact step's largest vertex move (0: undone, or inexact)
-  std::vector<std::array<Vec3, 3>> grad;
-  std::vector<Vec3> gv;  // grad in the level's vertex order (Level::vf), for J^T x
+  std::vector<std::array<Vec3, 3>> grad;  // the steps solved without the multigrid
+  std::vector<float> gf;                  // the multigrid's: J in single precision, 9 per face
+  std::vector<Vec3> gv;                   // grad in the level's vertex order (Level::vf), for J^T x
   std::vector<double> r, y, z, p, Ap, diag;
   std::vector<Vec3> delta;
   std::vector<Vec3> jt;      // J^T x per level vertex, inside the matrix-free products
@@ -119,9 +120,9 @@ struct GnScratch {
 // budgets).
 void release_step_scratch(GnScratch& g) {
   auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
-  release(g.grad, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
+  release(g.grad, g.gf, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
   internal::VertexMultigrid::Workspace& w = g.mgw;
-  release(w.levels, w.gf, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64);
+  release(w.levels, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64);
   w.fine = {};
 }
 
@@ -1588,15 +1589,31 @@ class VolumeReconstructor::Impl {
                             : how == StepSolve::Cycle && opt_.step_solver == VolumeStepSolver::Multigrid;
     GnScratch& w = s.gn;
     const std::size_t m = L.faces.size();
-    w.grad.resize(m);
+    // The multigrid takes J in single precision straight from here (and the squared norms of its
+    // rows, in w.diag, for its damping's scale): no array of the gradients in double, whose
+    // writing and two reads were 216 bytes of memory traffic a prism a step.
+    if (use_mg)
+      w.gf.resize(9 * m);
+    else
+      w.grad.resize(m);
     w.r.resize(m);
     w.diag.resize(m);
     for_each(m, [&](std::size_t j) {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g =
           prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
-      for (int c = 0; c < 3; ++c) w.grad[j][c] = s.pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
       w.r[j] = h * L.targets[j] - g.volume;
+      if (!use_mg) {
+        for (int c = 0; c < 3; ++c) w.grad[j][c] = s.pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
+        return;
+      }
+      double norm2 = 0.0;
+      for (int c = 0; c < 3; ++c) {
+        const Vec3 gc = s.pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
+        norm2 += gc.squaredNorm();
+        for (int k = 0; k < 3; ++k) w.gf[9 * j + 3 * c + k] = static_cast<float>(gc[k]);
+      }
+      w.diag[j] = norm2;
     });
     if (!use_mg) vertex_gradients(L, w);
     double rr = 0.0;
@@ -1699,13 +1716,13 @@ class VolumeReconstructor::Impl {
   // steps' does (Levenberg-Marquardt).
   void solve_multigrid(const Level& L, GnScratch& w, bool exact, ReconstructStats& st) const {
     const MultigridStepOptions& mo = opt_.multigrid;
-    double diag = 0.0;  // the mean diagonal of J^T J
-    for (const auto& g : w.grad) diag += g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm();
+    double diag = 0.0;  // the mean diagonal of J^T J (w.diag: the rows' squared norms)
+    for (double d : w.diag) diag += d;
     diag /= 3.0 * static_cast<double>(std::max<std::size_t>(1, L.verts.size()));
     if (!(diag > 0)) diag = 1.0;
     internal::VertexStepSystem sys;
     sys.faces = L.local_faces.empty() ? &L.faces : &L.local_faces;
-    sys.grad = &w.grad;
+    sys.gf = &w.gf;
     sys.vf_offsets = &L.vf_offsets;
     sys.vf = &L.vf;
     sys.r = &w.r;

@@ -232,7 +232,6 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
                                         std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena,
                                         bool single_precision_cycle) const {
   const std::vector<Face>& faces = *sys.faces;
-  const std::vector<std::array<Vec3, 3>>& grad = *sys.grad;
   const std::vector<int>& vfo = *sys.vf_offsets;
   const std::vector<int>& vf = *sys.vf;
   const std::vector<double>& r = *sys.r;
@@ -240,7 +239,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   const std::size_t m = faces.size();
   const std::size_t n = static_cast<std::size_t>(n0_);
   const int nc = static_cast<int>(coarse_.size());
-  assert(grad.size() == m && r.size() == m && vfo.size() == n + 1 && eps > 0);
+  assert(sys.gf->size() == 9 * m && r.size() == m && vfo.size() == n + 1 && eps > 0);
   VertexStepResult result;
   delta.assign(n, Vec3::Zero());
   double rr0 = 0.0;
@@ -248,14 +247,9 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   result.relative_residual = rr0 > 0 ? 1.0 : 0.0;
   if (n == 0 || m == 0 || !(rr0 > 0)) return result;
 
-  // --- This solve's operators: J in single precision, the fine block diagonal, the Galerkin
+  // --- This solve's operators: the fine block diagonal, the Galerkin
   // coarse blocks (assembled face by face in face order), their inverses and the coarsest factor.
-  ws.gf.resize(9 * m);
-  parallel_for_each(arena, m, [&](std::size_t j) {
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) ws.gf[9 * j + 3 * c + k] = static_cast<float>(grad[j][c][k]);
-  });
-  const float* gf = ws.gf.data();
+  const float* gf = sys.gf->data();
   auto g_at = [gf](std::size_t entry) {  // the gradient of vertex-face entry face * 3 + corner
     const float* g = gf + 3 * entry;
     return Vec3(g[0], g[1], g[2]);

@@ -43,8 +43,9 @@ struct VertexMultigridOptions {
 //! One Gauss-Newton step's least-squares system over a mesh level.
 struct VertexStepSystem {
   const std::vector<Face>* faces = nullptr;  //!< in the level's vertex ids
-  //! Per face, the volume gradient at each corner (zero at the corners of fixed vertices).
-  const std::vector<std::array<Vec3, 3>>* grad = nullptr;
+  //! J in single precision: per face, the volume gradient at each corner (9 floats, corner by
+  //! corner; zero at the corners of fixed vertices).
+  const std::vector<float>* gf = nullptr;
   //! Vertex -> its (face * 3 + corner) entries, faces ascending, in CSR form.
   const std::vector<int>* vf_offsets = nullptr;
   const std::vector<int>* vf = nullptr;
@@ -142,7 +143,6 @@ struct VertexMultigrid::Workspace {
   Level fine;                 // level 0 (matrix-free: no val)
   std::vector<Level> levels;  // levels 1..
   Eigen::LDLT<Eigen::MatrixXd> coarsest;
-  std::vector<float> gf;            // J: 9 per face, the corners' gradients
   std::vector<Vec3> res, z, p, kp;  // the conjugate gradients' vectors
   std::vector<double> rho, jp;      // per face: r - J delta, J p
   // Per face: J x between the two passes of a threaded V-cycle product, per precision.
