@@ -122,7 +122,7 @@ void release_step_scratch(GnScratch& g) {
   auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
   release(g.grad, g.gf, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
   internal::VertexMultigrid::Workspace& w = g.mgw;
-  release(w.levels, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64);
+  release(w.levels, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64, w.el32, w.el64);
   w.fine = {};
 }
 

@@ -344,12 +344,13 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     // With the smoothness term, face j's edges add eps_lap w (x_a - x_b) at a = f[e] and subtract
     // it at b = f[e + 1]; lap_terms() gives their sum at each corner, one expression for both
     // passes, so that they sum the same numbers. Without it the passes are as before it existed.
+    auto edge = [&](const Face& f, const float* w, int e) {  // eps_lap w (x_a - x_b) of edge e
+      return V3(static_cast<T>(eps_lap * w[e]) * (x[f[e]] - x[f[(e + 1) % 3]]));
+    };
     auto lap_terms = [&](std::size_t j, V3& l0, V3& l1, V3& l2) {
       const Face& f = faces[j];
       const float* w = flw + 3 * j;
-      const V3 d0 = static_cast<T>(eps_lap * w[0]) * (x[f[0]] - x[f[1]]);
-      const V3 d1 = static_cast<T>(eps_lap * w[1]) * (x[f[1]] - x[f[2]]);
-      const V3 d2 = static_cast<T>(eps_lap * w[2]) * (x[f[2]] - x[f[0]]);
+      const V3 d0 = edge(f, w, 0), d1 = edge(f, w, 1), d2 = edge(f, w, 2);
       l0 = d0 - d2;
       l1 = d1 - d0;
       l2 = d2 - d1;
@@ -385,16 +386,27 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     } else {
       std::vector<T>& jx = jx_out ? *jx_out : ws.jx_scratch(T{});
       jx.resize(m);
-      parallel_for_each(arena, m, [&](std::size_t j) { jx[j] = jdot(j); });
+      // With the smoothness term the face pass also keeps each face's edge terms, which the
+      // vertex pass combines per corner as the serial pass does (computing them per corner there
+      // made the threaded product slower than the neighbour lists it replaced).
+      std::vector<V3>& el = ws.edge_scratch(T{});
+      if constexpr (lap) el.resize(3 * m);
+      parallel_for_each(arena, m, [&](std::size_t j) {
+        jx[j] = jdot(j);
+        if constexpr (lap) {
+          const Face& f = faces[j];
+          const float* w = flw + 3 * j;
+          for (int e = 0; e < 3; ++e) el[3 * j + e] = edge(f, w, e);
+        }
+      });
       parallel_for_each(arena, n, [&](std::size_t v) {
         V3 acc = start(v);
         for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
           const std::size_t j = static_cast<std::size_t>(vf[t] / 3);
           const float* g = gf + 3 * vf[t];
           if constexpr (lap) {
-            V3 l[3];
-            lap_terms(j, l[0], l[1], l[2]);
-            add_lap(acc, jx[j], g, l[vf[t] % 3]);
+            const int c = vf[t] % 3;  // edge c leaves the corner, edge c - 1 arrives
+            add_lap(acc, jx[j], g, V3(el[3 * j + c] - el[3 * j + (c + 2) % 3]));
           } else {
             add(acc, jx[j], g);
           }
@@ -531,8 +543,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   if (single_precision_cycle) {
     std::vector<double>().swap(ws.jx64);
     std::vector<Vec3>().swap(ws.z);  // z_at() reads the V-cycle's float solution instead
-  } else
+  } else {
     std::vector<float>().swap(ws.jx32);
+    std::vector<Eigen::Vector3f>().swap(ws.el32);
+  }
   // Fixed vertices: their entries of the residual, the preconditioned residual and K p are held
   // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
   // free block of the V-cycle).

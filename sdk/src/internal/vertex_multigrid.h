@@ -150,6 +150,12 @@ struct VertexMultigrid::Workspace {
   std::vector<double> jx64;
   std::vector<float>& jx_scratch(float) { return jx32; }
   std::vector<double>& jx_scratch(double) { return jx64; }
+  // Per face: the smoothness term's three edge terms, between the two passes of a threaded
+  // product, per precision.
+  std::vector<Eigen::Vector3f> el32;
+  std::vector<Vec3> el64;
+  std::vector<Eigen::Vector3f>& edge_scratch(float) { return el32; }
+  std::vector<Vec3>& edge_scratch(double) { return el64; }
 };
 
 }  // namespace strata::internal
