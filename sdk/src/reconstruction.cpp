@@ -1887,10 +1887,10 @@ class VolumeReconstructor::Impl {
   // prisms cost 1.4-1.6 times the 100k's each).
   void gather_coarse(const State& s, State& c) const {
     const std::vector<int>& ids = compact_to_orig_;
-    auto take = [&ids](const auto& from, auto& to) {
+    auto take = [&](const auto& from, auto& to) {
       if (from.empty()) return to.clear();
       to.resize(ids.size());
-      for (std::size_t k = 0; k < ids.size(); ++k) to[k] = from[ids[k]];
+      for_each(ids.size(), [&](std::size_t k) { to[k] = from[ids[k]]; });
     };
     take(s.P, c.P);
     take(s.Q, c.Q);
@@ -1917,7 +1917,7 @@ class VolumeReconstructor::Impl {
   // The coarse levels' solution back into \p s (their positions, and the damping their exact
   // steps adapted, as if solved in \p s).
   void scatter_coarse(const State& c, State& s) const {
-    for (std::size_t k = 0; k < compact_to_orig_.size(); ++k) s.P[compact_to_orig_[k]] = c.P[k];
+    for_each(compact_to_orig_.size(), [&](std::size_t k) { s.P[compact_to_orig_[k]] = c.P[k]; });
     s.gn.damping = c.gn.damping;
   }
 
