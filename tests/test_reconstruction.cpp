@@ -544,6 +544,9 @@ TEST(Reconstruction, RejectsAnEncodingWithABrokenWeightGraphOrNonFiniteValues) {
   broken.weights[20] = nan;
   rejected(broken, "weights");
   broken = e;
+  broken.weights[21] = 1e31;  // beyond what the multigrid's single precision holds safely
+  rejected(broken, "weight");
+  broken = e;
   broken.normal_offsets[4] = nan;
   rejected(broken, "normal_offsets");
   broken = e;
@@ -560,18 +563,21 @@ TEST(Reconstruction, RejectsAnEncodingWithABrokenWeightGraphOrNonFiniteValues) {
   rejected(broken, "base point");
 }
 
-// A solve that diverges (regularization weights at 1e300: finite, but no solve follows them) is a
-// SolverError naming the divergence, not non-finite positions handed on.
+// A solve that diverges (regularization weights at 1e25: in range, but no solve follows them) is a
+// SolverError naming the divergence, not non-finite positions handed on; with the multigrid
+// preset's solver as with the default one.
 TEST(Reconstruction, ADivergingSolveIsASolverError) {
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
   DetailEncoding e = encode_detail(c.detail, c.base);
-  for (double& w : e.weights) w *= 1e300;
-  const VolumeReconstructor rec(e);
-  try {
-    rec.reconstruct(c.edited_base.vertices);
-    ADD_FAILURE() << "no error";
-  } catch (const SolverError& x) {
-    EXPECT_NE(std::string(x.what()).find("diverged"), std::string::npos) << x.what();
+  for (double& w : e.weights) w *= 1e25;
+  for (const ReconstructOptions& o : {ReconstructOptions{}, multigrid_reconstruct_options()}) {
+    const VolumeReconstructor rec(e, o);
+    try {
+      rec.reconstruct(c.edited_base.vertices);
+      ADD_FAILURE() << "no error";
+    } catch (const SolverError& x) {
+      EXPECT_NE(std::string(x.what()).find("diverged"), std::string::npos) << x.what();
+    }
   }
 }
 

@@ -68,6 +68,20 @@ struct StepSystem {
   }
 };
 
+// s's vertex -> (face * 3 + corner) lists, faces ascending.
+void vertex_faces(StepSystem& s) {
+  const std::vector<Face>& faces = s.enc.detail_faces;
+  const int n = s.enc.num_detail_vertices();
+  s.vf_offsets.assign(n + 1, 0);
+  for (const Face& f : faces)
+    for (int v : f) ++s.vf_offsets[v + 1];
+  for (int v = 0; v < n; ++v) s.vf_offsets[v + 1] += s.vf_offsets[v];
+  s.vf.resize(3 * faces.size());
+  std::vector<int> fill(s.vf_offsets.begin(), s.vf_offsets.end() - 1);
+  for (std::size_t j = 0; j < faces.size(); ++j)
+    for (int k = 0; k < 3; ++k) s.vf[fill[faces[j][k]]++] = static_cast<int>(3 * j) + k;
+}
+
 StepSystem make_system(cases::DetailKind kind, int triangles, double jitter) {
   const cases::CylinderCase c = cylinder_case(kind, triangles, jitter);
   StepSystem s;
@@ -75,7 +89,6 @@ StepSystem make_system(cases::DetailKind kind, int triangles, double jitter) {
   const BaseFrames fr = evaluate_base_frames(s.enc, c.edited_base.vertices);
   const std::vector<Vec3> p = reconstruct_vectors(s.enc, fr);
   const std::vector<Face>& faces = s.enc.detail_faces;
-  const int n = s.enc.num_detail_vertices();
   s.grad.resize(faces.size());
   s.r.resize(faces.size());
   for (std::size_t j = 0; j < faces.size(); ++j) {
@@ -85,14 +98,7 @@ StepSystem make_system(cases::DetailKind kind, int triangles, double jitter) {
     for (int k = 0; k < 3; ++k) s.grad[j][k] = g.grad[k];
     s.r[j] = s.enc.target_volumes[j] - g.volume;
   }
-  s.vf_offsets.assign(n + 1, 0);
-  for (const Face& f : faces)
-    for (int v : f) ++s.vf_offsets[v + 1];
-  for (int v = 0; v < n; ++v) s.vf_offsets[v + 1] += s.vf_offsets[v];
-  s.vf.resize(3 * faces.size());
-  std::vector<int> fill(s.vf_offsets.begin(), s.vf_offsets.end() - 1);
-  for (std::size_t j = 0; j < faces.size(); ++j)
-    for (int k = 0; k < 3; ++k) s.vf[fill[faces[j][k]]++] = static_cast<int>(3 * j) + k;
+  vertex_faces(s);
   return s;
 }
 
@@ -238,6 +244,27 @@ TEST(VertexMultigrid, ARegularizationGraphBeyondTheFacesIsAppliedWhole) {
     ASSERT_EQ(one.size(), three.size());
     for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
   }
+}
+
+// Faces that share an edge with two others (a non-manifold edge) and a face with a repeated
+// corner: each graph edge is applied once, on the first face that has it, and a repeated corner's
+// "edge" not at all; the step is the reference's.
+TEST(VertexMultigrid, AnEdgeOfThreeFacesAndARepeatedCornerKeepTheReferenceStep) {
+  StepSystem s = make_system(cases::DetailKind::Bumps, 1200, 0.4);
+  const Face f0 = s.enc.detail_faces[0];
+  const int far = s.enc.num_detail_vertices() / 2;
+  s.enc.detail_faces.push_back({f0[1], f0[0], far});  // a third face on edge (f0[0], f0[1])
+  s.enc.detail_faces.push_back({f0[2], f0[2], far});  // a repeated corner
+  for (int k = 0; k < 2; ++k) {
+    s.grad.push_back({Vec3(0.3, -0.2, 0.1), Vec3(-0.1, 0.4, 0.2), Vec3(0.2, 0.1, -0.3)});
+    s.r.push_back(0.01 * (k + 1));
+  }
+  vertex_faces(s);
+  const double d = s.diag();
+  std::vector<Vec3> delta;
+  internal::VertexMultigrid::Workspace ws;
+  s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, delta, ws, nullptr);
+  EXPECT_LT(relative_difference(delta, dense_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
 }
 
 // Fixed (pinned) vertices: delta is exactly 0 there, and the rest is the reference solution of

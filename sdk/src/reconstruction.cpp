@@ -84,6 +84,8 @@ struct Level {
 // Relative diagonal shift of the exact steps' system J J^T + eps I (eps = damping * max diagonal):
 // at least enough to factorize the singular clean start, at most a short gradient-like step.
 constexpr double kMinDamping = 1e-10;
+// The largest regularization weight a hand-made encoding may have (single precision holds it).
+constexpr double kMaxWeight = 1e30;
 constexpr double kMaxDamping = 1e-2;
 
 // Local exact steps (local_polish()) over at least this many prisms factorize with CHOLMOD's
@@ -540,6 +542,11 @@ class VolumeReconstructor::Impl {
       }
     };
     finite(enc_.weights, "weights");
+    // The multigrid keeps the weights in single precision; a normalized cotangent weight is at
+    // most a few units.
+    for (double w : enc_.weights)
+      if (!(std::abs(w) <= kMaxWeight))
+        throw InvalidInput("encoding has a weight beyond +-1e30 (weights are normalized, near 1)");
     finite(enc_.normal_offsets, "normal_offsets");
     finite(enc_.tangential_offsets, "tangential_offsets");
     finite(enc_.target_volumes, "target_volumes");

@@ -547,6 +547,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     std::vector<float>().swap(ws.jx32);
     std::vector<Eigen::Vector3f>().swap(ws.el32);
   }
+  if (!(eps_lap > 0) || !arena || n < 4096) {  // no threaded product with the smoothness term
+    std::vector<Eigen::Vector3f>().swap(ws.el32);
+    std::vector<Vec3>().swap(ws.el64);
+  }
   // Fixed vertices: their entries of the residual, the preconditioned residual and K p are held
   // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
   // free block of the V-cycle).
