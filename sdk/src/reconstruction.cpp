@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <type_traits>
@@ -66,6 +67,10 @@ struct Level {
   std::vector<Eigen::Vector2d> rest_lap_detail, rest_lap_base;
   std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
   std::vector<int> inserted, ring_offsets, ring_vertices;
+  // The order prolongate() visits `inserted` in (indices into it): by wave (a vertex after the
+  // inserted vertices of its ring), then by id, so that its reads and writes go through the arrays
+  // in order rather than in the decimation's order, which is by edge length.
+  std::vector<int> prolong_order;
   // The direct solver of J J^T (prisms sharing a vertex): its lower triangle with the pattern
   // fixed, the diagonal's slots in its value array, and the Cholesky factorization whose symbolic
   // analysis is done once per level. The values are written straight into the matrix from the
@@ -249,6 +254,7 @@ class VolumeReconstructor::Impl {
       report("setup", kDecimation + (1.0 - kDecimation) * done / prisms);
     }
     compact_coarse_levels();
+    prolongation_orders();
     if (enc_.over_limit_surface()) {
       std::vector<Vec3> rest(enc_.base_num_vertices, Vec3::Zero());
       limit_ = std::make_unique<SubdivSurface>(limit_surface_for(enc_, rest));
@@ -589,6 +595,34 @@ class VolumeReconstructor::Impl {
       compact_pinned_.resize(compact_to_orig_.size());
       for (std::size_t k = 0; k < compact_to_orig_.size(); ++k)
         compact_pinned_[k] = enc_.pinned[compact_to_orig_[k]];
+    }
+  }
+
+  // Level::prolong_order for every level. Each inserted vertex takes the mean of its ring, whose
+  // inserted vertices come earlier in the removal order: any order that keeps those before it
+  // computes the same numbers. A ring that reads a vertex inserted later (none in the hierarchies
+  // build_hierarchy() makes) keeps the removal order, so that nothing changes there either.
+  void prolongation_orders() {
+    std::vector<int> pos(enc_.num_detail_vertices(), -1);
+    for (Level& L : levels_) {
+      const int k_count = static_cast<int>(L.inserted.size());
+      std::vector<int> wave(k_count, 0);
+      bool in_order = true;
+      for (int k = 0; k < k_count; ++k) pos[L.inserted[k]] = k;
+      for (int k = 0; k < k_count && in_order; ++k) {
+        for (int r = L.ring_offsets[k]; r < L.ring_offsets[k + 1]; ++r) {
+          const int q = pos[L.ring_vertices[r]];
+          if (q >= k) in_order = false;  // itself, or not yet inserted: a stale read
+          if (q >= 0 && q < k) wave[k] = std::max(wave[k], wave[q] + 1);
+        }
+      }
+      for (int i : L.inserted) pos[i] = -1;
+      L.prolong_order.resize(k_count);
+      std::iota(L.prolong_order.begin(), L.prolong_order.end(), 0);
+      if (in_order)
+        std::sort(L.prolong_order.begin(), L.prolong_order.end(), [&](int a, int b) {
+          return wave[a] != wave[b] ? wave[a] < wave[b] : L.inserted[a] < L.inserted[b];
+        });
     }
   }
 
@@ -1873,7 +1907,7 @@ class VolumeReconstructor::Impl {
       s.dRho[i] = dn / guarded_f[i];
       s.dT[i] = d - dn * s.N[i];
     }
-    for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
+    for (const int k : fine.prolong_order) {
       const int i = fine.inserted[k];
       if (s.pinned(i)) {
         // Placed, not solved: unchanged since the pass started (the rings of later inserted
