@@ -545,7 +545,7 @@ TEST(Reconstruction, RejectsAnEncodingWithABrokenWeightGraphOrNonFiniteValues) {
   rejected(broken, "weights");
   broken = e;
   broken.weights[21] = 1e31;  // beyond what the multigrid's single precision holds safely
-  rejected(broken, "weight");
+  rejected(broken, "weights");
   broken = e;
   broken.normal_offsets[4] = nan;
   rejected(broken, "normal_offsets");

@@ -214,6 +214,26 @@ void add_non_face_edges(StepSystem& s) {
   e.weight_neighbors = nb;
   e.weights = w;
 }
+
+// A step on one thread and on three (the threaded product's two passes) is the same to the bit,
+// with the V-cycle in double precision (the polish's) as in single (the cycle steps').
+void expect_the_same_step_on_one_thread_and_three(const StepSystem& s) {
+  const internal::VertexMultigrid mg = s.hierarchy();
+  const double d = s.diag();
+  tbb::task_arena arena(3);
+  for (bool single : {false, true}) {
+    SCOPED_TRACE(single ? "single precision" : "double precision");
+    std::vector<Vec3> one, three;
+    internal::VertexMultigrid::Workspace w1, w3;
+    const internal::VertexStepResult r1 =
+        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, one, w1, nullptr, single);
+    const internal::VertexStepResult r3 =
+        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, three, w3, &arena, single);
+    EXPECT_EQ(r1.relative_residual, r3.relative_residual);
+    ASSERT_EQ(one.size(), three.size());
+    for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
+  }
+}
 }  // namespace
 
 // The smoothness term over a graph with edges that no face has: the product applies the faces'
@@ -232,18 +252,7 @@ TEST(VertexMultigrid, ARegularizationGraphBeyondTheFacesIsAppliedWhole) {
 
   StepSystem big = make_system(cases::DetailKind::Rings, 20000, 0.4);
   add_non_face_edges(big);
-  const internal::VertexMultigrid mg = big.hierarchy();
-  const double db = big.diag();
-  tbb::task_arena arena(3);
-  for (bool single : {false, true}) {
-    SCOPED_TRACE(single ? "single precision" : "double precision");
-    std::vector<Vec3> one, three;
-    internal::VertexMultigrid::Workspace w1, w3;
-    mg.solve(big.view(1e-6 * db, 1e-2 * db), 0.0, 8, one, w1, nullptr, single);
-    mg.solve(big.view(1e-6 * db, 1e-2 * db), 0.0, 8, three, w3, &arena, single);
-    ASSERT_EQ(one.size(), three.size());
-    for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
-  }
+  expect_the_same_step_on_one_thread_and_three(big);
 }
 
 // Faces that share an edge with two others (a non-manifold edge) and a face with a repeated
@@ -323,25 +332,9 @@ TEST(VertexMultigrid, ASinglePrecisionCycleLowersTheResidualAsFar) {
   EXPECT_NE(single, twice);  // the two preconditioners do differ
 }
 
-// Threads change nothing: every sum is taken in one order, with the V-cycle in double precision
-// (the polish's) as in single (the cycle steps').
+// Threads change nothing: every sum is taken in one order.
 TEST(VertexMultigrid, TheSameStepOnOneThreadAndThree) {
-  const StepSystem s = make_system(cases::DetailKind::Rings, 20000, 0.4);
-  const internal::VertexMultigrid mg = s.hierarchy();
-  const double d = s.diag();
-  tbb::task_arena arena(3);
-  for (bool single : {false, true}) {
-    SCOPED_TRACE(single ? "single precision" : "double precision");
-    std::vector<Vec3> one, three;
-    internal::VertexMultigrid::Workspace w1, w3;
-    const internal::VertexStepResult r1 =
-        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, one, w1, nullptr, single);
-    const internal::VertexStepResult r3 =
-        mg.solve(s.view(1e-6 * d, 1e-2 * d), 0.0, 8, three, w3, &arena, single);
-    EXPECT_EQ(r1.relative_residual, r3.relative_residual);
-    ASSERT_EQ(one.size(), three.size());
-    for (std::size_t v = 0; v < one.size(); ++v) ASSERT_EQ(one[v], three[v]) << v;
-  }
+  expect_the_same_step_on_one_thread_and_three(make_system(cases::DetailKind::Rings, 20000, 0.4));
 }
 
 // The reconstruction on it (multigrid_reconstruct_options()): the paper's bend over a scan-like

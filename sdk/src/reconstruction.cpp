@@ -89,9 +89,11 @@ struct Level {
 // Relative diagonal shift of the exact steps' system J J^T + eps I (eps = damping * max diagonal):
 // at least enough to factorize the singular clean start, at most a short gradient-like step.
 constexpr double kMinDamping = 1e-10;
-// The largest regularization weight a hand-made encoding may have (single precision holds it).
-constexpr double kMaxWeight = 1e30;
 constexpr double kMaxDamping = 1e-2;
+
+// The largest regularization weight a hand-made encoding may have: the multigrid holds the weights
+// in single precision, and a normalized cotangent weight is at most a few units.
+constexpr double kMaxWeight = 1e30;
 
 // Local exact steps (local_polish()) over at least this many prisms factorize with CHOLMOD's
 // supernodal Cholesky, smaller ones with Eigen's simplicial LDL^T. Measured on the 1M bend's local
@@ -547,12 +549,9 @@ class VolumeReconstructor::Impl {
         if (!ok) throw InvalidInput(std::string("encoding has a non-finite value in ") + name);
       }
     };
-    finite(enc_.weights, "weights");
-    // The multigrid keeps the weights in single precision; a normalized cotangent weight is at
-    // most a few units.
     for (double w : enc_.weights)
       if (!(std::abs(w) <= kMaxWeight))
-        throw InvalidInput("encoding has a weight beyond +-1e30 (weights are normalized, near 1)");
+        throw InvalidInput("encoding has weights that are not finite or beyond +-1e30 (kMaxWeight)");
     finite(enc_.normal_offsets, "normal_offsets");
     finite(enc_.tangential_offsets, "tangential_offsets");
     finite(enc_.target_volumes, "target_volumes");
@@ -1896,8 +1895,9 @@ class VolumeReconstructor::Impl {
   }
 
   // Carries the coarse level's change since the pass started to the vertices the finer level
-  // adds, in reverse removal order: each takes the mean change of its removal ring, as a change
-  // of d/f along its own normal and of the tangential displacement in its own tangent plane.
+  // adds, each after the inserted vertices of its removal ring (Level::prolong_order): each takes
+  // the mean change of that ring, as a change of d/f along its own normal and of the tangential
+  // displacement in its own tangent plane.
   // \p coarse_verts: the coarse level's vertices, in \p s's ids (as \p fine's).
   void prolongate(const Level& fine, const std::vector<int>& coarse_verts, State& s) const {
     const std::vector<double>& guarded_f = *s.f;

@@ -247,8 +247,8 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   result.relative_residual = rr0 > 0 ? 1.0 : 0.0;
   if (n == 0 || m == 0 || !(rr0 > 0)) return result;
 
-  // --- This solve's operators: the fine block diagonal, the Galerkin
-  // coarse blocks (assembled face by face in face order), their inverses and the coarsest factor.
+  // --- This solve's operators: the fine block diagonal, the Galerkin coarse blocks (assembled
+  // face by face in face order), their inverses and the coarsest factor.
   const float* gf = sys.gf->data();
   auto g_at = [gf](std::size_t entry) {  // the gradient of vertex-face entry face * 3 + corner
     const float* g = gf + 3 * entry;
@@ -342,8 +342,9 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
              (g[6] * c[0] + g[7] * c[1] + g[8] * c[2]);
     };
     // With the smoothness term, face j's edges add eps_lap w (x_a - x_b) at a = f[e] and subtract
-    // it at b = f[e + 1]; lap_terms() gives their sum at each corner, one expression for both
-    // passes, so that they sum the same numbers. Without it the passes are as before it existed.
+    // it at b = f[e + 1]. edge() is the one expression of a term for both passes, and both take a
+    // corner's sum as (edge leaving it) - (edge arriving), so that they sum the same numbers.
+    // Without the term the passes are as before it existed.
     auto edge = [&](const Face& f, const float* w, int e) {  // eps_lap w (x_a - x_b) of edge e
       return V3(static_cast<T>(eps_lap * w[e]) * (x[f[e]] - x[f[(e + 1) % 3]]));
     };
