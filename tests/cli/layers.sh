@@ -185,6 +185,22 @@ grep -q -- "--band: must be above 0, not 0" err.txt || fail "band 0 message: $(c
 # A tessellation of 100 million triangles was written (2.8 GB at resolution 1000 for a small cage).
 "$STRATA" export camel.strata --band 0 --resolution 100000 -o out.obj 2>err.txt && fail "resolution 100000 accepted"
 grep -q "would have .* triangles, over 5e+07" err.txt || fail "resolution message: $(cat err.txt)"
+grep -q -- "camel.strata: band 0 at --resolution 100000: " err.txt || fail "resolution not named: $(cat err.txt)"
+# Found by a documentation check (2026-11-28): these were exit 1, or named no option.
+expect_usage() {  # expect_usage <text the message must contain> <strata arguments...>
+  local needle=$1 code=0
+  shift
+  "$STRATA" "$@" >/dev/null 2>err.txt || code=$?
+  [ "$code" = 2 ] || fail "'$*' should be a usage error (exit 2), got $code: $(cat err.txt)"
+  grep -qF -- "$needle" err.txt || fail "'$*': the message does not mention '$needle': $(cat err.txt)"
+}
+expect_usage "give -o MODEL.strata or --out-dir DIR" build "$SCANS/camel.off"
+expect_usage "several scans need --out-dir" build "$SCANS/camel.off" "$SCANS/bear.off" -o out.strata
+expect_usage "give either -o or --out-dir, not both" build "$SCANS/camel.off" -o out.strata --out-dir models2
+expect_usage "--scale: must be -1000 to 1000, not 2000" amplitude camel.strata --band 1 --scale 2000 -o out.strata
+expect_usage "--threads: must be 0 to 1024, not 2000" deform "$SCANS/camel.off" --edit "$DATA/edits/camel_neck.json" \
+  --threads 2000 -o out.obj
+[ -e models2 ] && fail "the output directory was made after a usage error"
 # Two scans of one name would be built into one model, the second over the first.
 mkdir -p a b
 cp "$SCANS/bear.off" a/bear.off

@@ -320,8 +320,9 @@ Subcommand register_deform(CLI::App& parent) {
       ->capture_default_str();
   app->add_option(
          "--threads", o->threads,
-         "Threads of the volume solver's sweeps (0: all cores, 1: one); the result is the same for any count")
-      ->check(at_least(0))
+         "Threads of the volume solver's sweeps (0: all cores, 1: one, at most 1024); the result is the same "
+         "for any count")
+      ->check(in_range(0, 1024))
       ->capture_default_str();
   add_solver_option(app, o->solver);
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")

@@ -91,10 +91,14 @@ void check_model_output_path(const std::string& path) {
 }
 
 int run_build(const BuildCmdOptions& o) {
+  // Usage errors (exit 2, with the pointer to --help), as CLI11's own.
   if (o.scans.size() > 1 && o.out_dir.empty())
-    throw InvalidInput("several scans need --out-dir (each model is written as DIR/<scan name>.strata)");
-  if (!o.output.empty() && !o.out_dir.empty()) throw InvalidInput("give either -o or --out-dir, not both");
-  if (o.output.empty() && o.out_dir.empty()) throw InvalidInput("give -o MODEL.strata or --out-dir DIR");
+    throw CLI::ValidationError(
+        "several scans need --out-dir (each model is written as DIR/<scan name>.strata)");
+  if (!o.output.empty() && !o.out_dir.empty())
+    throw CLI::ValidationError("give either -o or --out-dir, not both");
+  if (o.output.empty() && o.out_dir.empty())
+    throw CLI::ValidationError("give -o MODEL.strata or --out-dir DIR");
   auto model_path = [&](const std::string& scan_path) {
     return o.output.empty()
                ? (fs::path(o.out_dir) / (fs::path(scan_path).stem().string() + ".strata")).string()
@@ -448,7 +452,15 @@ int run_export(const ExportCmdOptions& o) {
               << c.num_faces() << " faces)" << std::endl;
     return 0;
   }
-  const TriMesh mesh = model.band_mesh(k, o.resolution);
+  TriMesh mesh;
+  try {
+    mesh = model.band_mesh(k, o.resolution);
+  } catch (const InvalidInput& e) {
+    // The tessellation's limit: name the option that set it.
+    if (k != 0) throw;
+    throw InvalidInput(o.model + ": band 0 at --resolution " + std::to_string(o.resolution) + ": " +
+                       e.what());
+  }
   warn_stl_drops_vertices(mesh, o.output);
   validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault
   write_mesh(mesh, o.output);
@@ -522,8 +534,11 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "The finer bands are rebuilt in cascade.");
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("--band", o->band, "Band (1 or more)")->required()->check(above(0));
-    // A number (require_numbers()); LayeredModel::set_amplitude() bounds it.
-    app->add_option("--scale", o->scale, "Amplitude, within +-1000")->required();
+    // A number (require_numbers()) within LayeredModel::set_amplitude()'s bound, checked here too so
+    // that the usage error names --scale.
+    app->add_option("--scale", o->scale, "Amplitude, within +-1000")
+        ->required()
+        ->check(in_range(-1000, 1000));
     add_change_options(*app, *o);
     out.push_back({app, [o] { return run_amplitude(*o); }});
   }
