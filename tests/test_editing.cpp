@@ -129,6 +129,65 @@ TEST(RegionEditor, RejectsBadSelections) {
   TriMesh far = m;
   far.vertices[0].x() = 1e25;
   EXPECT_THROW(RegionEditor(far, region, handle), InvalidInput);
+  // The mesh precondition, checked (an out-of-range face index crashed the adjacency), and a
+  // NaN named as the editor's mesh (it was "edited mesh").
+  TriMesh bad_index = m;
+  bad_index.faces[7][1] = m.num_vertices();
+  EXPECT_THROW(RegionEditor(bad_index, region, handle), InvalidInput);
+  TriMesh nan = m;
+  nan.vertices[0].y() = std::nan("");
+  try {
+    RegionEditor(nan, region, handle);
+    ADD_FAILURE() << "a NaN vertex accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("region editor's mesh"), std::string::npos) << e.what();
+  }
+}
+
+// Options out of range: NaN or negative smoothing was taken as the default, negative solved rings
+// changed the result, and a tiny wavelength was a SolverError of the fairing.
+TEST(RegionEditor, OptionsOutOfRangeAreRejected) {
+  const TriMesh m = bumpy_cylinder(2000);
+  const std::vector<char> region = above(m, 2.0), handle = above(m, 4.0);
+  std::vector<std::pair<EditOptions, const char*>> bad;
+  EditOptions o;
+  o.smoothing_wavelength = std::nan("");
+  bad.emplace_back(o, "smoothing_wavelength");
+  o = {};
+  o.smoothing_wavelength = -1;
+  bad.emplace_back(o, "smoothing_wavelength");
+  o = {};
+  o.smoothing_fraction = 0;
+  bad.emplace_back(o, "smoothing_fraction");
+  o = {};
+  o.smoothing_fraction = std::nan("");
+  bad.emplace_back(o, "smoothing_fraction");
+  o = {};
+  o.handle_solved_rings = -1;
+  bad.emplace_back(o, "handle_solved_rings");
+  o = {};
+  o.drag_end_cycles = 0;
+  bad.emplace_back(o, "drag_end_cycles");
+  o = {};
+  o.smoothing_wavelength = 1e-300;
+  bad.emplace_back(o, "too small");
+  for (const auto& [options, name] : bad) {
+    try {
+      RegionEditor(m, region, handle, options);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+}
+
+// A blend weight that is not a number is refused, not turned into NaN coordinates.
+TEST(EditTransform, ANonFiniteBlendWeightIsRejected) {
+  const EditTransform t = EditTransform::rotation(Vec3::UnitZ(), 30.0, Vec3::Zero());
+  EXPECT_THROW(t.apply_blended(Vec3(1, 0, 0), std::nan("")), InvalidInput);
+  EXPECT_THROW(blend_transform({Vec3(1, 0, 0), Vec3(0, 1, 0)}, {0.5, std::nan("")}, t), InvalidInput);
+  EXPECT_TRUE(t.apply_blended(Vec3(1, 0, 0), 0.5)
+                  .isApprox(EditTransform::rotation(Vec3::UnitZ(), 15.0, Vec3::Zero()).apply(Vec3(1, 0, 0))));
 }
 
 // Every other face of the cylinder: triangles that share no edge, so every vertex lies on open

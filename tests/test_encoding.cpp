@@ -156,6 +156,118 @@ TEST(Encoding, RejectsBadInput) {
   EXPECT_THROW(evaluate_base_frames(e, far_base), InvalidInput);
 }
 
+// Every function that takes an encoding checks that its arrays fit before indexing with them (an
+// encoding made or altered by hand read past its arrays under ASan): the message names the array.
+TEST(Encoding, FunctionsTakingAnEncodingRejectAnInconsistentOne) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  EXPECT_NO_THROW(check_encoding(e));
+  const BaseFrames frames = evaluate_base_frames(e, c.edited_base.vertices);
+  const std::vector<Vec3> x = reconstruct_vectors(e, frames);
+  std::vector<int> kept;
+  // evaluate_base_frames() reads the base points and faces only (the encoders call it before the
+  // rest is filled in): it refuses what breaks those.
+  auto all_refuse = [&](const DetailEncoding& broken, const std::string& name, bool base_part) {
+    auto expect = [&](auto&& call, const char* what) {
+      try {
+        call();
+        ADD_FAILURE() << what << " accepted an encoding with a broken " << name;
+      } catch (const InvalidInput& ex) {
+        EXPECT_NE(std::string(ex.what()).find(name), std::string::npos) << what << ": " << ex.what();
+      }
+    };
+    expect([&] { check_encoding(broken); }, "check_encoding");
+    if (base_part)
+      expect([&] { evaluate_base_frames(broken, c.edited_base.vertices); }, "evaluate_base_frames");
+    expect([&] { reconstruct_vectors(broken, frames); }, "reconstruct_vectors");
+    expect([&] { volume_metrics(broken, frames, x); }, "volume_metrics");
+    expect([&] { restrict_encoding(broken, {0, 1, 2}, kept); }, "restrict_encoding");
+  };
+  // Arrays shrunk to their size (pop_back() alone leaves the capacity that ASan does not flag).
+  auto shrunk = [](auto& v) {
+    v.pop_back();
+    v.shrink_to_fit();
+  };
+  DetailEncoding broken = e;
+  shrunk(broken.base_points);
+  all_refuse(broken, "base points", true);
+  broken = e;
+  shrunk(broken.target_volumes);
+  all_refuse(broken, "target volumes", false);
+  broken = e;
+  shrunk(broken.normal_offsets);
+  all_refuse(broken, "normal offsets", false);
+  broken = e;
+  broken.pinned.assign(5, 0);
+  all_refuse(broken, "pinned flags", false);
+  broken = e;
+  broken.base_faces[3][2] = -1;
+  all_refuse(broken, "base face index", true);
+  broken = e;
+  broken.base_points[4].face = static_cast<int>(e.base_faces.size());
+  all_refuse(broken, "missing base face", true);
+  broken = e;
+  broken.detail_faces[8][0] = e.num_detail_vertices();
+  all_refuse(broken, "detail face index", false);
+  // Frames of another size, and prism volumes over indices beyond the points.
+  BaseFrames short_frames = frames;
+  shrunk(short_frames.tangents);
+  EXPECT_THROW(reconstruct_vectors(e, short_frames), InvalidInput);
+  std::vector<Face> faces = e.detail_faces;
+  faces[2][1] = static_cast<int>(x.size());
+  EXPECT_THROW(prism_volumes(faces, x, frames.points), InvalidInput);
+  std::vector<Vec3> short_points(frames.points.begin(), frames.points.end() - 1);
+  EXPECT_THROW(prism_volumes(e.detail_faces, x, short_points), InvalidInput);
+}
+
+// An edited base collapsed to a point has no normals: the frames were NaN (and the vectors' result
+// with them), where the reconstruction said only "base frame 0 is not finite".
+TEST(Encoding, ADegenerateEditedBaseIsNamed) {
+  const auto& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const std::vector<Vec3> collapsed(c.base.vertices.size(), Vec3(1, 2, 3));
+  for (int k = 0; k < 2; ++k) {
+    try {
+      if (k == 0)
+        evaluate_base_frames(e, collapsed);
+      else
+        reconstruct_vectors(e, collapsed);
+      ADD_FAILURE() << "a collapsed base gave frames";
+    } catch (const InvalidInput& ex) {
+      EXPECT_NE(std::string(ex.what()).find("edited base: base face"), std::string::npos) << ex.what();
+      EXPECT_NE(std::string(ex.what()).find("has no normal"), std::string::npos) << ex.what();
+    }
+  }
+}
+
+// Encoding options out of range (the ranges a .strata file's are read with): NaN ratios made every
+// projection fall back to the closest point without a word.
+TEST(Encoding, OptionsOutOfRangeAreRejected) {
+  const auto& c = small_case();
+  const double nan = std::nan("");
+  std::vector<std::pair<EncodeOptions, const char*>> bad;
+  EncodeOptions o;
+  o.search_rings = -1;
+  bad.emplace_back(o, "search_rings");
+  o = {};
+  o.barycentric_tolerance = nan;
+  bad.emplace_back(o, "barycentric_tolerance");
+  o = {};
+  o.max_distance_ratio = nan;
+  bad.emplace_back(o, "max_distance_ratio");
+  o = {};
+  o.max_distance_ratio = 0.5;
+  bad.emplace_back(o, "max_distance_ratio");
+  for (const auto& [options, name] : bad) {
+    try {
+      encode_detail(c.detail, c.base, options);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const InvalidInput& ex) {
+      EXPECT_NE(std::string(ex.what()).find(name), std::string::npos) << ex.what();
+    }
+  }
+}
+
 // The projections run on TBB's threads: one thread and three give the same base points, offsets,
 // targets and counts (several chunks of projections, so the counts are summed across threads).
 TEST(Encoding, TheSameForAnyThreadCount) {

@@ -87,6 +87,19 @@ TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
   EXPECT_NE(message("tangential_regularization", "laplacian").find("is not rest_offset or rest_laplacian"),
             std::string::npos);
   EXPECT_NE(message("progress", "x").find("unknown"), std::string::npos);  // a callback: not settable
+  // Plain decimals only, blanks on either side refused alike (strtod took leading ones only, and
+  // hexadecimal for reals only); a subnormal is a number.
+  for (const char* v : {" 3", "3 ", "\t3", "0x10", "+", "1e", ".e3"}) {
+    EXPECT_NE(message("volume_scales", v).find("is not a whole number"), std::string::npos) << v;
+    EXPECT_NE(message("tolerance", v).find("is not a finite number"), std::string::npos) << v;
+  }
+  ReconstructOptions d;
+  set_reconstruct_option(d, "tolerance", "1e-310");
+  EXPECT_EQ(d.tolerance, 1e-310);
+  set_reconstruct_option(d, "tolerance", "-.5E+2");
+  EXPECT_EQ(d.tolerance, -50.0);
+  set_reconstruct_option(d, "volume_scales", "+7");
+  EXPECT_EQ(d.volume_scales, 7);
   // One NAME=VALUE argument, as --set gives it: split at the first '='.
   ReconstructOptions o;
   set_reconstruct_option(o, "multigrid.tolerance=0.05");

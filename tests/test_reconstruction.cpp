@@ -561,6 +561,46 @@ TEST(Reconstruction, RejectsAnEncodingWithABrokenWeightGraphOrNonFiniteValues) {
   broken = e;
   broken.base_points[6].bary[1] = nan;
   rejected(broken, "base point");
+  // Base faces beyond the base's vertices: the frames read past the edited base.
+  broken = e;
+  broken.base_faces[5][1] = e.base_num_vertices;
+  rejected(broken, "base face index");
+  broken = e;
+  broken.base_num_vertices -= 1;  // the last vertex is still used by a face
+  rejected(broken, "base face index");
+}
+
+// Options out of range that check_reconstruct_options() let through: an enum from a cast integer,
+// reached a switch without its case (UBSan: a null reference); a NaN or negative motion bound; a
+// negative direct-solve size.
+TEST(Reconstruction, EnumAndBoundOptionsOutOfRangeAreRejected) {
+  auto refused = [](const ReconstructOptions& o, const char* name) {
+    try {
+      check_reconstruct_options(o);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const InvalidInput& x) {
+      EXPECT_NE(std::string(x.what()).find(name), std::string::npos) << x.what();
+    }
+  };
+  ReconstructOptions o;
+  o.polish_solver = static_cast<VolumeStepSolver>(42);
+  refused(o, "polish_solver");
+  o = {};
+  o.step_solver = static_cast<VolumeStepSolver>(-1);
+  refused(o, "step_solver");
+  o = {};
+  o.tangential_regularization = static_cast<TangentialRegularization>(7);
+  refused(o, "tangential_regularization");
+  o = {};
+  o.local_polish_max_motion = std::nan("");
+  refused(o, "local_polish_max_motion");
+  o.local_polish_max_motion = -1e-3;
+  refused(o, "local_polish_max_motion");
+  o = {};
+  o.direct_max_prisms = -1;
+  refused(o, "direct_max_prisms");
+  EXPECT_NO_THROW(check_reconstruct_options(ReconstructOptions{}));
+  EXPECT_NO_THROW(check_reconstruct_options(multigrid_reconstruct_options()));
 }
 
 // A solve that diverges (regularization weights at 1e25: in range, but no solve follows them) is a
@@ -601,6 +641,61 @@ TEST(DragState, StepsBeforeResetOrOfAnotherSizeAreRejected) {
   state.reset(VolumeReconstructor(oe).base_frames(other.base.vertices), oe.detail_rest);
   EXPECT_TRUE(state.started());
   EXPECT_THROW(rec.drag_step(c.base.vertices, state), InvalidInput);
+}
+
+// A state stepped by one reconstructor and then by another of the same encoding (the same vertex
+// count, another hierarchy) is refused: its per-level arrays follow the first one's levels, and the
+// second read past them. After a reset() the second may use it.
+TEST(DragState, AStateSteppedByAnotherReconstructorIsRejected) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 2000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  ReconstructOptions one_level, three_levels;
+  one_level.max_levels = 1;
+  three_levels.max_levels = 3;
+  const VolumeReconstructor a(e, one_level), b(e, three_levels);
+  ASSERT_NE(a.level_vertex_counts().size(), b.level_vertex_counts().size());
+  const WarmStartOptions preview{true, 1e-2, 1, 30};
+  for (const VolumeReconstructor* first : {&a, &b}) {
+    const VolumeReconstructor* second = first == &a ? &b : &a;
+    DragState state;
+    state.reset(first->base_frames(c.base.vertices), e.detail_rest);
+    first->drag_step(c.edited_base.vertices, state, preview);
+    try {
+      second->drag_step(c.edited_base.vertices, state, preview);
+      ADD_FAILURE() << "a state of another reconstructor was stepped";
+    } catch (const InvalidInput& x) {
+      EXPECT_NE(std::string(x.what()).find("another VolumeReconstructor"), std::string::npos) << x.what();
+    }
+    state.reset(second->base_frames(c.base.vertices), e.detail_rest);
+    const ReconstructResult r = second->drag_step(c.edited_base.vertices, state, preview);
+    for (const Vec3& p : r.positions) ASSERT_TRUE(p.allFinite());
+  }
+}
+
+// Warm-start options out of range are refused by the calls that take them (a NaN tolerance ended
+// unconverged at once; negative counts passed).
+TEST(Reconstruction, WarmStartOptionsOutOfRangeAreRejected) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor rec(e);
+  std::vector<WarmStartOptions> bad(5);
+  bad[0].tolerance = std::nan("");
+  bad[1].tolerance = 0;
+  bad[2].level_steps = -1;
+  bad[3].cg_max_iterations = -1;
+  bad[4].max_cycles = -1;
+  const char* names[] = {"tolerance", "tolerance", "level_steps", "cg_max_iterations", "max_cycles"};
+  for (std::size_t k = 0; k < bad.size(); ++k) {
+    try {
+      rec.reconstruct_from(c.edited_base.vertices, e.detail_rest, bad[k]);
+      ADD_FAILURE() << names[k] << " accepted";
+    } catch (const InvalidInput& x) {
+      EXPECT_NE(std::string(x.what()).find(names[k]), std::string::npos) << x.what();
+    }
+    DragState state;
+    state.reset(rec.base_frames(c.base.vertices), e.detail_rest);
+    EXPECT_THROW(rec.drag_step(c.edited_base.vertices, state, bad[k]), InvalidInput) << names[k];
+  }
 }
 
 // Over the unedited base every level's state is the rest detail, which holds every level's target

@@ -12,6 +12,7 @@
 #include "internal/detail_solve.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
+#include "strata/mesh_io.h"
 
 namespace strata {
 namespace {
@@ -95,7 +96,8 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
-    check_coordinates(mesh.vertices, "edited mesh");
+    validate_mesh(mesh, "cage editor's mesh");  // the precondition, checked
+    check_coordinates(mesh.vertices, "cage editor's mesh");
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       region_.push_back(i);

@@ -15,6 +15,7 @@
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
+#include "strata/mesh_io.h"
 
 namespace strata {
 namespace {
@@ -112,6 +113,7 @@ Vec3 EditTransform::apply(const Vec3& x) const {
 }
 
 Vec3 EditTransform::apply_blended(const Vec3& x, double s) const {
+  if (!std::isfinite(s)) throw InvalidInput("blend weight is not finite");
   return BlendedMap(*this).apply(x, s);
 }
 
@@ -122,6 +124,9 @@ std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::ve
                        std::to_string(points.size()) + " points");
   const BlendedMap map(transform);
   std::vector<Vec3> out = points;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(s[i]))
+      throw InvalidInput("blend: the value of point " + std::to_string(i) + " is not finite");
   for (std::size_t i = 0; i < points.size(); ++i)
     if (s[i] != 0.0) {
       out[i] = map.apply(points[i], s[i]);
@@ -137,6 +142,24 @@ std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::ve
   return out;
 }
 
+// NaN or negative smoothing options were taken as 0 (or reported as a region without extent), and
+// negative solved rings changed the result without a word.
+static void check_edit_options(const EditOptions& o) {
+  auto fail = [](const char* name, double value, const char* range) {
+    std::ostringstream os;
+    os << "edit option " << name << " = " << value << " is out of range (" << range << ")";
+    throw InvalidInput(os.str());
+  };
+  if (!(o.smoothing_wavelength >= 0 && std::isfinite(o.smoothing_wavelength)))
+    fail("smoothing_wavelength", o.smoothing_wavelength, "at least 0, finite; 0 is smoothing_fraction's");
+  if (!(o.smoothing_fraction > 0 && std::isfinite(o.smoothing_fraction)))
+    fail("smoothing_fraction", o.smoothing_fraction, "above 0, finite");
+  if (o.handle_solved_rings < 0 || o.handle_solved_rings > 1000)
+    fail("handle_solved_rings", o.handle_solved_rings, "0-1000");
+  if (o.drag_end_cycles < 1 || o.drag_end_cycles > 100000)
+    fail("drag_end_cycles", o.drag_end_cycles, "1-100000");
+}
+
 class RegionEditor::Impl {
  public:
   Impl(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle, EditOptions o)
@@ -147,7 +170,10 @@ class RegionEditor::Impl {
     if (static_cast<int>(region.size()) != n || static_cast<int>(handle.size()) != n)
       throw InvalidInput("region and handle flags must have one entry per mesh vertex (" + std::to_string(n) +
                          ")");
-    check_coordinates(mesh.vertices, "edited mesh");
+    check_edit_options(opt_);
+    // The precondition, checked: an out-of-range face index was a crash in the adjacency below.
+    validate_mesh(mesh, "region editor's mesh");
+    check_coordinates(mesh.vertices, "region editor's mesh");
     const auto t0 = Clock::now();
     in_region_.assign(n, 0);
     in_handle_.assign(n, 0);
@@ -288,6 +314,11 @@ class RegionEditor::Impl {
     if (!(wavelength > 0) || !std::isfinite(wavelength))
       throw InvalidInput("the region has no extent to smooth over");
     const double pull = std::pow(2 * M_PI / wavelength, 4);
+    if (!std::isfinite(pull)) {  // a tiny wavelength: the fairing's weights overflow
+      std::ostringstream m;
+      m << "the smoothing wavelength " << wavelength << " is too small (the fairing's weights overflow)";
+      throw InvalidInput(m.str());
+    }
 
     // Rows of Q = L M^-1 L for the unknowns: Q_ij = sum_k L_ik L_kj / M_k over k in {i} and i's
     // neighbours; held columns j go to the right-hand side.

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <sstream>
 #include <string>
 
 #include "internal/closest_point.h"
@@ -27,6 +28,22 @@ void check_mesh(const TriMesh& m, const char* what) {
       if (v < 0 || v >= m.num_vertices())
         throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
   check_extent(m.vertices, m.faces, std::string(what) + " mesh");
+}
+
+// NaN ratios and tolerances made every projection fail the comparisons and fall back to the
+// closest point, silently.
+void check_encode_options(const EncodeOptions& o) {
+  auto fail = [](const char* name, double value, const char* range) {
+    std::ostringstream m;
+    m << "encode option " << name << " = " << value << " is out of range (" << range << ")";
+    throw InvalidInput(m.str());
+  };
+  // The ranges a .strata file's options are read with (layers/FORMAT.md).
+  if (o.search_rings < 0 || o.search_rings > 100) fail("search_rings", o.search_rings, "0 to 100");
+  if (!(o.barycentric_tolerance >= 0 && o.barycentric_tolerance <= 0.1))
+    fail("barycentric_tolerance", o.barycentric_tolerance, "0 to 0.1");
+  if (!(o.max_distance_ratio >= 1 && o.max_distance_ratio <= 1e6))
+    fail("max_distance_ratio", o.max_distance_ratio, "1 to 1e6");
 }
 
 // Working state of one encode_detail() call.
@@ -228,6 +245,7 @@ DetailEncoding encoding_over_limit(const TriMesh& detail, const SubdivSurface& b
 
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_encode_options(options);
   check_mesh(detail, "detail");
   check_mesh(base, "base");
   const int n = detail.num_vertices();
@@ -311,6 +329,7 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base
 DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>& faces,
                                  std::vector<int>& vertices) {
   if (faces.empty()) throw InvalidInput("restrict_encoding: no faces selected");
+  check_encoding(e);
   const int n = e.num_detail_vertices();
   std::vector<int> id(n, -1);
   vertices.clear();
@@ -359,11 +378,76 @@ DetailEncoding restrict_encoding(const DetailEncoding& e, const std::vector<int>
   return r;
 }
 
+namespace {
+
+// What evaluate_base_frames() reads (called by the encoders before the rest is filled in): the
+// base points, one per detail vertex, on faces of the base whose indices are within it.
+void check_base_part(const DetailEncoding& e) {
+  const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
+  if (e.base_num_vertices < 0) throw InvalidInput("encoding has a negative base vertex count");
+  if (e.over_limit_surface()) {
+    // The cage's faces and the limit points' patches: SubdivSurface and LimitPointSet check them.
+    if (e.limit_points.size() != nv)
+      throw InvalidInput("encoding has " + std::to_string(e.limit_points.size()) + " base points for " +
+                         std::to_string(nv) + " detail vertices");
+    return;
+  }
+  if (e.base_points.size() != nv)
+    throw InvalidInput("encoding has " + std::to_string(e.base_points.size()) + " base points for " +
+                       std::to_string(nv) + " detail vertices");
+  for (const Face& f : e.base_faces)
+    for (int v : f)
+      if (v < 0 || v >= e.base_num_vertices)
+        throw InvalidInput("encoding has a base face index out of range (the base has " +
+                           std::to_string(e.base_num_vertices) + " vertices)");
+  for (const BasePoint& b : e.base_points)
+    if (b.face < 0 || b.face >= static_cast<int>(e.base_faces.size()))
+      throw InvalidInput("encoding has a base point on a missing base face");
+}
+
+}  // namespace
+
+void check_encoding(const DetailEncoding& e) {
+  check_base_part(e);
+  const int n = e.num_detail_vertices();
+  const std::size_t nf = e.detail_faces.size();
+  auto count = [](std::size_t size, std::size_t want, const char* what, const char* per) {
+    if (size != want)
+      throw InvalidInput("encoding has " + std::to_string(size) + " " + what + " for " +
+                         std::to_string(want) + " " + per);
+  };
+  auto maybe = [&](std::size_t size, const char* what) {  // empty, or one per detail vertex
+    if (size != 0) count(size, static_cast<std::size_t>(n), what, "detail vertices");
+  };
+  const auto nv = static_cast<std::size_t>(n);
+  count(e.normal_offsets.size(), nv, "normal offsets", "detail vertices");
+  count(e.tangential_offsets.size(), nv, "tangential offsets", "detail vertices");
+  count(e.base_rest_points.size(), nv, "rest base points", "detail vertices");
+  maybe(e.base_rest_normals.size(), "rest base normals");
+  maybe(e.base_rest_tangents.size(), "rest base tangents");
+  maybe(e.pinned.size(), "pinned flags");
+  count(e.target_volumes.size(), nf, "target volumes", "detail faces");
+  for (const Face& f : e.detail_faces)
+    for (int v : f)
+      if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
+  // The regularization graph in compressed rows: rows in order, neighbours within the detail.
+  count(e.weight_offsets.size(), nv + 1, "weight offsets", "detail vertices plus one");
+  const std::vector<int>& off = e.weight_offsets;
+  if (off.front() != 0 || off.back() != static_cast<int>(e.weight_neighbors.size()) ||
+      !std::is_sorted(off.begin(), off.end()))
+    throw InvalidInput("encoding's weight_offsets are not the rows of weight_neighbors (" +
+                       std::to_string(e.weight_neighbors.size()) + " entries)");
+  count(e.weights.size(), e.weight_neighbors.size(), "weights", "weight_neighbors");
+  for (int v : e.weight_neighbors)
+    if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range index in weight_neighbors");
+}
+
 BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>& x) {
   if (e.over_limit_surface()) {
     SubdivSurface surface = limit_surface_for(e, x);
     return evaluate_base_frames(e, surface);
   }
+  check_base_part(e);
   if (static_cast<int>(x.size()) != e.base_num_vertices)
     throw InvalidInput("edited base has " + std::to_string(x.size()) + " vertices, the encoding's base has " +
                        std::to_string(e.base_num_vertices));
@@ -381,6 +465,12 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
     fr.points[i] = bp.bary[0] * x0 + bp.bary[1] * x1 + bp.bary[2] * x2;
     Vec3 nrm = bp.bary[0] * vn[F[0]] + bp.bary[1] * vn[F[1]] + bp.bary[2] * vn[F[2]];
     if (!(nrm.norm() > 1e-12)) nrm = triangle_area_normal(x0, x1, x2);
+    // A face whose corners coincide or lie on a line, among neighbours as degenerate, has no
+    // normal: the frames would be NaN.
+    if (!(nrm.norm() > 0))
+      throw InvalidInput("edited base: base face " + std::to_string(bp.face) + " (under detail vertex " +
+                         std::to_string(i) +
+                         ") has no normal: its corners and its neighbours' coincide or are collinear");
     nrm.normalize();
     Vec3 t = (x1 - x0) - (x1 - x0).dot(nrm) * nrm;
     if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
@@ -396,6 +486,7 @@ namespace {
 void check_limit_encoding(const DetailEncoding& e, int control_points) {
   if (!e.over_limit_surface())
     throw InvalidInput("the encoding's base is a triangle mesh, not a limit surface");
+  check_base_part(e);
   if (control_points != e.base_num_vertices)
     throw InvalidInput("edited cage has " + std::to_string(control_points) +
                        " control points, the encoding's cage has " + std::to_string(e.base_num_vertices));
@@ -500,7 +591,12 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
 }  // namespace
 
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr, double amplitude) {
+  check_encoding(e);
   const int n = e.num_detail_vertices();
+  const auto nv = static_cast<std::size_t>(n);
+  if (fr.points.size() != nv || fr.normals.size() != nv || fr.tangents.size() != nv)
+    throw InvalidInput("reconstruct_vectors: " + std::to_string(fr.points.size()) + " base frames for " +
+                       std::to_string(n) + " detail vertices");
   std::vector<Vec3> p(n);
   for (int i = 0; i < n; ++i) {
     const Vec3& nrm = fr.normals[i];

@@ -10,6 +10,14 @@ namespace strata {
 
 std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vector<Vec3>& p,
                                   const std::vector<Vec3>& q) {
+  if (p.size() != q.size())
+    throw InvalidInput("prism_volumes: " + std::to_string(p.size()) + " detail positions and " +
+                       std::to_string(q.size()) + " base points");
+  for (const Face& f : faces)
+    for (int v : f)
+      if (v < 0 || v >= static_cast<int>(p.size()))
+        throw InvalidInput("prism_volumes: a face index is out of range (" + std::to_string(p.size()) +
+                           " vertices)");
   std::vector<double> v(faces.size());
   for (std::size_t j = 0; j < faces.size(); ++j) {
     const Face& f = faces[j];
@@ -20,6 +28,7 @@ std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vec
 
 VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, const std::vector<Vec3>& p,
                              double amplitude) {
+  check_encoding(e);
   const std::size_t n = static_cast<std::size_t>(e.num_detail_vertices());
   if (p.size() != n || frames.points.size() != n)
     throw InvalidInput("volume_metrics: expected " + std::to_string(n) +

@@ -75,6 +75,30 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"multigrid.single_precision_cycles", &m.single_precision_cycles}};
 }
 
+// Plain decimal notation only: [+-]digits[.digits][e[+-]digits] (a fraction and exponent only
+// if \p real). strtod alone took leading blanks but not trailing ones, and hexadecimal ("0x10").
+bool decimal(const std::string& t, bool real) {
+  std::size_t i = 0, digits = 0;
+  auto run = [&] {
+    const std::size_t start = i;
+    while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+    return i - start;
+  };
+  if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+  digits = run();
+  if (real && i < t.size() && t[i] == '.') {
+    ++i;
+    digits += run();
+  }
+  if (digits == 0) return false;
+  if (real && i < t.size() && (t[i] == 'e' || t[i] == 'E')) {
+    ++i;
+    if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+    if (run() == 0) return false;
+  }
+  return i == t.size();
+}
+
 [[noreturn]] void bad_value(const std::string& name, const std::string& value, const char* expected) {
   throw InvalidInput("reconstruction option " + name + ": '" + value + "' is not " + expected);
 }
@@ -89,12 +113,14 @@ void set_reconstruct_option(ReconstructOptions& options, const std::string& name
     errno = 0;
     if (auto* i = std::get_if<int*>(&f.field)) {
       const long v = std::strtol(text, &end, 10);
-      if (value.empty() || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
+      if (!decimal(value, false) || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
         bad_value(name, value, "a whole number");
       **i = static_cast<int>(v);
     } else if (auto* d = std::get_if<double*>(&f.field)) {
       const double v = std::strtod(text, &end);
-      if (value.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+      // ERANGE with a finite result is an underflow (a subnormal, or 0): a number all the same.
+      if (!decimal(value, true) || *end != '\0' || !std::isfinite(v) ||
+          (errno == ERANGE && std::abs(v) == HUGE_VAL))
         bad_value(name, value, "a finite number");
       **d = v;
     } else if (auto* b = std::get_if<bool*>(&f.field)) {

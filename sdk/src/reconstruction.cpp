@@ -8,9 +8,11 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <iterator>
 #include <numeric>
 #include <optional>
@@ -187,6 +189,9 @@ struct DragState::Impl {
   std::vector<Vec3> start;               // reset()'s positions, until the first step
   std::vector<std::vector<Vec3>> level;  // per level, indexed by detail vertex (the level's own)
   bool started = false;
+  // The reconstructor whose hierarchy `level` follows (its Impl's serial; 0: none yet). A state
+  // carried to another reconstructor would index its levels by the first one's sizes.
+  std::uint64_t owner = 0;
 };
 
 DragState::DragState() : impl_(std::make_unique<Impl>()) {}
@@ -208,11 +213,26 @@ void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
   impl_->frames = frames;
   impl_->start = std::move(start);
   impl_->level.clear();
+  impl_->owner = 0;
   impl_->started = true;
 }
 
 bool DragState::started() const {
   return impl_->started;
+}
+
+// A NaN tolerance made a warm start end unconverged at once; negative counts passed unnoticed.
+static void check_warm_start(const WarmStartOptions& w) {
+  auto fail = [](const char* name, double value, const char* range) {
+    std::ostringstream os;
+    os << "warm-start option " << name << " = " << value << " is out of range (" << range << ")";
+    throw InvalidInput(os.str());
+  };
+  if (!(w.tolerance > 0 && std::isfinite(w.tolerance))) fail("tolerance", w.tolerance, "above 0, finite");
+  if (w.level_steps < 0 || w.level_steps > 100000) fail("level_steps", w.level_steps, "0-100000");
+  if (w.cg_max_iterations < 0 || w.cg_max_iterations > 1000000)
+    fail("cg_max_iterations", w.cg_max_iterations, "0-1000000");
+  if (w.max_cycles < 0 || w.max_cycles > 100000) fail("max_cycles", w.max_cycles, "0-100000");
 }
 
 class VolumeReconstructor::Impl {
@@ -284,6 +304,7 @@ class VolumeReconstructor::Impl {
 
   ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start, const WarmStartOptions* warm,
                         const ReconstructRequest& request = {}) const {
+    if (warm) check_warm_start(*warm);
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
@@ -387,9 +408,13 @@ class VolumeReconstructor::Impl {
                          const ReconstructRequest& request) const {
     const int n = enc_.num_detail_vertices();
     if (!ds.started) throw InvalidInput("drag_step() before DragState::reset()");
+    check_warm_start(warm);
     if (static_cast<int>(ds.frames.points.size()) != n)
       throw InvalidInput("drag state has " + std::to_string(ds.frames.points.size()) +
                          " vertices, the detail has " + std::to_string(n));
+    if (ds.owner != 0 && ds.owner != serial_)
+      throw InvalidInput(
+          "drag state belongs to another VolumeReconstructor (reset() it to start a drag here)");
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
@@ -408,6 +433,7 @@ class VolumeReconstructor::Impl {
         for (int i : levels_[l].verts) ds.level[l][i] = ds.start[orig(l, i)];
       }
       ds.start = {};
+      ds.owner = serial_;
     }
     // Every level's last solution, carried along with the base frames.
     for (int l = 0; l < nl; ++l)
@@ -500,44 +526,12 @@ class VolumeReconstructor::Impl {
  private:
   void validate() const {
     const int n = enc_.num_detail_vertices();
-    const std::size_t nf = enc_.detail_faces.size();
-    if (n == 0 || nf == 0) throw InvalidInput("encoding has no detail vertices or faces");
-    if (static_cast<int>(enc_.detail_rest.size()) != n || static_cast<int>(enc_.normal_offsets.size()) != n ||
-        static_cast<int>(enc_.tangential_offsets.size()) != n ||
-        static_cast<int>(enc_.base_rest_points.size()) != n || enc_.target_volumes.size() != nf ||
-        static_cast<int>(enc_.weight_offsets.size()) != n + 1)
-      throw InvalidInput("encoding arrays have inconsistent sizes");
-    if (!enc_.pinned.empty() && static_cast<int>(enc_.pinned.size()) != n)
-      throw InvalidInput("encoding has " + std::to_string(enc_.pinned.size()) + " pinned flags for " +
-                         std::to_string(n) + " detail vertices");
-    for (const Face& f : enc_.detail_faces)
-      for (int v : f)
-        if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range detail face index");
+    if (n == 0 || enc_.detail_faces.empty()) throw InvalidInput("encoding has no detail vertices or faces");
+    check_encoding(enc_);  // sizes and indices
     // The hierarchy's decimation orders edges by length: a non-finite one has no place there.
     check_coordinates(enc_.detail_rest, "encoding's detail at rest:");
-    if (enc_.over_limit_surface() ? static_cast<int>(enc_.limit_points.size()) != n
-                                  : static_cast<int>(enc_.base_points.size()) != n)
-      throw InvalidInput(
-          "encoding has " +
-          std::to_string(enc_.over_limit_surface() ? enc_.limit_points.size() : enc_.base_points.size()) +
-          " base points for " + std::to_string(n) + " detail vertices");
-    for (const BasePoint& b : enc_.base_points) {
-      if (b.face < 0 || b.face >= static_cast<int>(enc_.base_faces.size()))
-        throw InvalidInput("encoding has a base point on a missing base face");
+    for (const BasePoint& b : enc_.base_points)
       if (!b.bary.allFinite()) throw InvalidInput("encoding has a base point with non-finite barycentrics");
-    }
-    // The regularization graph (compressed rows) indexes the solver's arrays: rows in order within
-    // weight_neighbors, neighbours within the detail.
-    const std::vector<int>& off = enc_.weight_offsets;
-    if (off.front() != 0 || off.back() != static_cast<int>(enc_.weight_neighbors.size()) ||
-        !std::is_sorted(off.begin(), off.end()))
-      throw InvalidInput("encoding's weight_offsets are not the rows of weight_neighbors (" +
-                         std::to_string(enc_.weight_neighbors.size()) + " entries)");
-    if (enc_.weights.size() != enc_.weight_neighbors.size())
-      throw InvalidInput("encoding has " + std::to_string(enc_.weights.size()) + " weights for " +
-                         std::to_string(enc_.weight_neighbors.size()) + " weight_neighbors");
-    for (int v : enc_.weight_neighbors)
-      if (v < 0 || v >= n) throw InvalidInput("encoding has an out-of-range index in weight_neighbors");
     // Every number the solve reads.
     auto finite = [](const auto& values, const char* name) {
       for (const auto& x : values) {
@@ -1996,6 +1990,12 @@ class VolumeReconstructor::Impl {
   const char* phase_ = "reconstruct";  // "fallback" in the fallback's Impl
   double setup_seconds_ = 0.0;
   double rest_diagonal_ = 0.0;  // the rest detail's bounding-box diagonal
+  // This object's number, unique in the process, which a DragState records (DragState::Impl::owner).
+  const std::uint64_t serial_ = next_serial();
+  static std::uint64_t next_serial() {
+    static std::atomic<std::uint64_t> count{0};
+    return ++count;
+  }
   // The solver's threads (ReconstructOptions::threads); null: the calling thread only.
   std::unique_ptr<tbb::task_arena> arena_;
 };
@@ -2056,6 +2056,9 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(o.local_polish_max_fraction >= 0 && o.local_polish_max_fraction <= 1, "local_polish_max_fraction",
         o.local_polish_max_fraction, "0 to 1");
   count(o.local_polish_rings, "local_polish_rings", 0, 1000);
+  check(o.local_polish_max_motion >= 0 && o.local_polish_max_motion <= 1, "local_polish_max_motion",
+        o.local_polish_max_motion, "0 to 1; 0 is no bound");
+  check(o.direct_max_prisms >= 0, "direct_max_prisms", o.direct_max_prisms, "at least 0");
   count(o.finest_volume_iterations, "finest_volume_iterations", 1, 100000);
   count(o.regularization_iterations, "regularization_iterations", 0, 100000);
   count(o.coarse_regularization_iterations, "coarse_regularization_iterations", 0, 100000);
@@ -2079,6 +2082,19 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   count(o.cg_max_iterations, "cg_max_iterations", 1, 1000000);
   // TBB's arenas crashed from 65,537 threads; far more than any machine's cores anyway.
   check(o.threads >= 0 && o.threads <= 1024, "threads", o.threads, "0-1024; 0 is all cores");
+  // An enum set from a cast integer (a wrapper's, a file's) reached a switch with no case for it.
+  auto solver_ok = [](VolumeStepSolver v) {
+    return v == VolumeStepSolver::JacobiCG || v == VolumeStepSolver::Direct ||
+           v == VolumeStepSolver::Multigrid;
+  };
+  check(solver_ok(o.step_solver), "step_solver", static_cast<int>(o.step_solver),
+        "jacobi_cg, direct or multigrid");
+  check(solver_ok(o.polish_solver), "polish_solver", static_cast<int>(o.polish_solver),
+        "direct or multigrid");
+  check(o.tangential_regularization == TangentialRegularization::RestOffset ||
+            o.tangential_regularization == TangentialRegularization::RestLaplacian,
+        "tangential_regularization", static_cast<int>(o.tangential_regularization),
+        "rest_offset or rest_laplacian");
   if (o.polish_solver == VolumeStepSolver::JacobiCG)
     throw InvalidInput(
         "reconstruction option polish_solver = jacobi_cg is out of range (direct or multigrid)");

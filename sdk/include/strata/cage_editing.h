@@ -64,8 +64,8 @@ class CageEditor {
   //! \p region and \p handle hold one flag per cage vertex; the handle is taken as the region
   //! vertices it flags. The blend field is bi-harmonic on the cage graph (uniform Laplacian) over
   //! the region minus the handle, 0 outside the region and 1 on the handle.
-  //! \pre mesh is a valid triangle mesh (validate_mesh()).
-  //! \throw InvalidInput if the flags do not match the cage's vertex count, the region or handle
+  //! \throw InvalidInput if the mesh fails validate_mesh(), the flags do not match the cage's vertex count,
+  //! the region or handle
   //!        is empty, the handle is the whole region, or no detail vertex depends on the region.
   //! \throw SolverError if the blend field cannot be solved.
   CageEditor(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,

@@ -101,7 +101,9 @@ struct DetailEncoding {
 //! is used and counted in the report. The projections run on TBB's threads (the caller's task
 //! arena); the result does not depend on their number.
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).
-//! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates.
+//! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates, or
+//! an option is out of range (search_rings 0 to 100, barycentric_tolerance 0 to 0.1,
+//! max_distance_ratio 1 to 1e6).
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
@@ -133,13 +135,23 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
 DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
                                 std::vector<LimitPoint> limit_points);
 
+//! Checks that \p encoding's arrays fit together, so that what reads them stays within them: one
+//! offset, rest base point, base point (or limit point) and, if any, rest frame and pinned flag per
+//! detail vertex; one target volume per detail face; face indices within the detail and the base;
+//! base points on existing base faces; the weight graph's rows and neighbours. An encoding from
+//! encode_detail() passes; every function here that takes one checks it first. Values are not
+//! checked (the reconstruction checks those it reads; limit points' patches are checked where a
+//! limit surface evaluates them).
+//! \throw InvalidInput naming the first array that does not fit.
+void check_encoding(const DetailEncoding& encoding);
+
 //! The part of \p encoding spanned by the detail faces \p faces (indices into detail_faces): its
 //! vertices renumbered in order of first use (\p vertices receives each one's original index),
 //! with their base points, offsets, rest positions, pinned flags and the faces' target volumes
 //! copied, and the regularization weights recomputed on the part's own connectivity (as
 //! encode_detail() would for that submesh). The base connectivity is kept whole, so the part is
 //! reconstructed over the same edited bases.
-//! \throw InvalidInput if \p faces is empty or holds an index out of range.
+//! \throw InvalidInput if \p faces is empty or holds an index out of range, or as check_encoding().
 DetailEncoding restrict_encoding(const DetailEncoding& encoding, const std::vector<int>& faces,
                                  std::vector<int>& vertices);
 
@@ -154,7 +166,9 @@ struct BaseFrames {
 //! Evaluates the base points of \p encoding on the base positions \p base_vertices (the vertices of
 //! a triangle base, or the control points of a subdivision base's cage).
 //! \throw InvalidInput if base_vertices does not match the encoding's base vertex count or holds
-//! non-finite coordinates.
+//! non-finite coordinates, if a base point's face has no normal (its corners, and its neighbours',
+//! coincide or are collinear), or if the base points or base faces do not fit (check_encoding()'s
+//! checks of them; the rest of the encoding is not read).
 BaseFrames evaluate_base_frames(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
 
 //! Evaluates the limit base points of \p encoding on \p surface (the edited cage, with the
@@ -178,10 +192,12 @@ SubdivSurface limit_surface_for(const DetailEncoding& encoding, const std::vecto
 //! The normal-displacement baseline (the paper's "displacement vectors"): each detail vertex is
 //! rebuilt as q'_i + f_i n'(q'_i) plus its stored tangential offset in the rotated local frame.
 //! Over the original base it returns the original detail positions.
+//! \throw InvalidInput as evaluate_base_frames().
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
 
 //! Same, from already evaluated base frames, with the displacements scaled by \p amplitude (a
 //! band's amplitude in a layered model: 0 puts every vertex on its base point).
+//! \throw InvalidInput if \p frames does not hold one frame per detail vertex, or as check_encoding().
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames,
                                       double amplitude = 1.0);
 

@@ -20,12 +20,14 @@ struct VolumeMetrics {
 };
 
 //! Measures the prisms spanned by \p detail_positions over the base points in \p frames.
-//! \throw InvalidInput if positions or frames do not have one entry per detail vertex.
+//! \throw InvalidInput if positions or frames do not have one entry per detail vertex, or as
+//! check_encoding().
 //! With \p amplitude, the targets are amplitude times V*_j (a layered model's band amplitude).
 VolumeMetrics volume_metrics(const DetailEncoding& encoding, const BaseFrames& frames,
                              const std::vector<Vec3>& detail_positions, double amplitude = 1.0);
 
 //! The signed volume of every prism, in face order.
+//! \throw InvalidInput if the two point arrays differ in size or a face index is out of range.
 std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vector<Vec3>& detail_positions,
                                   const std::vector<Vec3>& base_points);
 

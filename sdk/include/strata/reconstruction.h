@@ -551,7 +551,9 @@ class VolumeReconstructor {
 
   //! Warm-started solve without volume scaling, from \p start (e.g. the previous frame's result):
   //! the interactive mode of section 5.
-  //! \throw InvalidInput if start does not have one position per detail vertex.
+  //! \throw InvalidInput if start does not have one position per detail vertex, or a warm option is
+  //! out of range (tolerance above 0 and finite; level_steps, cg_max_iterations, max_cycles not
+  //! negative).
   //! The request's amplitude scales the targets; its pinned positions replace the displacement
   //! vectors' placement of the pinned vertices.
   ReconstructResult reconstruct_from(const std::vector<Vec3>& edited_base, const std::vector<Vec3>& start,
@@ -570,7 +572,8 @@ class VolumeReconstructor {
   //! end), the finest level alone is solved to warm.tolerance from its carried positions. Updates
   //! \p state. No volume scaling: a drag's steps are small.
   //! \pre state.reset() was called with this encoding's vertex count.
-  //! \throw InvalidInput as reconstruct_from(), or if the state was not started or has another size.
+  //! \throw InvalidInput as reconstruct_from(), or if the state was not started, has another size,
+  //! or took a step with another VolumeReconstructor since its reset().
   ReconstructResult drag_step(const BaseFrames& edited_frames, DragState& state,
                               const WarmStartOptions& warm = {},
                               const ReconstructRequest& request = {}) const;
