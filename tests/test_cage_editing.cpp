@@ -2,6 +2,8 @@
 // the handle's transform blended over the cage, the detail rebuilt over the limit surface.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "paper_cases.h"
 #include "strata/cage_editing.h"
 #include "strata/encoding.h"
@@ -217,4 +219,14 @@ TEST(CageEditor, RejectsBadSelections) {
   ASSERT_EQ(with.size(), without.size() + 1);
   EXPECT_EQ(with.back(), 0.0);
   for (std::size_t v = 0; v < without.size(); ++v) EXPECT_NEAR(with[v], without[v], 1e-12) << v;
+  // A cage face index out of range (the Laplacian's assembly wrote past its arrays), and solved
+  // rings beyond any mesh (INT_MAX overflowed the ring search's bound).
+  PolyMesh bad = s.cage;
+  bad.faces[2][1] = s.cage.num_vertices() + 1000;
+  EXPECT_THROW(cage_blend_field(bad, s.region, s.handle), InvalidInput);
+  bad.faces[2][1] = -5;
+  EXPECT_THROW(cage_blend_field(bad, s.region, s.handle), InvalidInput);
+  CageEditOptions rings;
+  rings.handle_solved_rings = std::numeric_limits<int>::max();
+  EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, rings), InvalidInput);
 }

@@ -144,6 +144,16 @@ TEST(CageFit, RejectsBadInput) {
   TriMesh far = scan;
   for (Vec3& v : far.vertices) v *= 1e160;
   EXPECT_THROW(fit_cage(far, with([](CageFitOptions&) {})), InvalidInput);
+  // A valid scan whose decimation keeps a vertex in 200 faces, more than a cage may have: the
+  // fit's failure (SolverError), where it was an InvalidInput naming a cage the caller never gave.
+  TriMesh fan;
+  fan.vertices.push_back(Vec3::Zero());
+  const int n = 200;
+  for (int i = 0; i < n; ++i)
+    fan.vertices.emplace_back(std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n),
+                              0.1 * std::sin(6.0 * i / n));
+  for (int i = 0; i < n; ++i) fan.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
+  EXPECT_THROW(fit_cage(fan, with([](CageFitOptions& o) { o.faces = 190; })), SolverError);
 }
 
 // The decimation, the cage fit and the builder do not depend on the scan's size: OpenMesh keeps

@@ -337,6 +337,75 @@ TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   EXPECT_EQ(edit_of(h[h.size() - 1]), nlohmann::json::parse("{\"script\":\"bend.json\"}"));
 }
 
+// A program's misuse of the model's API, found by an AddressSanitizer run (2026-11-28): each is
+// refused with InvalidInput naming the problem, where it was read past an array, looped for hours,
+// threw a JSON library's exception or wrote a file the reader refused.
+TEST(Layers, MisuseOfTheApiIsRefused) {
+  const LayeredModel& camel = model_of("camel");
+  std::vector<layers::Band> bands;
+  for (int k = 0; k < camel.num_bands(); ++k) bands.push_back(camel.band(k));
+  auto refused = [&](std::vector<layers::Band> b, layers::ModelOptions o, std::vector<std::string> h,
+                     const std::string& needle) {
+    try {
+      LayeredModel::assemble(std::move(b), std::move(o), std::move(h));
+      ADD_FAILURE() << "assembled; expected an error with '" << needle << "'";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  std::vector<layers::Band> b = bands;
+  b[2].encoding.tangential_offsets.resize(3);
+  refused(b, camel.options(), {}, "band 2: encoding has 3 tangential offsets");
+  b = bands;
+  b[2].encoding.base_points[5].face = -1;
+  refused(b, camel.options(), {}, "band 2: encoding has a base point on a missing base face");
+  b = bands;
+  b[0].subdiv.scheme = SubdivScheme::Auto;  // written as "auto", which the reader refused
+  refused(b, camel.options(), {}, "scheme");
+  layers::ModelOptions rings = camel.options();
+  rings.handle_solved_rings = 1000000000;  // a band-0 edit looped over that many rings
+  refused(bands, rings, {}, "handle_solved_rings");
+  refused(bands, camel.options(), {"{\"op\":\"build\"}", "\xff"}, "history entry 1 is not UTF-8");
+  LayeredModel model = camel;
+  EXPECT_THROW(model.set_options(rings), InvalidInput);
+  layers::ModelOptions nan = camel.options();
+  nan.smoothing_fraction = std::nan("");
+  EXPECT_THROW(model.set_options(nan), InvalidInput);
+  layers::ModelOptions seeds = camel.options();
+  seeds.projection.seed_resolution = 100;  // set, then the written file was refused
+  EXPECT_THROW(model.set_options(seeds), InvalidInput);
+
+  // Provenance that is not UTF-8 is kept with U+FFFD for its bad bytes, and the model writes and
+  // reads back (edit() threw nlohmann's type_error 316).
+  EditStep identity = camel_neck_bend();
+  identity.transform = EditTransform{};
+  model.edit(1, identity, "bend \xff");
+  test::ScratchDir tmp("strata_layers");
+  layers::write_model(model, tmp.file("u.strata"));
+  const std::string last = layers::read_model(tmp.file("u.strata")).history().back();
+  EXPECT_NE(last.find("bend \xef\xbf\xbd"), std::string::npos) << last;
+}
+
+// A transform update_drag() refuses is not the drag's: end_drag() ends with the last accepted one
+// (it took the refused one, failed, and lost the drag).
+TEST(Layers, ARefusedDragUpdateKeepsTheDrag) {
+  LayeredModel model = model_of("camel");
+  LayeredModel exact = model;
+  const EditStep step = camel_neck_bend();
+  const EditTransform accepted = EditTransform::rotation(Vec3(1, 0, 0), 30.0, step.transform.pivot);
+  EditStep last = step;
+  last.transform = accepted;
+  exact.edit(0, last);
+  model.begin_drag(0, step.region, step.handle);
+  model.update_drag(accepted);
+  EditTransform bad = accepted;
+  bad.translation.x() = std::nan("");
+  EXPECT_THROW(model.update_drag(bad), InvalidInput);
+  EXPECT_TRUE(model.dragging());
+  model.end_drag();
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(model.band_points(k), exact.band_points(k))) << k;
+}
+
 TEST(Layers, EditOfAnIntermediateBandIsReencodedAndTheFinerBandFollows) {
   LayeredModel model = model_of("camel");
   const TriMesh band1 = model.band(1).mesh;

@@ -8,6 +8,7 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -400,6 +401,9 @@ TEST(Subdiv, TessellationIsWatertightAndOnTheSurface) {
         }
     }
     EXPECT_THROW(s.tessellate(0), InvalidInput);
+    // The largest resolution is refused too: rounded up to even for a cage with sub-faces,
+    // INT_MAX overflowed (UBSan).
+    EXPECT_THROW(s.tessellate(std::numeric_limits<int>::max()), InvalidInput);
     // Over kMaxTessellationTriangles: refused, and the count named is the one the grid would have
     // (a Loop cage's grid was counted twice over): at resolution 2r, 4 times that at r = 6.
     const int r = 6;

@@ -386,8 +386,39 @@ const std::vector<Vec3>& LayeredModel::band_points(int k) const {
 const ModelOptions& LayeredModel::options() const {
   return impl_->options;
 }
+void check_model_options(const ModelOptions& options) {
+  // The ranges the .strata reader takes, so that a model written with them reads back.
+  try {
+    check_reconstruct_options(options.reconstruct);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string("the model's ") + e.what());
+  }
+  if (options.method != EditOptions::Method::Volumes && options.method != EditOptions::Method::Vectors)
+    throw InvalidInput("the model's method is neither volumes nor vectors");
+  if (!(options.smoothing_fraction >= 1e-3 && options.smoothing_fraction <= 100))
+    throw InvalidInput("the model's smoothing_fraction must be within 0.001-100");
+  // A billion rings made a band-0 edit loop for hours.
+  if (options.handle_solved_rings < 0 || options.handle_solved_rings > 1000)
+    throw InvalidInput("the model's handle_solved_rings must be within 0-1000");
+  const ProjectOptions& po = options.projection;
+  if (po.seed_resolution < 1 || po.seed_resolution > 64 || po.max_iterations < 1 ||
+      po.max_iterations > 10000 || !(po.orthogonality_tolerance > 0 && po.orthogonality_tolerance <= 1) ||
+      !(po.seam_tolerance >= po.orthogonality_tolerance && po.seam_tolerance <= 1))
+    throw InvalidInput(
+        "the model's projection options are out of range (seed_resolution 1-64, max_iterations 1-10000, "
+        "0 < orthogonality_tolerance <= seam_tolerance <= 1)");
+  const EncodeOptions& eo = options.encode;
+  if (eo.search_rings < 0 || eo.search_rings > 100 ||
+      !(eo.barycentric_tolerance >= 0 && eo.barycentric_tolerance <= 0.1) ||
+      !(eo.max_distance_ratio >= 1 && eo.max_distance_ratio <= 1e6))
+    throw InvalidInput(
+        "the model's encoding options are out of range (search_rings 0-100, barycentric_tolerance 0-0.1, "
+        "max_distance_ratio 1-1e6)");
+}
+
 void LayeredModel::set_options(const ModelOptions& options) {
   if (impl_->drag) throw InvalidInput("set_options() during a drag");
+  check_model_options(options);
   impl_->options = options;
   impl_->options.reconstruct.progress = nullptr;
   impl_->options.reconstruct.cancel = nullptr;
@@ -429,7 +460,10 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   check_extent(scan.vertices, scan.faces, "scan");
   if (o.bands < 2 || o.bands > 8)
     throw InvalidInput("build: bands must be 2 to 8, not " + std::to_string(o.bands));
-  if (o.band_smoothing_steps < 0) throw InvalidInput("build: band_smoothing_steps must be >= 0");
+  if (o.band_smoothing_steps < 0 || o.band_smoothing_steps > 1000)
+    throw InvalidInput("build: band_smoothing_steps must be 0 to 1000, not " +
+                       std::to_string(o.band_smoothing_steps));
+  check_model_options(o.model);
   auto progress = [&](const std::string& phase, double f) {
     if (o.progress) o.progress(phase, f);
   };
@@ -510,6 +544,17 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                                     std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
   if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
+  check_model_options(options);
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    try {
+      (void)json(history[i]).dump();  // throws for text that is not UTF-8, which no file can hold
+    } catch (const json::exception&) {
+      throw InvalidInput("history entry " + std::to_string(i) + " is not UTF-8 text");
+    }
+  }
+  // The scheme is stored by name: Auto (or a cast integer) wrote a file the reader refused.
+  if (bands[0].subdiv.scheme != SubdivScheme::Loop && bands[0].subdiv.scheme != SubdivScheme::CatmullClark)
+    throw InvalidInput("band 0: the cage's scheme must be loop or catmull-clark (not auto)");
   // The cage's current points make a limit surface (a NaN point passed `info` and `export`, and an
   // edit blamed its script).
   try {
@@ -527,6 +572,12 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     const int nv = b.mesh.num_vertices();
     if (e.num_detail_vertices() != nv || e.detail_faces != b.mesh.faces)
       throw InvalidInput(name + ": the encoding does not match the band's mesh");
+    // Its arrays fit together (a short offsets array was read past by detail_magnitude()).
+    try {
+      check_encoding(e);
+    } catch (const InvalidInput& x) {
+      throw InvalidInput(name + ": " + x.what());
+    }
     // A face with a repeated corner spans no prism (such a band passed every command).
     for (std::size_t f = 0; f < b.mesh.faces.size(); ++f) {
       const Face& t = b.mesh.faces[f];
@@ -613,7 +664,9 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   } catch (const std::exception&) {
     h["edit"] = provenance;
   }
-  work.history.push_back(h.dump());
+  // Text that is not UTF-8 is kept with U+FFFD for its bad bytes: dump() threw a JSON library
+  // type_error for it, out of edit() and end_drag().
+  work.history.push_back(h.dump(-1, ' ', false, json::error_handler_t::replace));
   report.total_seconds = seconds_since(t0);
   std::swap(impl_->bands, work.bands);
   std::swap(impl_->history, work.history);
@@ -676,11 +729,13 @@ void LayeredModel::update_drag(const EditTransform& transform) {
   Impl& m = *impl_;
   if (!m.drag) throw InvalidInput("update_drag() without begin_drag()");
   Impl::Drag& d = *m.drag;
-  d.step.transform = transform;
+  // The transform is the drag's last only once it is accepted: a refused one (not finite, or
+  // moving points out of range) was end_drag()'s, which then failed and lost the drag.
   if (d.band == 0)
     m.bands[0].cage.vertices = blend_transform(d.saved[0].cage.vertices, d.cage_blend, transform);
   else
     m.bands[d.band].mesh.vertices = d.editor->update_drag(transform);
+  d.step.transform = transform;
   for (std::size_t t = 0; t < d.finer.size(); ++t) {
     const int j = d.band + 1 + static_cast<int>(t);
     d.finer[t]->solve_drag(m.points(j - 1), m.bands[j].amplitude);

@@ -399,26 +399,10 @@ LayeredModel read_model(const std::string& path) {
   // Options out of range were read and named only by the first edit, without the file (or as the
   // edit script's fault).
   try {
-    check_reconstruct_options(options.reconstruct);
+    check_model_options(options);
   } catch (const InvalidInput& e) {
-    h.fail(std::string("the model's ") + e.what());
+    h.fail(e.what());
   }
-  const ProjectOptions& po = options.projection;
-  if (!(options.smoothing_fraction >= 1e-3 && options.smoothing_fraction <= 100))
-    h.fail("the model's smoothing_fraction must be within 0.001-100");
-  if (po.seed_resolution < 1 || po.seed_resolution > 64 || po.max_iterations < 1 ||
-      po.max_iterations > 10000 || !(po.orthogonality_tolerance > 0 && po.orthogonality_tolerance <= 1) ||
-      !(po.seam_tolerance >= po.orthogonality_tolerance && po.seam_tolerance <= 1))
-    h.fail(
-        "the model's projection options are out of range (seed_resolution 1-64, max_iterations 1-10000, "
-        "0 < orthogonality_tolerance <= seam_tolerance <= 1)");
-  const EncodeOptions& eo = options.encode;
-  if (eo.search_rings < 0 || eo.search_rings > 100 ||
-      !(eo.barycentric_tolerance >= 0 && eo.barycentric_tolerance <= 0.1) ||
-      !(eo.max_distance_ratio >= 1 && eo.max_distance_ratio <= 1e6))
-    h.fail(
-        "the model's encoding options are out of range (search_rings 0-100, barycentric_tolerance 0-0.1, "
-        "max_distance_ratio 1-1e6)");
   std::vector<std::string> history;
   const json& hist = h.at(m, "history", "the model header");
   if (!hist.is_array()) h.fail("'history' is not an array");

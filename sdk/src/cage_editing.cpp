@@ -45,6 +45,12 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
                                      const std::vector<char>& handle) {
   const int n = cage.num_vertices();
   check_cage_selection(n, region, handle);
+  // The cage's faces index its points (an out-of-range index overflowed the Laplacian's assembly).
+  for (std::size_t f = 0; f < cage.faces.size(); ++f)
+    for (int v : cage.faces[f])
+      if (v < 0 || v >= n)
+        throw InvalidInput("cage face " + std::to_string(f) + " has vertex index " + std::to_string(v) +
+                           " out of range (the cage has " + std::to_string(n) + " points)");
   const Eigen::SparseMatrix<double> L = internal::cage_laplacian(cage, false);
   const Eigen::SparseMatrix<double> B = L.transpose() * L;
   std::vector<int> free_id(n, -1), free;
@@ -96,6 +102,14 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
+    // INT_MAX rings overflowed the ring search's bound.
+    if (opt_.handle_solved_rings > 1000)
+      throw InvalidInput(
+          "cage edit option handle_solved_rings = " + std::to_string(opt_.handle_solved_rings) +
+          " is out of range (at most 1000; negative solves every vertex)");
+    if (opt_.drag_end_cycles < 1 || opt_.drag_end_cycles > 100000)
+      throw InvalidInput("cage edit option drag_end_cycles = " + std::to_string(opt_.drag_end_cycles) +
+                         " is out of range (1-100000)");
     validate_mesh(mesh, "cage editor's mesh");  // the precondition, checked
     check_coordinates(mesh.vertices, "cage editor's mesh");
     for (int i = 0; i < n; ++i) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "internal/cage_graph.h"
@@ -178,7 +179,15 @@ CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
     }
 
   t0 = Clock::now();
-  CageFitter fitter(decimated, smooth_used, options);
+  // The decimated cage is the fit's own: a cage it cannot subdivide (a vertex of the scan's in
+  // over 64 faces survives the decimation) is the fit's failure, not the caller's input.
+  std::optional<CageFitter> made;
+  try {
+    made.emplace(decimated, smooth_used, options);
+  } catch (const InvalidInput& e) {
+    throw SolverError(std::string("cage fit: the decimation did not reach a valid cage: ") + e.what());
+  }
+  CageFitter& fitter = *made;
   for (int r = 0; r < options.rounds; ++r) fitter.round();
   fit.rounds = options.rounds;
   const SubdivSurface& s = fitter.surface();

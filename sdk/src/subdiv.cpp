@@ -462,11 +462,12 @@ class SubdivSurface::Impl {
       throw InvalidInput("tessellation resolution must be at least 1, got " + vtx(resolution));
     bool has_subfaces = false;
     for (const auto& f : cage_.faces) has_subfaces = has_subfaces || static_cast<int>(f.size()) != corners_;
-    const int R = has_subfaces ? resolution + resolution % 2 : resolution;
+    // Rounded up to even in double: INT_MAX + 1 overflowed. Beyond the limit below, R is not used.
+    const double R_even = has_subfaces ? resolution + static_cast<double>(resolution % 2) : resolution;
     // Resolution 1000 over a 50-face cage wrote 50M faces (2.8 GB); 100000 ran out of memory.
     double triangles = 0.0;  // as the loop below makes them: a quad grid 2 Rf^2, a triangle grid Rf^2
     for (int p = 0; p < num_ptex_; ++p) {
-      const double Rf = deriv_scale_[p] == 1.0 ? R : R / 2;
+      const double Rf = deriv_scale_[p] == 1.0 ? R_even : std::floor(R_even / 2);
       triangles += (corners_ == 4 ? 2.0 : 1.0) * Rf * Rf;
     }
     if (triangles > kMaxTessellationTriangles) {
@@ -475,6 +476,7 @@ class SubdivSurface::Impl {
                     resolution, triangles, kMaxTessellationTriangles);
       throw InvalidInput(text);
     }
+    const int R = static_cast<int>(R_even);
     LimitTessellation t;
     std::unordered_map<std::uint64_t, int> ids;  // (line, lattice index) or a corner key -> vertex
     const std::uint64_t corner_tag = std::uint64_t(1) << 63;

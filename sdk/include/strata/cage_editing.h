@@ -71,6 +71,7 @@ class CageEditor {
   CageEditor(const TriMesh& mesh, SubdivSurface base, const std::vector<char>& region,
              const std::vector<char>& handle, CageEditOptions options = {});
   ~CageEditor();
+  //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
   CageEditor(CageEditor&&) noexcept;
   CageEditor& operator=(CageEditor&&) noexcept;
 

@@ -182,6 +182,7 @@ class RegionEditor {
   RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
                EditOptions options = {});
   ~RegionEditor();
+  //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
   RegionEditor(RegionEditor&&) noexcept;
   RegionEditor& operator=(RegionEditor&&) noexcept;
 

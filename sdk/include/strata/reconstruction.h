@@ -524,6 +524,7 @@ class VolumeReconstructor {
   //! once options.cancel reads true (the setup of a 1M-prism encoding takes seconds).
   VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options = {});
   ~VolumeReconstructor();
+  //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
   VolumeReconstructor(VolumeReconstructor&&) noexcept;
   VolumeReconstructor& operator=(VolumeReconstructor&&) noexcept;
 

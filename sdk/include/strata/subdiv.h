@@ -121,6 +121,7 @@ class SubdivSurface {
   explicit SubdivSurface(const PolyMesh& cage, const SubdivTags& tags = {},
                          const SubdivOptions& options = {});
   ~SubdivSurface();
+  //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
   SubdivSurface(SubdivSurface&&) noexcept;
   //! The most corners of a cage face and faces at a cage vertex: building the patches grows with
   //! about the cube of either (measured: 64 took 0.07-0.33 s, 128 1-3.4 s, 200 5-16 s); a cage

@@ -62,6 +62,13 @@ struct ModelOptions {
   EncodeOptions encode;
 };
 
+//! Checks \p options against the ranges a .strata file's are read with (check_reconstruct_options()
+//! for the reconstruction; smoothing_fraction 0.001-100; handle_solved_rings 0-1000; the
+//! projection's and encoding's ranges in layers/FORMAT.md), so that a model written with them
+//! reads back. LayeredModel::build(), assemble() and set_options() call it.
+//! \throw InvalidInput naming the option ("the model's ...").
+void check_model_options(const ModelOptions& options);
+
 //! Options of LayeredModel::build(), with their defaults.
 struct BuildOptions {
   //! Bands in all, 2 to 8: the cage (band 0) plus bands-1 triangle bands, the finest the scan.
@@ -130,7 +137,8 @@ class LayeredModel {
   //! Assembles a model from its parts (the file reader): checks that the cage makes a limit
   //! surface, that every triangle band's faces have 3 distinct vertices and each directed edge
   //! in one face at most (no repeated face, no edge of more than two faces, one orientation), and
-  //! that every band's encoding fits its mesh and its base.
+  //! that every band's encoding fits its mesh and its base (check_encoding() too), that the cage's
+  //! scheme is Loop or Catmull-Clark, and the options (check_model_options()).
   //! \throw InvalidInput naming the band and the problem.
   static LayeredModel assemble(std::vector<Band> bands, ModelOptions options,
                                std::vector<std::string> history);
@@ -139,6 +147,7 @@ class LayeredModel {
   ~LayeredModel();
   LayeredModel(const LayeredModel& other);
   LayeredModel& operator=(const LayeredModel& other);
+  //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
   LayeredModel(LayeredModel&&) noexcept;
   LayeredModel& operator=(LayeredModel&&) noexcept;
 
@@ -153,7 +162,7 @@ class LayeredModel {
   DetailMagnitude detail_magnitude(int k) const;
   const ModelOptions& options() const;
   //! Replaces the options used by later edits and rebuilds (e.g. the method, for a comparison).
-  //! \throw InvalidInput during a drag.
+  //! \throw InvalidInput during a drag, or as check_model_options().
   void set_options(const ModelOptions& options);
   //! JSON objects, one per operation (build, edit, amplitude), oldest first: provenance.
   const std::vector<std::string>& history() const;
