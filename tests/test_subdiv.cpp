@@ -507,6 +507,12 @@ TEST(Subdiv, RejectsBadCages) {
     return "no error";
   };
   EXPECT_NE(msg(PolyMesh{}).find("no vertices or no faces"), std::string::npos);
+  SubdivOptions cast;  // enums from integers were kept (scheme() returned 7)
+  cast.scheme = static_cast<SubdivScheme>(7);
+  EXPECT_NE(msg(cube_cage(), {}, cast).find("scheme 7 is not"), std::string::npos);
+  cast = {};
+  cast.boundary = static_cast<BoundaryRule>(-2);
+  EXPECT_NE(msg(cube_cage(), {}, cast).find("boundary rule -2 is not"), std::string::npos);
   PolyMesh m = cube_cage();
   m.vertices[3].x() = std::nan("");
   EXPECT_NE(msg(m).find("vertex 3 has a non-finite"), std::string::npos);

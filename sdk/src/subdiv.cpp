@@ -88,6 +88,14 @@ class SubdivSurface::Impl {
   // ---- construction ----
 
   void validate() {
+    // Enums cast from integers (a wrapper's, a file's) were kept: scheme() returned 7.
+    if (opt_.scheme != SubdivScheme::Auto && opt_.scheme != SubdivScheme::Loop &&
+        opt_.scheme != SubdivScheme::CatmullClark)
+      throw InvalidInput("subdivision scheme " + vtx(static_cast<int>(opt_.scheme)) +
+                         " is not auto, loop or catmull-clark");
+    if (opt_.boundary != BoundaryRule::EdgeOnly && opt_.boundary != BoundaryRule::EdgeAndCorner)
+      throw InvalidInput("boundary rule " + vtx(static_cast<int>(opt_.boundary)) +
+                         " is not edge-only or edge-and-corner");
     const int nv = cage_.num_vertices();
     if (nv == 0 || cage_.faces.empty()) throw InvalidInput("cage has no vertices or no faces");
     check_coordinates(cage_.vertices, "cage");
