@@ -360,6 +360,9 @@ TEST(Layers, MisuseOfTheApiIsRefused) {
   b[2].encoding.base_points[5].face = -1;
   refused(b, camel.options(), {}, "band 2: encoding has a base point on a missing base face");
   b = bands;
+  b[1].encoding.cage_options.isolation_level = 1;  // another limit surface than band 0's
+  refused(b, camel.options(), {}, "band 1: the encoding's subdivision tags or options are not band 0's");
+  b = bands;
   b[0].subdiv.scheme = SubdivScheme::Auto;  // written as "auto", which the reader refused
   refused(b, camel.options(), {}, "scheme");
   layers::ModelOptions rings = camel.options();

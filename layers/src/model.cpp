@@ -540,6 +540,26 @@ void check_amplitude(double amplitude, const std::string& what) {
 
 }  // namespace
 
+namespace {
+
+// Band 1's encoding subdivides band 0's cage as band 0 does (its tags and options).
+bool same_subdivision(const DetailEncoding& e, const Band& cage) {
+  const SubdivTags &a = e.cage_tags, &b = cage.tags;
+  if (a.creases.size() != b.creases.size() || a.corners.size() != b.corners.size()) return false;
+  for (std::size_t i = 0; i < a.creases.size(); ++i)
+    if (a.creases[i].v0 != b.creases[i].v0 || a.creases[i].v1 != b.creases[i].v1 ||
+        a.creases[i].sharpness != b.creases[i].sharpness)
+      return false;
+  for (std::size_t i = 0; i < a.corners.size(); ++i)
+    if (a.corners[i].vertex != b.corners[i].vertex || a.corners[i].sharpness != b.corners[i].sharpness)
+      return false;
+  const SubdivOptions &x = e.cage_options, &y = cage.subdiv;
+  return x.scheme == y.scheme && x.boundary == y.boundary && x.isolation_level == y.isolation_level &&
+         x.max_refined_faces == y.max_refined_faces;
+}
+
+}  // namespace
+
 LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options,
                                     std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
@@ -614,6 +634,10 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     if (k == 1 ? (!e.over_limit_surface() || e.cage_faces != bands[0].cage.faces)
                : (e.over_limit_surface() || e.base_faces != bands[k - 1].mesh.faces))
       throw InvalidInput(name + ": the encoding's base is not band " + std::to_string(k - 1) + "'s surface");
+    // Band 1's encoding evaluates the limit surface with its own tags and options: others than
+    // band 0's gave another surface (the file stores band 0's, so the model read back changed).
+    if (k == 1 && !same_subdivision(e, bands[0]))
+      throw InvalidInput(name + ": the encoding's subdivision tags or options are not band 0's");
   }
   LayeredModel model;
   model.impl_->bands = std::move(bands);
