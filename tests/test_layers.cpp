@@ -378,6 +378,14 @@ TEST(Layers, MisuseOfTheApiIsRefused) {
   seeds.projection.seed_resolution = 100;  // set, then the written file was refused
   EXPECT_THROW(model.set_options(seeds), InvalidInput);
 
+  // A default-constructed model is not written (its message was "band 0 out of range").
+  try {
+    layers::write_model(LayeredModel{}, "/tmp/never_written.strata");
+    ADD_FAILURE() << "an empty model was written";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("the model has 0 bands"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists("/tmp/never_written.strata"));
   // Provenance that is not UTF-8 is kept with U+FFFD for its bad bytes, and the model writes and
   // reads back (edit() threw nlohmann's type_error 316).
   EditStep identity = camel_neck_bend();

@@ -298,6 +298,10 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
 }  // namespace
 
 void write_model(const LayeredModel& model, const std::string& path) {
+  // A default-constructed model has no bands: nothing a reader would take ("band 0 out of range").
+  if (model.num_bands() < 2)
+    throw InvalidInput(path + ": the model has " + std::to_string(model.num_bands()) +
+                       " bands, not written (a model has at least 2: build() or read_model() makes one)");
   StrataContainer c;
   json bands = json::array();
   const Band& cage = model.band(0);

@@ -203,7 +203,8 @@ class LayeredModel {
 };
 
 //! Writes \p model to \p path (.strata; layout in layers/FORMAT.md), atomically.
-//! \throw IoError if the file cannot be written.
+//! \throw IoError if the file cannot be written; InvalidInput for a model without bands (a
+//!        default-constructed one).
 void write_model(const LayeredModel& model, const std::string& path);
 
 //! Reads a model written by write_model().
