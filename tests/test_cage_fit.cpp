@@ -154,6 +154,10 @@ TEST(CageFit, RejectsBadInput) {
                               0.1 * std::sin(6.0 * i / n));
   for (int i = 0; i < n; ++i) fan.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
   EXPECT_THROW(fit_cage(fan, with([](CageFitOptions& o) { o.faces = 190; })), SolverError);
+  // The caller's own subdivision options stay InvalidInput (a review found them rethrown as the
+  // fit's SolverError, after the decimation had run).
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.subdiv.isolation_level = 0; })), InvalidInput);
+  EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.subdiv.isolation_level = 11; })), InvalidInput);
 }
 
 // The decimation, the cage fit and the builder do not depend on the scan's size: OpenMesh keeps

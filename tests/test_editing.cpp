@@ -134,6 +134,12 @@ TEST(RegionEditor, RejectsBadSelections) {
   TriMesh bad_index = m;
   bad_index.faces[7][1] = m.num_vertices();
   EXPECT_THROW(RegionEditor(bad_index, region, handle), InvalidInput);
+  // A zero-area face is not refused (a layered model's band muted to its base has them, and its
+  // region is edited): only what the editor indexes with is checked.
+  TriMesh flat = m;
+  const Face& sliver = flat.faces[0];
+  flat.vertices[sliver[2]] = 0.5 * (flat.vertices[sliver[0]] + flat.vertices[sliver[1]]);
+  EXPECT_NO_THROW(RegionEditor(flat, region, handle));
   TriMesh nan = m;
   nan.vertices[0].y() = std::nan("");
   try {

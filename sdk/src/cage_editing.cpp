@@ -12,7 +12,6 @@
 #include "internal/detail_solve.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
-#include "strata/mesh_io.h"
 
 namespace strata {
 namespace {
@@ -110,7 +109,7 @@ class CageEditor::Impl {
     if (opt_.drag_end_cycles < 1 || opt_.drag_end_cycles > 100000)
       throw InvalidInput("cage edit option drag_end_cycles = " + std::to_string(opt_.drag_end_cycles) +
                          " is out of range (1-100000)");
-    validate_mesh(mesh, "cage editor's mesh");  // the precondition, checked
+    internal::check_face_indices(mesh.faces, mesh.num_vertices(), "cage editor's mesh");
     check_coordinates(mesh.vertices, "cage editor's mesh");
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;

@@ -37,6 +37,14 @@ void check_options(const CageFitOptions& o) {
   if (!(o.smoothness >= 0.0 && o.smoothness <= 1e12))
     throw InvalidInput("cage fit: smoothness must be within 0-1e12");
   if (o.rounds < 1 || o.rounds > 100) throw InvalidInput("cage fit: rounds must be within 1-100");
+  // The cage's subdivision options are the caller's: checked here, so that what the fitted cage
+  // fails after the decimation is the fit's (a SolverError there), not these.
+  if (o.subdiv.isolation_level < 1 || o.subdiv.isolation_level > 10)
+    throw InvalidInput("cage fit: subdiv.isolation_level must be within 1-10, not " +
+                       std::to_string(o.subdiv.isolation_level));
+  if (o.subdiv.max_refined_faces < 0) throw InvalidInput("cage fit: subdiv.max_refined_faces must be >= 0");
+  if (o.subdiv.boundary != BoundaryRule::EdgeOnly && o.subdiv.boundary != BoundaryRule::EdgeAndCorner)
+    throw InvalidInput("cage fit: subdiv.boundary is not edge-only or edge-and-corner");
 }
 
 struct Distances {

@@ -14,6 +14,7 @@
 #include "internal/closest_point.h"
 #include "internal/offset_roots.h"
 #include "internal/topology.h"
+#include "internal/vectors.h"
 #include "strata/exceptions.h"
 #include "strata/prism.h"
 
@@ -468,7 +469,7 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
     // A face whose corners coincide or lie on a line, among neighbours as degenerate, has no
     // normal: the frames would be NaN.
     if (!(nrm.norm() > 0))
-      throw InvalidInput("edited base: base face " + std::to_string(bp.face) + " (under detail vertex " +
+      throw InvalidInput("base face " + std::to_string(bp.face) + " (under detail vertex " +
                          std::to_string(i) +
                          ") has no normal: its corners and its neighbours' coincide or are collinear");
     nrm.normalize();
@@ -590,13 +591,9 @@ void limit_frames(const DetailEncoding& e, const SubdivSurface& surface, const s
 
 }  // namespace
 
-std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr, double amplitude) {
-  check_encoding(e);
+std::vector<Vec3> internal::vectors_unchecked(const DetailEncoding& e, const BaseFrames& fr,
+                                              double amplitude) {
   const int n = e.num_detail_vertices();
-  const auto nv = static_cast<std::size_t>(n);
-  if (fr.points.size() != nv || fr.normals.size() != nv || fr.tangents.size() != nv)
-    throw InvalidInput("reconstruct_vectors: " + std::to_string(fr.points.size()) + " base frames for " +
-                       std::to_string(n) + " detail vertices");
   std::vector<Vec3> p(n);
   for (int i = 0; i < n; ++i) {
     const Vec3& nrm = fr.normals[i];
@@ -605,6 +602,15 @@ std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames&
     p[i] = fr.points[i] + amplitude * (e.normal_offsets[i] * nrm + o[0] * t + o[1] * nrm.cross(t));
   }
   return p;
+}
+
+std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr, double amplitude) {
+  check_encoding(e);
+  const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
+  if (fr.points.size() != nv || fr.normals.size() != nv || fr.tangents.size() != nv)
+    throw InvalidInput("reconstruct_vectors: " + std::to_string(fr.points.size()) + " base frames for " +
+                       std::to_string(nv) + " detail vertices");
+  return internal::vectors_unchecked(e, fr, amplitude);
 }
 
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const std::vector<Vec3>& base_vertices) {

@@ -23,6 +23,7 @@
 #include "internal/parallel.h"
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
+#include "internal/vectors.h"
 #include "internal/vertex_multigrid.h"
 #include "strata/exceptions.h"
 #include "strata/intersections.h"
@@ -804,7 +805,7 @@ class VolumeReconstructor::Impl {
     s.dT.assign(n, Vec3::Zero());
     if (enc_.pinned.empty()) return;
     if (!request.pinned_positions) {
-      s.pinned_at = reconstruct_vectors(enc_, fr, s.amplitude);
+      s.pinned_at = internal::vectors_unchecked(enc_, fr, s.amplitude);  // both checked already
       return;
     }
     const std::vector<Vec3>& pp = *request.pinned_positions;

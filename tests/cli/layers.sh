@@ -200,6 +200,8 @@ expect_usage "give either -o or --out-dir, not both" build "$SCANS/camel.off" -o
 expect_usage "--scale: must be -1000 to 1000, not 2000" amplitude camel.strata --band 1 --scale 2000 -o out.strata
 expect_usage "--threads: must be 0 to 1024, not 2000" deform "$SCANS/camel.off" --edit "$DATA/edits/camel_neck.json" \
   --threads 2000 -o out.obj
+expect_usage "--handle-rings: must be -1000 to 1000, not 5000" deform "$SCANS/camel.off" \
+  --edit "$DATA/edits/camel_neck.json" --handle-rings 5000 -o out.obj
 [ -e models2 ] && fail "the output directory was made after a usage error"
 # Two scans of one name would be built into one model, the second over the first.
 mkdir -p a b

@@ -316,7 +316,9 @@ Subcommand register_deform(CLI::App& parent) {
   app->add_option(
          "--handle-rings", o->handle_rings,
          "Handle vertices that move rigidly are placed exactly (as by vectors) and not solved, except "
-         "within this many edges of the blended part; with --base subdiv a negative value solves all")
+         "within this many edges of the blended part (at most 1000); with --base subdiv a negative value "
+         "solves all")
+      ->check(in_range(-1000, 1000))
       ->capture_default_str();
   app->add_option(
          "--threads", o->threads,

@@ -48,7 +48,8 @@ struct CageEditOptions {
 //! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
-//!        handle is empty, or the handle is the whole region. A region that is the whole cage (of
+//!        handle is empty, the handle is the whole region, or a cage face's index is out of
+//!        range. A region that is the whole cage (of
 //!        one piece) gives s = 1 everywhere: the edit moves the model rigidly. A cage vertex in
 //!        no face (it shapes no surface) keeps s = 0, or 1 on the handle.
 //! \throw SolverError if the field's system cannot be factorized or solved.
@@ -64,7 +65,11 @@ class CageEditor {
   //! \p region and \p handle hold one flag per cage vertex; the handle is taken as the region
   //! vertices it flags. The blend field is bi-harmonic on the cage graph (uniform Laplacian) over
   //! the region minus the handle, 0 outside the region and 1 on the handle.
-  //! \throw InvalidInput if the mesh fails validate_mesh(), the flags do not match the cage's vertex count,
+  //! \pre mesh is a valid triangle mesh (validate_mesh()); its face indices and coordinates are
+  //! checked.
+  //! \throw InvalidInput if a face index of the mesh is out of range or a coordinate is not finite
+  //!        or beyond kMaxCoordinate, options.handle_solved_rings is above 1000 or
+  //!        options.drag_end_cycles outside 1-100000, the flags do not match the cage's vertex count,
   //! the region or handle
   //!        is empty, the handle is the whole region, or no detail vertex depends on the region.
   //! \throw SolverError if the blend field cannot be solved.

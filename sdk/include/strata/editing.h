@@ -172,13 +172,15 @@ class RegionEditor {
  public:
   //! \p region and \p handle hold one flag per vertex of \p mesh; the handle is taken as the
   //! region vertices it flags.
-  //! \throw InvalidInput if the mesh fails validate_mesh(), an option is out of range
-  //! (smoothing_wavelength at least 0, smoothing_fraction above 0, both finite;
-  //! handle_solved_rings 0-1000; drag_end_cycles 1-100000), the flags do not match the vertex
-  //! count, the region or the handle is empty, the handle is the whole region, the region is the
-  //! whole mesh, or a connected part of the region touches neither the fixed rest nor the handle
-  //! (its fairing is undetermined).
-  //! \throw SolverError if the fairing system cannot be factorized.
+  //! \pre mesh is a valid triangle mesh (validate_mesh()); its face indices and coordinates are
+  //! checked.
+  //! \throw InvalidInput if a face index is out of range or a coordinate is not finite or beyond
+  //! kMaxCoordinate, an option is out of range (smoothing_wavelength at least 0,
+  //! smoothing_fraction above 0, both finite, and the wavelength not so small that the fairing's
+  //! weights overflow; handle_solved_rings 0-1000; drag_end_cycles 1-100000), the flags do not match the
+  //! vertex count, the region or the handle is empty, the handle is the whole region, the region is the whole
+  //! mesh, or a connected part of the region touches neither the fixed rest nor the handle (its fairing is
+  //! undetermined). \throw SolverError if the fairing system cannot be factorized.
   RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
                EditOptions options = {});
   ~RegionEditor();

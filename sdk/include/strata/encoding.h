@@ -103,7 +103,7 @@ struct DetailEncoding {
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).
 //! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates, or
 //! an option is out of range (search_rings 0 to 100, barycentric_tolerance 0 to 0.1,
-//! max_distance_ratio 1 to 1e6).
+//! max_distance_ratio 1 to 1e6), or a base point's face has no normal (evaluate_base_frames()).
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
@@ -192,7 +192,7 @@ SubdivSurface limit_surface_for(const DetailEncoding& encoding, const std::vecto
 //! The normal-displacement baseline (the paper's "displacement vectors"): each detail vertex is
 //! rebuilt as q'_i + f_i n'(q'_i) plus its stored tangential offset in the rotated local frame.
 //! Over the original base it returns the original detail positions.
-//! \throw InvalidInput as evaluate_base_frames().
+//! \throw InvalidInput as evaluate_base_frames(), or as check_encoding() (the whole encoding is read).
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
 
 //! Same, from already evaluated base frames, with the displacements scaled by \p amplitude (a

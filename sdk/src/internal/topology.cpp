@@ -4,6 +4,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "strata/exceptions.h"
+
 namespace strata::internal {
 
 Adjacency build_adjacency(int nv, const std::vector<Face>& faces) {
@@ -124,6 +126,14 @@ std::vector<int> ring_distance(const Adjacency& adj, const std::vector<char>& se
     frontier.swap(next);
   }
   return dist;
+}
+
+void check_face_indices(const std::vector<Face>& faces, int num_vertices, const std::string& what) {
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int v : faces[f])
+      if (v < 0 || v >= num_vertices)
+        throw InvalidInput(what + ": face " + std::to_string(f) + " has vertex index " + std::to_string(v) +
+                           " out of range (" + std::to_string(num_vertices) + " vertices)");
 }
 
 }  // namespace strata::internal

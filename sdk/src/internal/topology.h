@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "strata/mesh.h"
@@ -21,6 +22,11 @@ struct Adjacency {
 };
 
 Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces);
+
+//! Throws InvalidInput "WHAT: face F has vertex index V out of range (N vertices)" for the first
+//! index of \p faces outside [0, num_vertices): what build_adjacency() and the per-vertex arrays
+//! need (a mesh's other defects, e.g. zero-area faces, are the callers' to judge).
+void check_face_indices(const std::vector<Face>& faces, int num_vertices, const std::string& what);
 
 //! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary).
 std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vector<Face>& faces);
