@@ -390,6 +390,7 @@ void check_model_options(const ModelOptions& options) {
   // The ranges the .strata reader takes, so that a model written with them reads back.
   try {
     check_reconstruct_options(options.reconstruct);
+    check_encode_options(options.encode);
   } catch (const InvalidInput& e) {
     throw InvalidInput(std::string("the model's ") + e.what());
   }
@@ -407,13 +408,6 @@ void check_model_options(const ModelOptions& options) {
     throw InvalidInput(
         "the model's projection options are out of range (seed_resolution 1-64, max_iterations 1-10000, "
         "0 < orthogonality_tolerance <= seam_tolerance <= 1)");
-  const EncodeOptions& eo = options.encode;
-  if (eo.search_rings < 0 || eo.search_rings > 100 ||
-      !(eo.barycentric_tolerance >= 0 && eo.barycentric_tolerance <= 0.1) ||
-      !(eo.max_distance_ratio >= 1 && eo.max_distance_ratio <= 1e6))
-    throw InvalidInput(
-        "the model's encoding options are out of range (search_rings 0-100, barycentric_tolerance 0-0.1, "
-        "max_distance_ratio 1-1e6)");
 }
 
 void LayeredModel::set_options(const ModelOptions& options) {

@@ -12,6 +12,7 @@
 
 #include "internal/blended_map.h"
 #include "internal/detail_solve.h"
+#include "internal/option_error.h"
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
 #include "strata/exceptions.h"
@@ -145,9 +146,7 @@ std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::ve
 // negative solved rings changed the result without a word.
 static void check_edit_options(const EditOptions& o) {
   auto fail = [](const char* name, double value, const char* range) {
-    std::ostringstream os;
-    os << "edit option " << name << " = " << value << " is out of range (" << range << ")";
-    throw InvalidInput(os.str());
+    internal::option_out_of_range("edit", name, value, range);
   };
   if (!(o.smoothing_wavelength >= 0 && std::isfinite(o.smoothing_wavelength)))
     fail("smoothing_wavelength", o.smoothing_wavelength, "at least 0, finite; 0 is smoothing_fraction's");

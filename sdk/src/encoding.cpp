@@ -13,6 +13,7 @@
 
 #include "internal/closest_point.h"
 #include "internal/offset_roots.h"
+#include "internal/option_error.h"
 #include "internal/topology.h"
 #include "internal/vectors.h"
 #include "strata/exceptions.h"
@@ -29,22 +30,6 @@ void check_mesh(const TriMesh& m, const char* what) {
       if (v < 0 || v >= m.num_vertices())
         throw InvalidInput(std::string(what) + " mesh has an out-of-range index");
   check_extent(m.vertices, m.faces, std::string(what) + " mesh");
-}
-
-// NaN ratios and tolerances made every projection fail the comparisons and fall back to the
-// closest point, silently.
-void check_encode_options(const EncodeOptions& o) {
-  auto fail = [](const char* name, double value, const char* range) {
-    std::ostringstream m;
-    m << "encode option " << name << " = " << value << " is out of range (" << range << ")";
-    throw InvalidInput(m.str());
-  };
-  // The ranges a .strata file's options are read with (layers/FORMAT.md).
-  if (o.search_rings < 0 || o.search_rings > 100) fail("search_rings", o.search_rings, "0 to 100");
-  if (!(o.barycentric_tolerance >= 0 && o.barycentric_tolerance <= 0.1))
-    fail("barycentric_tolerance", o.barycentric_tolerance, "0 to 0.1");
-  if (!(o.max_distance_ratio >= 1 && o.max_distance_ratio <= 1e6))
-    fail("max_distance_ratio", o.max_distance_ratio, "1 to 1e6");
 }
 
 // Working state of one encode_detail() call.
@@ -244,6 +229,20 @@ DetailEncoding encoding_over_limit(const TriMesh& detail, const SubdivSurface& b
 
 }  // namespace
 
+// NaN ratios and tolerances made every projection fail the comparisons and fall back to the
+// closest point, silently.
+void check_encode_options(const EncodeOptions& o) {
+  auto fail = [](const char* name, double value, const char* range) {
+    internal::option_out_of_range("encode", name, value, range);
+  };
+  // The ranges a .strata file's options are read with (layers/FORMAT.md).
+  if (o.search_rings < 0 || o.search_rings > 100) fail("search_rings", o.search_rings, "0 to 100");
+  if (!(o.barycentric_tolerance >= 0 && o.barycentric_tolerance <= 0.1))
+    fail("barycentric_tolerance", o.barycentric_tolerance, "0 to 0.1");
+  if (!(o.max_distance_ratio >= 1 && o.max_distance_ratio <= 1e6))
+    fail("max_distance_ratio", o.max_distance_ratio, "1 to 1e6");
+}
+
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   check_encode_options(options);
@@ -386,16 +385,14 @@ namespace {
 void check_base_part(const DetailEncoding& e) {
   const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
   if (e.base_num_vertices < 0) throw InvalidInput("encoding has a negative base vertex count");
-  if (e.over_limit_surface()) {
-    // The cage's faces and the limit points' patches: SubdivSurface and LimitPointSet check them.
-    if (e.limit_points.size() != nv)
-      throw InvalidInput("encoding has " + std::to_string(e.limit_points.size()) + " base points for " +
-                         std::to_string(nv) + " detail vertices");
-    return;
-  }
-  if (e.base_points.size() != nv)
-    throw InvalidInput("encoding has " + std::to_string(e.base_points.size()) + " base points for " +
-                       std::to_string(nv) + " detail vertices");
+  const bool limit = e.over_limit_surface();
+  const std::size_t points = limit ? e.limit_points.size() : e.base_points.size();
+  if (points != nv)
+    throw InvalidInput("encoding has " + std::to_string(points) + " base points for " + std::to_string(nv) +
+                       " detail vertices");
+  // Over a limit surface, the cage's faces and the limit points' patches: SubdivSurface and
+  // LimitPointSet check them.
+  if (limit) return;
   for (const Face& f : e.base_faces)
     for (int v : f)
       if (v < 0 || v >= e.base_num_vertices)

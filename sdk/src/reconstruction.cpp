@@ -20,6 +20,7 @@
 #include <type_traits>
 
 #include "internal/hierarchy.h"
+#include "internal/option_error.h"
 #include "internal/parallel.h"
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
@@ -225,9 +226,7 @@ bool DragState::started() const {
 // A NaN tolerance made a warm start end unconverged at once; negative counts passed unnoticed.
 static void check_warm_start(const WarmStartOptions& w) {
   auto fail = [](const char* name, double value, const char* range) {
-    std::ostringstream os;
-    os << "warm-start option " << name << " = " << value << " is out of range (" << range << ")";
-    throw InvalidInput(os.str());
+    internal::option_out_of_range("warm-start", name, value, range);
   };
   if (!(w.tolerance > 0 && std::isfinite(w.tolerance))) fail("tolerance", w.tolerance, "above 0, finite");
   if (w.level_steps < 0 || w.level_steps > 100000) fail("level_steps", w.level_steps, "0-100000");

@@ -94,6 +94,11 @@ struct DetailEncoding {
   bool over_limit_surface() const { return !limit_points.empty(); }
 };
 
+//! Checks \p options against their ranges (search_rings 0 to 100, barycentric_tolerance 0 to 0.1,
+//! max_distance_ratio 1 to 1e6: those a .strata file's are read with). encode_detail() calls it.
+//! \throw InvalidInput naming the option.
+void check_encode_options(const EncodeOptions& options);
+
 //! Finds for each detail vertex p_i a base point q_i on \p base such that p_i - q_i is parallel
 //! to the base's interpolated (Phong) vertex normal at q_i, then stores the target volumes, the
 //! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
@@ -102,8 +107,8 @@ struct DetailEncoding {
 //! arena); the result does not depend on their number.
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).
 //! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates, or
-//! an option is out of range (search_rings 0 to 100, barycentric_tolerance 0 to 0.1,
-//! max_distance_ratio 1 to 1e6), or a base point's face has no normal (evaluate_base_frames()).
+//! an option is out of range (check_encode_options()), or a base point's face has no normal
+//! (evaluate_base_frames()).
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
