@@ -771,6 +771,47 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   expect_rejected(tmp.file("bad2.strata"), "an unknown tangential regularization");
 }
 
+// The cage's refinement budget is part of its limit surface's options: it was not written before
+// 2026-11-28, so a model assembled with one came back from its file with the default (0).
+TEST(LayersFile, TheCagesRefinementBudgetRoundTrips) {
+  const LayeredModel& camel = model_of("camel");
+  std::vector<layers::Band> bands;
+  for (int k = 0; k < camel.num_bands(); ++k) bands.push_back(camel.band(k));
+  ASSERT_EQ(bands[0].subdiv.max_refined_faces, 0);
+  bands[0].subdiv.max_refined_faces = 123456;
+  bands[1].encoding.cage_options.max_refined_faces = 123456;  // band 1 subdivides as band 0 does
+  const LayeredModel model = LayeredModel::assemble(bands, camel.options(), camel.history());
+  test::ScratchDir tmp("strata_layers");
+  const std::string path = tmp.file("budget.strata");
+  layers::write_model(model, path);
+  const LayeredModel back = layers::read_model(path);
+  EXPECT_EQ(back.band(0).subdiv.max_refined_faces, 123456);
+  EXPECT_EQ(back.band(1).encoding.cage_options.max_refined_faces, 123456);
+
+  // A file without the key (written before it was stored) reads the default, as it did then.
+  const layers::StrataContainer c = layers::read_strata_container(path);
+  layers::StrataContainer old = c;
+  nlohmann::json j = nlohmann::json::parse(old.model_json);
+  ASSERT_TRUE(j["bands"][0].contains("max_refined_faces"));
+  j["bands"][0].erase("max_refined_faces");
+  old.model_json = j.dump();
+  layers::write_strata_container(old, tmp.file("old.strata"));
+  EXPECT_EQ(layers::read_model(tmp.file("old.strata")).band(0).subdiv.max_refined_faces, 0);
+
+  // Out of range in a file is named; so is a budget the reader would refuse, at assembly.
+  j["bands"][0]["max_refined_faces"] = -1;
+  old.model_json = j.dump();
+  layers::write_strata_container(old, tmp.file("negative.strata"));
+  expect_rejected(tmp.file("negative.strata"), "max_refined_faces");
+  bands[0].subdiv.max_refined_faces = bands[1].encoding.cage_options.max_refined_faces = 1LL << 40;
+  try {
+    LayeredModel::assemble(bands, camel.options(), camel.history());
+    ADD_FAILURE() << "assembled a budget of 2^40 faces";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("max_refined_faces"), std::string::npos) << e.what();
+  }
+}
+
 TEST(LayersFile, ForeignAndMissingFilesAreNamed) {
   test::ScratchDir tmp("strata_layers");
   write_bytes(tmp.file("scan.strata"), read_bytes(scan_path("bear")));

@@ -569,6 +569,10 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
   // The scheme is stored by name: Auto (or a cast integer) wrote a file the reader refused.
   if (bands[0].subdiv.scheme != SubdivScheme::Loop && bands[0].subdiv.scheme != SubdivScheme::CatmullClark)
     throw InvalidInput("band 0: the cage's scheme must be loop or catmull-clark (not auto)");
+  // The reader's bound (a budget past it cannot be met in memory anyway).
+  if (bands[0].subdiv.max_refined_faces > (1LL << 30))
+    throw InvalidInput("band 0: the cage's max_refined_faces must be at most 2^30, got " +
+                       std::to_string(bands[0].subdiv.max_refined_faces));
   // The cage's current points make a limit surface (a NaN point passed `info` and `export`, and an
   // edit blamed its script).
   try {

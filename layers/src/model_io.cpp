@@ -324,6 +324,7 @@ void write_model(const LayeredModel& model, const std::string& path) {
          {"scheme", scheme_name(cage.subdiv.scheme)},
          {"boundary", cage.subdiv.boundary == BoundaryRule::EdgeAndCorner ? "edge-and-corner" : "edge-only"},
          {"isolation_level", cage.subdiv.isolation_level},
+         {"max_refined_faces", cage.subdiv.max_refined_faces},
          {"tags", {{"creases", creases}, {"corners", corners}}}});
     c.sections.push_back({"band0.points", pack_f64(flatten(cage.cage.vertices))});
     c.sections.push_back({"band0.face_sizes", pack_i32(sizes)});
@@ -444,6 +445,9 @@ LayeredModel read_model(const std::string& path) {
       h.fail("band 0: unknown boundary rule '" + boundary + "'");
     cage.subdiv.boundary = boundary == "edge-only" ? BoundaryRule::EdgeOnly : BoundaryRule::EdgeAndCorner;
     cage.subdiv.isolation_level = static_cast<int>(h.integer(b, "isolation_level", w, 1, 10));
+    // Absent in files written before 2026-11-28 (their refinement budget was the default, 0).
+    if (b.contains("max_refined_faces"))
+      cage.subdiv.max_refined_faces = h.integer(b, "max_refined_faces", w, 0, kMaxCount);
     const json& tags = h.at(b, "tags", w);
     const json& creases = h.at(tags, "creases", "band 0 tags");
     const json& corners = h.at(tags, "corners", "band 0 tags");
