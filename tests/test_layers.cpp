@@ -478,6 +478,34 @@ TEST(Layers, DragPreviewsThenEndsWithTheExactEdit) {
   EXPECT_TRUE(same_bits(c.band(2).mesh.vertices, model_of("camel").band(2).mesh.vertices));
 }
 
+// Saving or copying in the middle of a drag (a viewer's autosave, an undo snapshot) keeps the model's
+// committed state, not the preview: until 2026-11-28 both captured the preview as the bands.
+TEST(Layers, ACopyOrAFileDuringADragIsTheStateBeforeIt) {
+  const LayeredModel& before = model_of("camel");
+  LayeredModel model = before;
+  const EditStep step = camel_neck_bend();
+  model.begin_drag(0, step.region, step.handle);
+  model.update_drag(step.transform);
+  ASSERT_FALSE(same_bits(model.band(2).mesh.vertices, before.band(2).mesh.vertices));
+  test::ScratchDir tmp("strata_layers");
+  layers::write_model(model, tmp.file("drag.strata"));
+  const LayeredModel copy = model;
+  LayeredModel assigned;
+  assigned = model;
+  const LayeredModel read = layers::read_model(tmp.file("drag.strata"));
+  for (const LayeredModel* m : {&copy, static_cast<const LayeredModel*>(&assigned), &read}) {
+    EXPECT_FALSE(m->dragging());
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(m->band_points(k), before.band_points(k))) << k;
+    EXPECT_EQ(m->history(), before.history());
+  }
+  // The drag itself goes on and ends with the exact edit.
+  EXPECT_TRUE(model.dragging());
+  model.end_drag();
+  LayeredModel exact = before;
+  exact.edit(0, step);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(model.band_points(k), exact.band_points(k))) << k;
+}
+
 // --- Corrupted and malformed .strata files ------------------------------------------------------
 
 std::string read_bytes(const std::string& path) {

@@ -204,7 +204,9 @@ class LayeredModel::Impl {
   std::unique_ptr<Drag> drag;
 
   Impl() = default;
-  Impl(const Impl& o) : bands(o.bands), options(o.options), history(o.history) {}
+  // A copy is the model's committed state: during a drag, the state before it (a preview is no
+  // edit, and the drag's solver state stays with the original).
+  Impl(const Impl& o) : bands(o.drag ? o.drag->saved : o.bands), options(o.options), history(o.history) {}
 
   int n() const { return static_cast<int>(bands.size()); }
 

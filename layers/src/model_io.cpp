@@ -302,6 +302,8 @@ void write_model(const LayeredModel& model, const std::string& path) {
   if (model.num_bands() < 2)
     throw InvalidInput(path + ": the model has " + std::to_string(model.num_bands()) +
                        " bands, not written (a model has at least 2: build() or read_model() makes one)");
+  // During a drag band(k) is the preview; the file gets the committed state (a copy is that).
+  if (model.dragging()) return write_model(LayeredModel(model), path);
   StrataContainer c;
   json bands = json::array();
   const Band& cage = model.band(0);

@@ -145,6 +145,8 @@ class LayeredModel {
 
   LayeredModel();
   ~LayeredModel();
+  //! A copy holds the committed state: during a drag of \p other, its state before the drag (the
+  //! copy is not dragging).
   LayeredModel(const LayeredModel& other);
   LayeredModel& operator=(const LayeredModel& other);
   //! A moved-from object may only be assigned to or destroyed (its other calls are undefined).
@@ -202,7 +204,8 @@ class LayeredModel {
   std::unique_ptr<Impl> impl_;
 };
 
-//! Writes \p model to \p path (.strata; layout in layers/FORMAT.md), atomically.
+//! Writes \p model to \p path (.strata; layout in layers/FORMAT.md), atomically. During a drag it
+//! writes the state before the drag (the preview is not an edit).
 //! \throw IoError if the file cannot be written; InvalidInput for a model without bands (a
 //!        default-constructed one).
 void write_model(const LayeredModel& model, const std::string& path);
