@@ -734,19 +734,21 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     layers::ModelOptions other = o;
     other.reconstruct.fold_repair_local_first = false;
     other.reconstruct.fold_repair_local_rings = 7;
+    other.reconstruct.fold_repair_local_rounds = 9;
     model.set_options(other);
     layers::write_model(model, tmp.file("other.strata"));
     const ReconstructOptions read = layers::read_model(tmp.file("other.strata")).options().reconstruct;
     EXPECT_FALSE(read.fold_repair_local_first);
     EXPECT_EQ(read.fold_repair_local_rings, 7);
+    EXPECT_EQ(read.fold_repair_local_rounds, 9);
     model.set_options(o);
   }
 
   const layers::StrataContainer c = layers::read_strata_container(path);
   // A file written before retry_other_regularization (or fold_repair_local_first) existed solves
   // as it did then: without it (fold_repair_local_rings, written with it, reads 0 when absent).
-  for (const char* key :
-       {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings"}) {
+  for (const char* key : {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings",
+                          "fold_repair_local_rounds"}) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
     ASSERT_TRUE(j["options"]["reconstruct"].contains(key));
@@ -757,6 +759,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     const std::string k = key;
     if (k == "fold_repair_local_rings")
       EXPECT_EQ(read.fold_repair_local_rings, 0);
+    else if (k == "fold_repair_local_rounds")
+      EXPECT_EQ(read.fold_repair_local_rounds, -1);  // fold_repair_rounds local rounds, as then
     else
       EXPECT_FALSE(k == "retry_other_regularization" ? read.retry_other_regularization
                                                      : read.fold_repair_local_first)

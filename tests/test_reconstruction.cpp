@@ -305,9 +305,22 @@ TEST(Reconstruction, FoldRepairTriesTheLocalPassFirst) {
     const ReconstructResult local = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
     o.fold_repair_local_first = false;
     const ReconstructResult whole = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
-    ASSERT_GE(local.stats.fold_repairs, 1);  // the case: the solve folds and is repaired
+    ASSERT_GE(local.stats.fold_repairs, 3);  // the case: the solve folds and is repaired
     EXPECT_EQ(local.stats.fold_repair_polishes, 0);
     EXPECT_GE(whole.stats.fold_repair_polishes, 1);
+    // fold_repair_local_rounds bounds the local pass alone: with fewer rounds than it needs, it
+    // runs that many, then the whole-level rounds run as without it (-1: fold_repair_rounds, 6).
+    o.fold_repair_local_first = true;
+    o.fold_repair_local_rounds = local.stats.fold_repairs - 1;
+    const ReconstructResult short_local = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    EXPECT_EQ(short_local.stats.fold_repairs, o.fold_repair_local_rounds + whole.stats.fold_repairs);
+    EXPECT_EQ(short_local.stats.fold_repair_polishes, whole.stats.fold_repair_polishes);
+    o.fold_repair_local_rounds = -1;
+    const ReconstructResult as_before = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    EXPECT_EQ(as_before.stats.fold_repairs, local.stats.fold_repairs);
+    EXPECT_EQ(as_before.positions, local.positions);
+    o.fold_repair_local_rounds = -2;
+    EXPECT_THROW(VolumeReconstructor(e, o), InvalidInput);
     for (const ReconstructResult* r : {&local, &whole}) {
       EXPECT_TRUE(r->stats.converged);
       EXPECT_EQ(r->stats.new_intersecting_pairs, 0);

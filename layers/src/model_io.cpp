@@ -79,6 +79,7 @@ json options_json(const ModelOptions& o) {
             {"fold_repair_rounds", r.fold_repair_rounds},
             {"fold_repair_local_first", r.fold_repair_local_first},
             {"fold_repair_local_rings", r.fold_repair_local_rings},
+            {"fold_repair_local_rounds", r.fold_repair_local_rounds},
             {"fold_repair_rings", r.fold_repair_rings},
             {"fold_repair_sweeps", r.fold_repair_sweeps},
             {"fold_repair_max_fraction", r.fold_repair_max_fraction},
@@ -214,6 +215,11 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.fold_repair_local_first =
       r.contains("fold_repair_local_first") && h.boolean(r, "fold_repair_local_first", wr);
   ro.fold_repair_local_rings = optional_count("fold_repair_local_rings", 0);
+  // Files written before 2026-11-28 ran fold_repair_rounds local rounds (-1).
+  ro.fold_repair_local_rounds =
+      r.contains("fold_repair_local_rounds")
+          ? static_cast<int>(h.integer(r, "fold_repair_local_rounds", wr, -1, 100000))
+          : -1;
   ro.fold_repair_rings = optional_count("fold_repair_rings", ro.fold_repair_rings);
   ro.fold_repair_sweeps = optional_count("fold_repair_sweeps", ro.fold_repair_sweeps);
   if (r.contains("fold_repair_max_fraction"))

@@ -34,6 +34,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"fold_repair_rounds", &o.fold_repair_rounds},
           {"fold_repair_local_first", &o.fold_repair_local_first},
           {"fold_repair_local_rings", &o.fold_repair_local_rings},
+          {"fold_repair_local_rounds", &o.fold_repair_local_rounds},
           {"fold_repair_max_fraction", &o.fold_repair_max_fraction},
           {"fold_repair_rings", &o.fold_repair_rings},
           {"fold_repair_sweeps", &o.fold_repair_sweeps},

@@ -971,6 +971,7 @@ class VolumeReconstructor::Impl {
       o.threads = opt_.threads;
       o.fold_repair_local_first = opt_.fold_repair_local_first;  // a .strata file's, as it repaired
       o.fold_repair_local_rings = opt_.fold_repair_local_rings;
+      o.fold_repair_local_rounds = opt_.fold_repair_local_rounds;
       o.progress = opt_.progress;
       o.cancel = opt_.cancel;
       o.fallback_schedule = false;
@@ -1024,12 +1025,14 @@ class VolumeReconstructor::Impl {
     if (static_cast<double>(best.new_pairs) > opt_.fold_repair_max_fraction * levels_.back().faces.size())
       return;
     if (!opt_.fold_repair_local_first) {
-      repair_rounds(s, a, st, V, best, /*whole_level=*/true);
+      repair_rounds(s, a, st, V, best, /*whole_level=*/true, opt_.fold_repair_rounds);
       return;
     }
     const std::vector<Vec3> entry = s.P;
     Outcome local = best;
-    repair_rounds(s, a, st, V, local, /*whole_level=*/false);
+    const int local_rounds =
+        opt_.fold_repair_local_rounds < 0 ? opt_.fold_repair_rounds : opt_.fold_repair_local_rounds;
+    repair_rounds(s, a, st, V, local, /*whole_level=*/false, local_rounds);
     if (local.converged && local.new_pairs == 0) {
       best = std::move(local);
       return;
@@ -1037,7 +1040,7 @@ class VolumeReconstructor::Impl {
     std::vector<Vec3> local_positions;
     local_positions.swap(s.P);
     s.P = entry;
-    repair_rounds(s, a, st, V, best, /*whole_level=*/true);
+    repair_rounds(s, a, st, V, best, /*whole_level=*/true, opt_.fold_repair_rounds);
     if (local.better_than(best)) {
       s.P.swap(local_positions);
       best = std::move(local);
@@ -1047,9 +1050,9 @@ class VolumeReconstructor::Impl {
   // The rounds of repair_folds(), from s.P with outcome \p best; on return s.P is the best result
   // and \p best its outcome. \p whole_level: a round whose local restoration leaves folds (or
   // does not converge) also polishes the whole finest level from the smoothed positions, and keeps
-  // the better of the two.
+  // the better of the two. At most \p rounds rounds.
   void repair_rounds(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& best,
-                     bool whole_level) const {
+                     bool whole_level, int rounds) const {
     // An unconverged result (checked by fold_checked()) has its rounds' results counted too.
     const bool count = !best.converged;
     const Level& F = levels_.back();
@@ -1059,7 +1062,7 @@ class VolumeReconstructor::Impl {
     std::vector<int> subset, moving, next;
     std::vector<Vec3> smoothed, local_result;
     int stalled = 0;  // rounds since the best result last improved
-    for (int round = 0; round < opt_.fold_repair_rounds; ++round) {
+    for (int round = 0; round < rounds; ++round) {
       check_cancel();
       grow_rings(seeds, opt_.fold_repair_rings + round, in, subset, next);
       for (int it = 0; it < opt_.fold_repair_sweeps; ++it) regularize(F, s, 1.0, &subset);
@@ -2049,6 +2052,7 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   count(o.retry_volume_iterations, "retry_volume_iterations", 0, 100000);
   count(o.fold_repair_rounds, "fold_repair_rounds", 0, 1000);
   count(o.fold_repair_local_rings, "fold_repair_local_rings", 0, 1000);
+  count(o.fold_repair_local_rounds, "fold_repair_local_rounds", -1, 1000, "-1: fold_repair_rounds");
   check(o.fold_repair_max_fraction >= 0, "fold_repair_max_fraction", o.fold_repair_max_fraction,
         "at least 0");
   count(o.fold_repair_rings, "fold_repair_rings", 0, 1000);

@@ -539,6 +539,7 @@ int main(int argc, char** argv) {
             {"fold_repair_rounds", ro.fold_repair_rounds},
             {"fold_repair_local_first", ro.fold_repair_local_first},
             {"fold_repair_local_rings", ro.fold_repair_local_rings},
+            {"fold_repair_local_rounds", ro.fold_repair_local_rounds},
             {"fold_repair_rings", ro.fold_repair_rings},
             {"fold_repair_sweeps", ro.fold_repair_sweeps},
             {"local_polish_max_fraction", ro.local_polish_max_fraction},

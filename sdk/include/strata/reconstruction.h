@@ -164,8 +164,18 @@ struct ReconstructOptions {
   //! and the better of the two passes is kept (fold_repair_local_first). Measured on the rings,
   //! with a whole-level polish every round: at the
   //! paper's resolution 3 rounds left 10 new pairs and 4 rounds none; at 100k prisms 3
-  //! rounds left 28 (after a retry) and 6 none, so the retry did not run. 0: no repair.
+  //! rounds left 28 (after a retry) and 6 none, so the retry did not run. 0: no repair. The local
+  //! pass (fold_repair_local_first) has its own limit, fold_repair_local_rounds.
   int fold_repair_rounds = 6;
+  //! Rounds of the local pass at most (fold_repair_local_first), which cost a small solve and an
+  //! intersection count each (0.05 s at 100k prisms), against a whole-level polish each in the
+  //! other pass; both passes also stop after two rounds without progress. Measured on the
+  //! scan-like 100k bumps bend renumbered at random (2026-11-28): the local pass took the solve's
+  //! 267 new pairs to 184, 120, 105, 104, 65, 44, 25 and 0 in 8 rounds; with 6 it stopped at 44,
+  //! and the whole-level pass and a retry took the solve from 1.2 s to 5.6 s. -1: fold_repair_rounds
+  //! (the repair of .strata files written before 2026-11-28). fold_repair_rounds 0 turns the
+  //! whole repair off.
+  int fold_repair_local_rounds = 12;
   //! The repair's rounds first restore the volumes locally (the smoothed vertices and
   //! fold_repair_local_rings rings around them), and run again with whole-level polishes only if
   //! folds remain; the better result of the two passes is kept (converged first, then fewer new
