@@ -747,8 +747,9 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   const layers::StrataContainer c = layers::read_strata_container(path);
   // A file written before retry_other_regularization (or fold_repair_local_first) existed solves
   // as it did then: without it (fold_repair_local_rings, written with it, reads 0 when absent).
+  EXPECT_TRUE(back.renumber_for_locality);  // the default, written since 2026-11-28
   for (const char* key : {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings",
-                          "fold_repair_local_rounds"}) {
+                          "fold_repair_local_rounds", "renumber_for_locality"}) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
     ASSERT_TRUE(j["options"]["reconstruct"].contains(key));
@@ -761,6 +762,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
       EXPECT_EQ(read.fold_repair_local_rings, 0);
     else if (k == "fold_repair_local_rounds")
       EXPECT_EQ(read.fold_repair_local_rounds, -1);  // fold_repair_rounds local rounds, as then
+    else if (k == "renumber_for_locality")
+      EXPECT_FALSE(read.renumber_for_locality);  // the band's own numbering, as then
     else
       EXPECT_FALSE(k == "retry_other_regularization" ? read.retry_other_regularization
                                                      : read.fold_repair_local_first)

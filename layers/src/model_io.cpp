@@ -74,6 +74,7 @@ json options_json(const ModelOptions& o) {
             {"finest_intermediate_solves", r.finest_intermediate_solves},
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
+            {"renumber_for_locality", r.renumber_for_locality},
             {"fallback_schedule", r.fallback_schedule},
             {"retry_other_regularization", r.retry_other_regularization},
             {"fold_repair_rounds", r.fold_repair_rounds},
@@ -201,6 +202,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
                                    : 0;
   ro.retry_on_new_intersections =
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
+  // Absent in files written before 2026-11-28, whose solves kept the band's numbering.
+  ro.renumber_for_locality = r.contains("renumber_for_locality") && h.boolean(r, "renumber_for_locality", wr);
   // Files written before the option existed did not fall back.
   ro.fallback_schedule = r.contains("fallback_schedule") && h.boolean(r, "fallback_schedule", wr);
   // Absent in files written before 2026-11-27, whose solves had no such retry.

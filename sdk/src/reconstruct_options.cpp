@@ -29,6 +29,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"volume_iterations", &o.volume_iterations},
           {"retry_volume_iterations", &o.retry_volume_iterations},
           {"retry_on_new_intersections", &o.retry_on_new_intersections},
+          {"renumber_for_locality", &o.renumber_for_locality},
           {"fallback_schedule", &o.fallback_schedule},
           {"retry_other_regularization", &o.retry_other_regularization},
           {"fold_repair_rounds", &o.fold_repair_rounds},

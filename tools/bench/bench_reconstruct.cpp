@@ -9,6 +9,8 @@
 // with IntersectionOptions::parallel = false.
 //
 // --jitter J: the scan-like (irregular) triangulation of the cases (CylinderCaseOptions::jitter).
+// --shuffle SEED: the detail's vertices and faces numbered at random (seeded), as a tool that
+// hashes its vertices writes a scan (ReconstructOptions::renumber_for_locality; 0: the grid's order).
 // --solver multigrid: multigrid_reconstruct_options() instead of the defaults (--set still applies
 // after it).
 // --repeat N: N reconstructions with the same VolumeReconstructor (its hierarchy kept, as an
@@ -34,6 +36,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -108,12 +111,28 @@ ReconstructOptions one_thread() {
   return o;
 }
 
+// \p m with its vertices and faces in a random order (seeded).
+TriMesh shuffled(const TriMesh& m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<int> new_of_old(m.vertices.size());
+  std::iota(new_of_old.begin(), new_of_old.end(), 0);
+  std::shuffle(new_of_old.begin(), new_of_old.end(), rng);
+  TriMesh s;
+  s.vertices.resize(m.vertices.size());
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) s.vertices[new_of_old[v]] = m.vertices[v];
+  s.faces.reserve(m.faces.size());
+  for (const Face& f : m.faces) s.faces.push_back({new_of_old[f[0]], new_of_old[f[1]], new_of_old[f[2]]});
+  std::shuffle(s.faces.begin(), s.faces.end(), rng);
+  return s;
+}
+
 struct Args {
   std::vector<int> sizes{10000, 100000, 1000000};
   cases::DetailKind detail = cases::DetailKind::Bumps;
   std::string out;
   double max_seconds = 900.0;
   double jitter = 0.0;
+  unsigned shuffle = 0;              // --shuffle SEED (0: none)
   int finest_volume_iterations = 0;  // 0: the options' own
   int repeat = 1;                    // reconstructions per size (--repeat)
   bool help = false;
@@ -159,6 +178,18 @@ Args parse_args(int argc, char** argv) {
       a.out = value(i);
     } else if (opt == "--jitter") {
       a.jitter = std::stod(value(i));
+    } else if (opt == "--shuffle") {
+      const std::string v = value(i);
+      std::size_t used = 0;
+      long long seed = -1;
+      try {
+        seed = std::stoll(v, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != v.size() || seed < 0 || seed > 4294967295LL)
+        throw std::runtime_error("--shuffle is a seed from 0 to 4294967295, got '" + v + "'");
+      a.shuffle = static_cast<unsigned>(seed);
     } else if (opt == "--finest-volume-iterations") {
       a.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--solver") {
@@ -219,6 +250,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   co.target_detail_triangles = size;
   co.jitter = args.jitter;
   cases::CylinderCase c = timed("generate", [&] { return cases::make_cylinder_case(co); });
+  if (args.shuffle != 0) c.detail = shuffled(c.detail, args.shuffle);
   DetailEncoding enc = timed("encode", [&] { return encode_detail(c.detail, c.base); });
   const std::vector<Vec3> edited = std::move(c.edited_base.vertices);
   const int base_vertices = c.base.num_vertices(), base_faces = c.base.num_faces();
@@ -228,7 +260,6 @@ json run_size(const Args& args, int size, long long parent_rss) {
   const VolumeReconstructor rec(std::move(enc), args.reconstruct);
   sec["setup"] = rec.setup_seconds();
   rss["setup"] = max_rss_bytes();
-  const DetailEncoding& e = rec.encoding();
   const ReconstructResult r = timed("reconstruct", [&] { return rec.reconstruct(edited); });
   const ReconstructStats& st = r.stats;
   // --repeat: the same reconstruction again; every run's wall, CPU and solve seconds, then their
@@ -265,6 +296,8 @@ json run_size(const Args& args, int size, long long parent_rss) {
   std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return solves[i] < solves[j]; });
   sec["solve_phases"] = phases[order[(order.size() - 1) / 2]];
 
+  // The caller's encoding: after the solves (a renumbering solver restores it on first use).
+  const DetailEncoding& e = rec.encoding();
   const BaseFrames frames = evaluate_base_frames(e, edited);
   const VolumeMetrics vm = timed("volume_metrics", [&] { return volume_metrics(e, frames, r.positions); });
   const std::vector<Vec3> vec = timed("vectors", [&] { return reconstruct_vectors(e, frames); });
@@ -291,6 +324,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
               {"repeat", args.repeat},
               {"case", cases::to_string(args.detail)},
               {"jitter", args.jitter},
+              {"shuffle", args.shuffle},
               {"prisms", prisms},
               {"detail_vertices", e.num_detail_vertices()},
               {"base_vertices", base_vertices},
@@ -436,11 +470,12 @@ int main(int argc, char** argv) {
   }
   const char* usage =
       "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
-      "[--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
+      "[--shuffle SEED] [--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
       "[--repeat N] [--out FILE.json] [--max-seconds S]\n"
       "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
       "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
       "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
+      "  --shuffle SEED: the detail's vertices and faces numbered at random (0: the grid's order)\n"
       "  --solver: legacy (the default options) or multigrid (multigrid_reconstruct_options())\n"
       "  --set OPTION=VALUE: a ReconstructOptions field (multigrid.* for MultigridStepOptions)\n"
       "  --repeat N: N reconstructions per size with one solver object; times are their median, and\n"
@@ -506,8 +541,8 @@ int main(int argc, char** argv) {
 
     const json report {
       {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
-          {"case", cases::to_string(args.detail)}, {"jitter", args.jitter}, {"sizes", args.sizes},
-          {"max_seconds", args.max_seconds},
+          {"case", cases::to_string(args.detail)}, {"jitter", args.jitter}, {"shuffle", args.shuffle},
+          {"sizes", args.sizes}, {"max_seconds", args.max_seconds},
           {"machine",
            {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
             {"cpu_model", cpu_model()},
@@ -534,6 +569,7 @@ int main(int argc, char** argv) {
             {"finest_intermediate_solves", ro.finest_intermediate_solves},
             {"retry_volume_iterations", ro.retry_volume_iterations},
             {"retry_on_new_intersections", ro.retry_on_new_intersections},
+            {"renumber_for_locality", ro.renumber_for_locality},
             {"fallback_schedule", ro.fallback_schedule},
             {"retry_other_regularization", ro.retry_other_regularization},
             {"fold_repair_rounds", ro.fold_repair_rounds},
