@@ -16,9 +16,11 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "strata/layers/model.h"
 #include "strata/mesh_io.h"
+#include "strata/reconstruction.h"
 
 using namespace strata;
 using Clock = std::chrono::steady_clock;
@@ -78,14 +80,19 @@ layers::CascadeReport bend_top(layers::LayeredModel& model) {
 int main(int argc, char** argv) {
   std::vector<std::string> scans;
   int min_faces = 0, bands = 3;
+  std::vector<std::string> sets;  // --set NAME=VALUE: ReconstructOptions of the model
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--min-faces" && i + 1 < argc)
+    if (a == "--set" && i + 1 < argc)
+      sets.push_back(argv[++i]);
+    else if (a == "--min-faces" && i + 1 < argc)
       min_faces = std::stoi(argv[++i]);
     else if (a == "--bands" && i + 1 < argc)
       bands = std::stoi(argv[++i]);
     else if (a == "--help" || a == "-h") {
-      std::cout << "usage: strata_bench_layers SCAN... [--min-faces N] [--bands B]\n";
+      std::cout
+          << "usage: strata_bench_layers SCAN... [--min-faces N] [--bands B] [--set OPTION=VALUE]\n"
+             "  --set: a ReconstructOptions field of the model's solves (as strata reconstruct --set)\n";
       return 0;
     } else
       scans.push_back(a);
@@ -113,6 +120,7 @@ int main(int argc, char** argv) {
       write_mesh(scan, obj);
       layers::BuildOptions o;
       o.bands = bands;
+      for (const std::string& kv : sets) set_reconstruct_option(o.model.reconstruct, kv);
       auto t = Clock::now();
       layers::LayeredModel model = layers::LayeredModel::build(scan, o);
       r["build_seconds"] = since(t);
