@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <random>
 #include <tuple>
@@ -169,6 +170,7 @@ TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
   ReconstructRequest req_new;
   req_new.pinned_positions = &pinned_new;
   const ReconstructResult ra = a.reconstruct(bent, req);
+  EXPECT_TRUE(ra.stats.renumbered);
   EXPECT_TRUE(ra.stats.converged);
   EXPECT_LE(ra.stats.max_relative_error, 1e-3);
   EXPECT_EQ(ra.positions, back(b.reconstruct(bent, req_new)));
@@ -206,4 +208,31 @@ TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
             back(b.drag_step(internal::to_new(r, fr), db, warm, req_new)));
   // The state belongs to the reconstructor that took its first step.
   EXPECT_THROW(b.drag_step(half, da, warm, req_new), InvalidInput);
+
+  // Errors name vertices by the caller's numbers.
+  int k = 0;  // a pinned vertex the renumbering moved
+  while (!(e.pinned[k] && r.new_of_old[k] != k)) ++k;
+  const auto message = [](auto&& call) {
+    try {
+      call();
+    } catch (const InvalidInput& err) {
+      return std::string(err.what());
+    }
+    return std::string("no error");
+  };
+  BaseFrames bad_frames = fr;
+  bad_frames.normals[k] = Vec3(std::nan(""), 0, 0);
+  EXPECT_NE(message([&] { a.reconstruct(bad_frames); }).find("base frame " + std::to_string(k) + " "),
+            std::string::npos);
+  std::vector<Vec3> bad_start = s.vertices;
+  bad_start[k] = Vec3(0, std::nan(""), 0);
+  EXPECT_NE(
+      message([&] { a.reconstruct_from(bent, bad_start, warm); }).find("vertex " + std::to_string(k) + " "),
+      std::string::npos);
+  std::vector<Vec3> bad_pinned = pinned_at;
+  bad_pinned[k] = Vec3(0, 0, std::nan(""));
+  ReconstructRequest bad_req;
+  bad_req.pinned_positions = &bad_pinned;
+  EXPECT_NE(message([&] { a.reconstruct(bent, bad_req); }).find("pinned position " + std::to_string(k) + " "),
+            std::string::npos);
 }

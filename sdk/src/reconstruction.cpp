@@ -387,10 +387,7 @@ class VolumeReconstructor::Impl {
         fall_back(fr, request, s, st, first);
       st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
     } else {
-      if (static_cast<int>(start->size()) != enc_.num_detail_vertices())
-        throw InvalidInput("warm start has " + std::to_string(start->size()) + " positions, the detail has " +
-                           std::to_string(enc_.num_detail_vertices()) + " vertices");
-      check_coordinates(*start, "warm start:");
+      check_start(*start);
       s.P = *start;
       place_pinned(s);
       if (warm->coarse_levels_only) {
@@ -550,9 +547,14 @@ class VolumeReconstructor::Impl {
                                     Solve&& solve) const {
     if (renum_.empty()) return solve(start, request);
     std::vector<Vec3> s, pinned;
-    if (start) s = internal::to_new(renum_, *start);
+    if (start) {
+      check_start(*start);
+      s = internal::to_new(renum_, *start);
+    }
     ReconstructRequest q = request;
-    if (request.pinned_positions) {
+    if (request.pinned_positions && !enc_.pinned.empty()) {
+      check_pinned_positions(*request.pinned_positions,
+                             [&](int v) { return enc_.pinned[renum_.new_of_old[v]] != 0; });
       pinned = internal::to_new(renum_, *request.pinned_positions);
       q.pinned_positions = &pinned;
     }
@@ -563,6 +565,7 @@ class VolumeReconstructor::Impl {
   // The caller's frames in the solver's numbering (held by \p copy if renumbered).
   const BaseFrames& solver_frames(const BaseFrames& f, BaseFrames& copy) const {
     if (renum_.empty()) return f;
+    check_frames(f);
     copy = internal::to_new(renum_, f);
     return copy;
   }
@@ -835,14 +838,7 @@ class VolumeReconstructor::Impl {
     s.f = &guarded_f_;
     s.pin = enc_.pinned.empty() ? nullptr : &enc_.pinned;
     const int n = enc_.num_detail_vertices();
-    if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
-        static_cast<int>(fr.tangents.size()) != n)
-      throw InvalidInput("base frames have " + std::to_string(fr.points.size()) + " points, the detail has " +
-                         std::to_string(n) + " vertices");
-    for (int i = 0; i < n; ++i)
-      if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
-        throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
-    check_coordinates(fr.points, "base frames:");
+    check_frames(fr);
     s.Q = fr.points;
     s.N = fr.normals;
     s.tangential = opt_.tangential_regularization;
@@ -859,15 +855,40 @@ class VolumeReconstructor::Impl {
       s.pinned_at = internal::vectors_unchecked(enc_, fr, s.amplitude);  // both checked already
       return;
     }
-    const std::vector<Vec3>& pp = *request.pinned_positions;
+    check_pinned_positions(*request.pinned_positions, [&](int i) { return enc_.pinned[i] != 0; });
+    s.pinned_at = *request.pinned_positions;
+  }
+
+  // The checks of the callers' arrays, whose messages name vertices by index: run on the caller's
+  // arrays before they are renumbered (in_solver_order(), solver_frames()), so that the index named
+  // is the caller's.
+  void check_frames(const BaseFrames& fr) const {
+    const int n = enc_.num_detail_vertices();
+    if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
+        static_cast<int>(fr.tangents.size()) != n)
+      throw InvalidInput("base frames have " + std::to_string(fr.points.size()) + " points, the detail has " +
+                         std::to_string(n) + " vertices");
+    for (int i = 0; i < n; ++i)
+      if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
+        throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
+    check_coordinates(fr.points, "base frames:");
+  }
+  template <class Pinned>
+  void check_pinned_positions(const std::vector<Vec3>& pp, Pinned&& is_pinned) const {
+    const int n = enc_.num_detail_vertices();
     if (static_cast<int>(pp.size()) != n)
       throw InvalidInput("reconstruction: " + std::to_string(pp.size()) + " pinned positions for " +
                          std::to_string(n) + " detail vertices");
     for (int i = 0; i < n; ++i)
-      if (enc_.pinned[i] && !(pp[i].allFinite() && pp[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      if (is_pinned(i) && !(pp[i].allFinite() && pp[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
         throw InvalidInput("reconstruction: pinned position " + std::to_string(i) +
                            " is not finite or beyond the engine's range");
-    s.pinned_at = pp;
+  }
+  void check_start(const std::vector<Vec3>& start) const {
+    if (static_cast<int>(start.size()) != enc_.num_detail_vertices())
+      throw InvalidInput("warm start has " + std::to_string(start.size()) + " positions, the detail has " +
+                         std::to_string(enc_.num_detail_vertices()) + " vertices");
+    check_coordinates(start, "warm start:");
   }
 
   bool pinned(int i) const { return !enc_.pinned.empty() && enc_.pinned[i]; }
@@ -1318,6 +1339,7 @@ class VolumeReconstructor::Impl {
   // The hierarchy's sizes, coarsest first.
   void level_stats(ReconstructStats& st) const {
     st.levels = static_cast<int>(levels_.size());
+    st.renumbered = !renum_.empty();
     st.seconds_levels.assign(levels_.size(), 0.0);
     for (const Level& L : levels_) {
       st.level_vertices.push_back(static_cast<int>(L.verts.size()));

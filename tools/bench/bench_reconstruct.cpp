@@ -332,6 +332,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
               {"levels", st.levels},
               {"level_vertices", st.level_vertices},
               {"level_faces", st.level_faces},
+              {"renumbered", st.renumbered},
               {"seconds", sec},
               {"cpu_seconds", cpu},
               {"stats",

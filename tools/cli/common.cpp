@@ -496,6 +496,7 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
   return json{{"levels", s.levels},
               {"level_vertices", s.level_vertices},
               {"level_faces", s.level_faces},
+              {"renumbered", s.renumbered},
               {"cycles", s.cycles},
               {"finest_cycles_per_scale", s.finest_cycles_per_scale},
               {"volume_sweeps", s.volume_sweeps},

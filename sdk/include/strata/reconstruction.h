@@ -409,10 +409,12 @@ struct ReconstructStats {
   int levels = 0;                   //!< multigrid levels used, finest included
   std::vector<int> level_vertices;  //!< vertex count per level, coarsest first
   std::vector<int> level_faces;     //!< prism count per level, coarsest first
-  int volume_sweeps = 0;            //!< Gauss-Newton volume steps over all levels and scales
-  int regularization_sweeps = 0;    //!< regularization sweeps over all levels and scales
-  int cycles = 0;                   //!< cycles (volume steps + regularization) over all levels and scales
-  int final_sweeps = 0;             //!< exact Gauss-Newton polish steps on the finest level
+  //! Whether the solver renumbered the detail (ReconstructOptions::renumber_for_locality).
+  bool renumbered = false;
+  int volume_sweeps = 0;          //!< Gauss-Newton volume steps over all levels and scales
+  int regularization_sweeps = 0;  //!< regularization sweeps over all levels and scales
+  int cycles = 0;                 //!< cycles (volume steps + regularization) over all levels and scales
+  int final_sweeps = 0;           //!< exact Gauss-Newton polish steps on the finest level
   //! Cycles on the finest level per multigrid pass (a clean start's volume scales, retries
   //! appending theirs; a warm start's one pass); 0 where a clean start's intermediate scale did not
   //! solve it (ReconstructOptions::finest_intermediate_solves false).
