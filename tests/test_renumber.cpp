@@ -235,4 +235,23 @@ TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
   bad_req.pinned_positions = &bad_pinned;
   EXPECT_NE(message([&] { a.reconstruct(bent, bad_req); }).find("pinned position " + std::to_string(k) + " "),
             std::string::npos);
+  // An edited base collapsed around a vertex (no normals there): the message is the one the
+  // caller's own evaluation gives, naming the caller's first vertex over such a face (found by a
+  // review, 2026-11-28: it named the solver's).
+  std::vector<Vec3> collapsed = c.base.vertices;
+  std::vector<char> ring(collapsed.size(), 0);
+  ring[0] = 1;
+  for (int round = 0; round < 3; ++round) {
+    std::vector<char> next = ring;
+    for (const Face& f : c.base.faces)
+      if (ring[f[0]] || ring[f[1]] || ring[f[2]]) next[f[0]] = next[f[1]] = next[f[2]] = 1;
+    ring.swap(next);
+  }
+  for (std::size_t v = 0; v < collapsed.size(); ++v)
+    if (ring[v]) collapsed[v] = c.base.vertices[0];
+  const std::string expected = message([&] { evaluate_base_frames(e, collapsed); });
+  ASSERT_NE(expected.find("no normal"), std::string::npos) << expected;
+  EXPECT_EQ(message([&] { a.reconstruct(collapsed); }), expected);
+  EXPECT_EQ(message([&] { a.base_frames(collapsed); }), expected);
+  EXPECT_EQ(message([&] { a.drag_step(collapsed, da, warm); }), expected);
 }

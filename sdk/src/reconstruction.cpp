@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <memory>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -298,9 +300,22 @@ class VolumeReconstructor::Impl {
 
   // The base frames on an edited base given by its vertices (or its cage's control points).
   BaseFrames frames_for(const std::vector<Vec3>& base) const {
-    if (!limit_) return evaluate_base_frames(enc_, base);
-    limit_->set_control_points(base);  // keeps the patch table: only the patch points change
-    return evaluate_base_frames(enc_, *limit_points_, *limit_);
+    try {
+      if (!limit_) return evaluate_base_frames(enc_, base);
+      limit_->set_control_points(base);  // keeps the patch table: only the patch points change
+      return evaluate_base_frames(enc_, *limit_points_, *limit_);
+    } catch (const InvalidInput&) {
+      // Its message names a detail vertex: evaluated again over the caller's encoding, which
+      // fails at the caller's first such vertex (only on this error's path).
+      if (!renum_.empty()) {
+        const DetailEncoding& caller = encoding();
+        if (!limit_)
+          evaluate_base_frames(caller, base);
+        else
+          evaluate_base_frames(caller, LimitPointSet(*limit_, caller.limit_points), *limit_);
+      }
+      throw;
+    }
   }
 
   ReconstructResult run(const std::vector<Vec3>& base, const std::vector<Vec3>* start,
@@ -427,9 +442,9 @@ class VolumeReconstructor::Impl {
       if (!renum_.empty()) {
         ds.frames = internal::to_new(renum_, ds.frames);
         ds.start = internal::to_new(renum_, ds.start);
+        ds.owner = serial_;  // in this solver's numbering from now on
       }
       ds.in_solver_order = true;
-      ds.owner = serial_;
     }
     ReconstructResult res;
     ReconstructStats& st = res.stats;
@@ -534,8 +549,10 @@ class VolumeReconstructor::Impl {
   // first use rather than kept, which would cost its memory through every solve.
   const DetailEncoding& encoding() const {
     if (renum_.empty()) return enc_;
-    if (!original_)
+    // Once, even from two threads (a getter that looks read-only).
+    std::call_once(original_once_, [&] {
       original_ = std::make_unique<DetailEncoding>(internal::restore(enc_, renum_, face_order_));
+    });
     return *original_;
   }
 
@@ -956,13 +973,20 @@ class VolumeReconstructor::Impl {
 
   // A solve driven out of range (e.g. a regularization weight of 1e308) is named as such, not as
   // the non-finite coordinates that a count or a writer would meet next.
-  static void check_finite(const State& s) {
+  // The vertex named is the caller's: the smallest caller index among the non-finite ones.
+  void check_finite(const State& s) const {
+    int bad = -1;
     for (std::size_t i = 0; i < s.P.size(); ++i)
-      if (!s.P[i].allFinite())
-        throw SolverError(
-            "reconstruction produced non-finite positions (detail vertex " + std::to_string(i) +
-            "): the solve diverged (a base edited beyond what the detail can follow, or options out of a "
-            "workable range)");
+      if (!s.P[i].allFinite()) {
+        const int v = renum_.empty() ? static_cast<int>(i) : renum_.old_of_new[i];
+        if (bad < 0 || v < bad) bad = v;
+        if (renum_.empty()) break;
+      }
+    if (bad >= 0)
+      throw SolverError(
+          "reconstruction produced non-finite positions (detail vertex " + std::to_string(bad) +
+          "): the solve diverged (a base edited beyond what the detail can follow, or options out of a "
+          "workable range)");
   }
 
   // The new pairs are counted (retry_on_new_intersections) for a converged result, and for an
@@ -2052,6 +2076,7 @@ class VolumeReconstructor::Impl {
   internal::Renumbering renum_;
   std::vector<int> face_order_;
   mutable std::unique_ptr<DetailEncoding> original_;
+  mutable std::once_flag original_once_;
   ReconstructOptions opt_;
   std::vector<double> guarded_f_;
   double mean_abs_f_ = 0.0;
