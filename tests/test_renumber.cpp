@@ -6,8 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
-#include <random>
 #include <tuple>
 
 #include "internal/renumber.h"
@@ -26,20 +24,6 @@ cases::CylinderCase bumps_case() {
   o.target_detail_triangles = 40000;
   o.jitter = 0.4;
   return cases::make_cylinder_case(o);
-}
-
-// \p m with its vertices and faces shuffled (seeded), as a tool that hashes its vertices writes it.
-TriMesh shuffled(const TriMesh& m, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::vector<int> new_of_old(m.vertices.size());
-  std::iota(new_of_old.begin(), new_of_old.end(), 0);
-  std::shuffle(new_of_old.begin(), new_of_old.end(), rng);
-  TriMesh s;
-  s.vertices.resize(m.vertices.size());
-  for (std::size_t v = 0; v < m.vertices.size(); ++v) s.vertices[new_of_old[v]] = m.vertices[v];
-  for (const Face& f : m.faces) s.faces.push_back({new_of_old[f[0]], new_of_old[f[1]], new_of_old[f[2]]});
-  std::shuffle(s.faces.begin(), s.faces.end(), rng);
-  return s;
 }
 
 // Each face as its sorted corners (in the caller's numbering) with its target volume.
@@ -65,7 +49,7 @@ TEST(Renumber, AScatteredNumberingIsRenumberedAndAGridKept) {
   // The generated grid's neighbours are close in the numbering: kept.
   EXPECT_LT(internal::scattered_edge_fraction(c.detail.faces, internal::kWindow), 0.01);
   EXPECT_TRUE(internal::locality_renumbering(c.detail.vertices, c.detail.faces).empty());
-  const TriMesh s = shuffled(c.detail, 7);
+  const TriMesh s = cases::shuffled_numbering(c.detail, 7);
   EXPECT_GT(internal::scattered_edge_fraction(s.faces, internal::kWindow), 0.5);
   const DetailEncoding e = encode_detail(s, c.base);
   const internal::Renumbering r = internal::locality_renumbering(e.detail_rest, e.detail_faces);
@@ -138,7 +122,7 @@ TEST(Renumber, AScatteredNumberingIsRenumberedAndAGridKept) {
 
 TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
   const cases::CylinderCase c = bumps_case();
-  const TriMesh s = shuffled(c.detail, 11);
+  const TriMesh s = cases::shuffled_numbering(c.detail, 11);
   DetailEncoding e = encode_detail(s, c.base);
   // Pinned vertices (a region edit's outside), with positions of their own: the displacement
   // vectors' over the bent base, a little moved (null pinned_positions is the vectors' own).

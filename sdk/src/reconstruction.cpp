@@ -248,7 +248,7 @@ class VolumeReconstructor::Impl {
     const auto t0 = Clock::now();
     validate();
     // A scattered numbering (a scan whose tool hashed or shuffled its vertices) costs the solve
-    // its caches: the scan-like 1M bumps bend renumbered at random took 12.9 s against 6.7 s.
+    // its caches (renumber_for_locality).
     if (opt_.renumber_for_locality) {
       renum_ = internal::locality_renumbering(enc_.detail_rest, enc_.detail_faces);
       if (!renum_.empty()) enc_ = internal::renumber(enc_, renum_, &face_order_);

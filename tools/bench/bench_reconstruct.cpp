@@ -36,7 +36,6 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -109,21 +108,6 @@ ReconstructOptions one_thread() {
   ReconstructOptions o;
   o.threads = 1;  // the measure is single-threaded; --set threads=N to compare
   return o;
-}
-
-// \p m with its vertices and faces in a random order (seeded).
-TriMesh shuffled(const TriMesh& m, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::vector<int> new_of_old(m.vertices.size());
-  std::iota(new_of_old.begin(), new_of_old.end(), 0);
-  std::shuffle(new_of_old.begin(), new_of_old.end(), rng);
-  TriMesh s;
-  s.vertices.resize(m.vertices.size());
-  for (std::size_t v = 0; v < m.vertices.size(); ++v) s.vertices[new_of_old[v]] = m.vertices[v];
-  s.faces.reserve(m.faces.size());
-  for (const Face& f : m.faces) s.faces.push_back({new_of_old[f[0]], new_of_old[f[1]], new_of_old[f[2]]});
-  std::shuffle(s.faces.begin(), s.faces.end(), rng);
-  return s;
 }
 
 struct Args {
@@ -250,7 +234,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   co.target_detail_triangles = size;
   co.jitter = args.jitter;
   cases::CylinderCase c = timed("generate", [&] { return cases::make_cylinder_case(co); });
-  if (args.shuffle != 0) c.detail = shuffled(c.detail, args.shuffle);
+  if (args.shuffle != 0) c.detail = cases::shuffled_numbering(c.detail, args.shuffle);
   DetailEncoding enc = timed("encode", [&] { return encode_detail(c.detail, c.base); });
   const std::vector<Vec3> edited = std::move(c.edited_base.vertices);
   const int base_vertices = c.base.num_vertices(), base_faces = c.base.num_faces();

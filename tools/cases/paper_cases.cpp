@@ -440,4 +440,18 @@ PolyMesh make_cylinder_cage(const CylinderCaseOptions& o, int segments) {
   return build(o.radius * 3.0 / (2.0 + std::cos(2.0 * kPi / segments)));
 }
 
+TriMesh shuffled_numbering(const TriMesh& mesh, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<int> new_of_old(mesh.vertices.size());
+  for (std::size_t v = 0; v < new_of_old.size(); ++v) new_of_old[v] = static_cast<int>(v);
+  std::shuffle(new_of_old.begin(), new_of_old.end(), rng);
+  TriMesh s;
+  s.vertices.resize(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) s.vertices[new_of_old[v]] = mesh.vertices[v];
+  s.faces.reserve(mesh.faces.size());
+  for (const Face& f : mesh.faces) s.faces.push_back({new_of_old[f[0]], new_of_old[f[1]], new_of_old[f[2]]});
+  std::shuffle(s.faces.begin(), s.faces.end(), rng);
+  return s;
+}
+
 }  // namespace strata::cases

@@ -122,4 +122,9 @@ double detail_offset(const CylinderCaseOptions& options, double theta, double z)
 //! \throws InvalidInput if segments < 6 or the options are out of range.
 PolyMesh make_cylinder_cage(const CylinderCaseOptions& options = {}, int segments = 16);
 
+//! \p mesh with its vertices and faces in a random order (seeded; each face keeps its corners'
+//! order), as a tool that hashes its vertices writes a scan: the renumbering's case
+//! (ReconstructOptions::renumber_for_locality).
+TriMesh shuffled_numbering(const TriMesh& mesh, unsigned seed);
+
 }  // namespace strata::cases

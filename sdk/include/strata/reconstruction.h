@@ -131,7 +131,8 @@ struct ReconstructOptions {
   //! vertices, and more than 10% of the face edges joining vertices more than 4,096 indices apart
   //! (as a scan whose tools hashed or shuffled its vertices: refined_elephant in assets/scans has
   //! 83%, a generated grid 0%). Every array of the API stays in the caller's numbering. The scan-like
-  //! 1M bumps bend, renumbered at random, took 12.9 s against 6.7 s in its grid order (2026-11-28).
+  //! 1M bumps bend numbered at random took 14.6 s in that numbering, 7.0 s renumbered, and 6.2-6.4 s
+  //! in its grid order (strata_bench --shuffle 7, one thread, 2026-11-28).
   //! The solve's path changes with the numbering (the hierarchy's ties), so results differ by more
   //! than rounding between numberings. false: the caller's numbering (.strata files written before
   //! 2026-11-28).

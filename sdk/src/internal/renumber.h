@@ -28,8 +28,8 @@ Renumbering locality_renumbering(const std::vector<Vec3>& points, const std::vec
 
 //! Below this many vertices the arrays stay in the caches whatever the numbering.
 constexpr int kMinVertices = 16384;
-//! Neighbours within this many indices share the caches' working set (about 100 bytes of solver
-//! state a vertex: 400 KB, the L2 cache of the machines measured).
+//! Neighbours within this many indices share the caches' working set (an estimate, not measured:
+//! about 100 bytes of solver state a vertex, 400 KB, the size of a core's L2 cache).
 constexpr int kWindow = 4096;
 //! A row-major grid has none beyond the window; the real scans of assets/scans have 0-83%.
 constexpr double kMaxScatteredFraction = 0.1;
