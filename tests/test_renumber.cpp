@@ -120,6 +120,36 @@ TEST(Renumber, AScatteredNumberingIsRenumberedAndAGridKept) {
   }
 }
 
+// encode_detail() projects a scattered numbering's vertices along a Morton curve (for the caches):
+// each vertex still gets the base point the grid's numbering gives it, and the same counts.
+TEST(Renumber, AScatteredDetailEncodesToTheSameBasePoints) {
+  const cases::CylinderCase c = bumps_case();
+  const TriMesh s = cases::shuffled_numbering(c.detail, 5);
+  ASSERT_FALSE(internal::locality_renumbering(s.vertices, s.faces).empty());  // the path under test
+  const DetailEncoding grid = encode_detail(c.detail, c.base);
+  const DetailEncoding shuffled = encode_detail(s, c.base);
+  // The grid's vertex at each shuffled vertex's position (positions are distinct).
+  std::vector<std::pair<std::array<double, 3>, int>> by_position;
+  for (int i = 0; i < c.detail.num_vertices(); ++i) {
+    const Vec3& p = c.detail.vertices[i];
+    by_position.push_back({{p.x(), p.y(), p.z()}, i});
+  }
+  std::sort(by_position.begin(), by_position.end());
+  ASSERT_EQ(s.num_vertices(), c.detail.num_vertices());
+  for (int i = 0; i < s.num_vertices(); ++i) {
+    const Vec3& p = s.vertices[i];
+    const auto it = std::lower_bound(by_position.begin(), by_position.end(),
+                                     std::make_pair(std::array<double, 3>{p.x(), p.y(), p.z()}, -1));
+    ASSERT_TRUE(it != by_position.end() && it->first == (std::array<double, 3>{p.x(), p.y(), p.z()}));
+    const BasePoint &a = shuffled.base_points[i], &b = grid.base_points[it->second];
+    ASSERT_EQ(a.face, b.face) << "vertex " << i;
+    ASSERT_EQ(a.bary, b.bary) << "vertex " << i;
+  }
+  EXPECT_EQ(shuffled.report.num_projected, grid.report.num_projected);
+  EXPECT_EQ(shuffled.report.num_fallback, grid.report.num_fallback);
+  EXPECT_EQ(shuffled.report.num_ambiguous, grid.report.num_ambiguous);
+}
+
 TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
   const cases::CylinderCase c = bumps_case();
   const TriMesh s = cases::shuffled_numbering(c.detail, 11);
