@@ -75,6 +75,8 @@ json options_json(const ModelOptions& o) {
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
             {"renumber_for_locality", r.renumber_for_locality},
+            {"contact_ratio", r.contact_ratio},
+            {"base_crossing_rings", r.base_crossing_rings},
             {"fallback_schedule", r.fallback_schedule},
             {"retry_other_regularization", r.retry_other_regularization},
             {"fold_repair_rounds", r.fold_repair_rounds},
@@ -204,6 +206,12 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
   // Absent in files written before 2026-11-28, whose solves kept the band's numbering.
   ro.renumber_for_locality = r.contains("renumber_for_locality") && h.boolean(r, "renumber_for_locality", wr);
+  // Absent in files written before 2026-11-28 (twenty-first session), whose solves counted every
+  // new pair as a fold. (check_model_options() checks the ranges.)
+  ro.contact_ratio = r.contains("contact_ratio") ? h.number(r, "contact_ratio", wr) : 0.0;
+  ro.base_crossing_rings = r.contains("base_crossing_rings")
+                               ? static_cast<int>(h.integer(r, "base_crossing_rings", wr, -1, 1000))
+                               : -1;
   // Files written before the option existed did not fall back.
   ro.fallback_schedule = r.contains("fallback_schedule") && h.boolean(r, "fallback_schedule", wr);
   // Absent in files written before 2026-11-27, whose solves had no such retry.

@@ -29,6 +29,8 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"volume_iterations", &o.volume_iterations},
           {"retry_volume_iterations", &o.retry_volume_iterations},
           {"retry_on_new_intersections", &o.retry_on_new_intersections},
+          {"contact_ratio", &o.contact_ratio},
+          {"base_crossing_rings", &o.base_crossing_rings},
           {"renumber_for_locality", &o.renumber_for_locality},
           {"fallback_schedule", &o.fallback_schedule},
           {"retry_other_regularization", &o.retry_other_regularization},

@@ -21,6 +21,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "internal/contact.h"
 #include "internal/hierarchy.h"
 #include "internal/option_error.h"
 #include "internal/parallel.h"
@@ -176,6 +177,11 @@ struct State {
   const std::vector<double>* f = nullptr;
   const std::vector<char>* pin = nullptr;
   bool pinned(int i) const { return pin && (*pin)[i]; }
+  // The fold checks' view of the base (ReconstructOptions::contact_ratio, base_crossing_rings),
+  // made on first use: both depend on the base points alone, which a reconstruction does not
+  // change, so its retries and repair rounds share them.
+  mutable std::unique_ptr<internal::ContactTest> contact;
+  mutable std::optional<std::vector<char>> near_crossings;
 };
 
 // p carried along from the frame (from) of vertex i to its frame (to): the displacement keeps
@@ -378,7 +384,7 @@ class VolumeReconstructor::Impl {
         else
           s.P.swap(kept);
       };
-      auto failed = [&] { return !first.converged || first.new_pairs > 0; };
+      auto failed = [&] { return !first.converged || first.folds() > 0; };
       // First with the other tangential regularization (retry_other_regularization): the rest
       // offsets fold on other regular grids than the rest Laplacian.
       if (opt_.retry_other_regularization &&
@@ -398,9 +404,8 @@ class VolumeReconstructor::Impl {
         PhaseTimer timer(st.seconds_folds);
         fold_checked(s, a, st, V, first);
       }
-      if (opt_.fallback_schedule && first.counted && first.new_pairs > 0)
-        fall_back(fr, request, s, st, first);
-      st.new_intersecting_pairs = first.counted ? static_cast<long long>(first.new_pairs) : -1;
+      if (opt_.fallback_schedule && first.counted && first.folds() > 0) fall_back(fr, request, s, st, first);
+      report_pairs(first, st);
     } else {
       check_start(*start);
       s.P = *start;
@@ -536,7 +541,7 @@ class VolumeReconstructor::Impl {
           Outcome o = outcome(s, a, V);
           repair_folds(s, a, st, V, o);
           fold_checked(s, a, st, V, o);
-          st.new_intersecting_pairs = o.counted ? static_cast<long long>(o.new_pairs) : -1;
+          report_pairs(o, st);
         }
       }
       for (int i : L.verts) ds.level[l][i] = ls.P[i];
@@ -948,12 +953,32 @@ class VolumeReconstructor::Impl {
     bool converged = false;
     double max_error = 0.0;
     std::size_t new_pairs = 0;
-    bool counted = false;             // new_pairs was counted
-    double tolerance = 0.0;           // the tolerance converged was judged by
-    std::vector<int> new_pair_faces;  // the faces of the new pairs, sorted, distinct
+    // Of new_pairs, those that are a contact made by the edit (ReconstructOptions::contact_ratio):
+    // no schedule or repair undoes them, so the folds alone decide retries, repair and choice.
+    std::size_t contact_pairs = 0;
+    // Of new_pairs, the others near the edited base's own new crossings (base_crossing_rings).
+    std::size_t crossing_pairs = 0;
+    bool counted = false;    // new_pairs was counted
+    bool listed = false;     // and its pairs listed (the search was not cut short)
+    double tolerance = 0.0;  // the tolerance converged was judged by
+    // The faces of the new pairs that are not contacts (those the fold repair works on), sorted,
+    // distinct.
+    std::vector<int> new_pair_faces;
+    // The new pairs that decide the retries and the fallback schedule: neither contacts nor next
+    // to the base's crossings, which a clean-start solve with another schedule would meet again.
+    std::size_t folds() const { return new_pairs - contact_pairs - crossing_pairs; }
+    // Those the fold repair takes on: all but the contacts (local smoothing may still undo a pair
+    // next to a crossing of the base: the camel's neck bend, 2 such pairs).
+    std::size_t repairable() const { return new_pairs - contact_pairs; }
+    // Fewer folds first, then fewer repairable pairs, then fewer new pairs.
+    bool fewer_pairs(const Outcome& o) const {
+      return std::make_tuple(folds(), repairable(), new_pairs) <
+             std::make_tuple(o.folds(), o.repairable(), o.new_pairs);
+    }
+    bool no_more_pairs(const Outcome& o) const { return !o.fewer_pairs(*this); }
     bool better_than(const Outcome& o) const {
       if (converged != o.converged) return converged;
-      if (converged) return new_pairs < o.new_pairs;
+      if (converged) return fewer_pairs(o);
       // Two unconverged results whose pairs were counted (a fold repair after a solve that ends
       // above the tolerance): better only if worse in neither, so that a repair never trades
       // volume accuracy for folds or back. Errors within 1% of the tolerance, or within
@@ -964,9 +989,8 @@ class VolumeReconstructor::Impl {
       // to 6.3e-14 with 56 new pairs, repaired 4.2e-14 to 5.2e-14 with none, by OpenBLAS's kernel
       // set; with 1% of the tolerance alone the Zen and Haswell kernels' repairs were refused).
       if (counted && o.counted)
-        return (new_pairs < o.new_pairs &&
-                max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
-               (new_pairs <= o.new_pairs && max_error < o.max_error);
+        return (fewer_pairs(o) && max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
+               (no_more_pairs(o) && max_error < o.max_error);
       return max_error < o.max_error;
     }
   };
@@ -989,6 +1013,52 @@ class VolumeReconstructor::Impl {
           "workable range)");
   }
 
+  // The intersection searches of the fold checks: within bounded_intersection_options(), since a
+  // detail whose triangles mostly cross (or whose long thin triangles' boxes mostly overlap) would
+  // cost O(n^2), listing the pairs, on the solver's threads (ReconstructOptions::threads; the
+  // pairs are sorted, so the count is the same on any number of them).
+  IntersectionOptions search_options() const {
+    IntersectionOptions io = bounded_intersection_options(enc_.detail_faces.size());
+    io.collect_pairs = true;
+    io.cancel = opt_.cancel;
+    io.parallel = arena_ != nullptr;
+    return io;
+  }
+  IntersectionResult search(const std::vector<Vec3>& p) const {
+    const IntersectionOptions io = search_options();
+    if (!arena_) return find_self_intersections(p, enc_.detail_faces, io);
+    return arena_->execute([&] { return find_self_intersections(p, enc_.detail_faces, io); });
+  }
+
+  // ReconstructOptions::base_crossing_rings: per finest vertex, whether it lies within that many
+  // rings of a new crossing of the edited base, as the detail's triangles over their base points
+  // show it (pairs of them that cross where the rest base points' do not). Empty if there is none,
+  // or if either search was cut short, or the option is off.
+  std::vector<char> near_base_crossings(const State& s) const {
+    if (opt_.base_crossing_rings < 0 || enc_.base_rest_points.size() != s.Q.size()) return {};
+    if (!rest_base_pairs_)
+      rest_base_pairs_ = std::make_unique<IntersectionResult>(search(enc_.base_rest_points));
+    if (rest_base_pairs_->truncated) return {};
+    const IntersectionResult now = search(s.Q);
+    if (now.truncated) return {};
+    std::vector<std::pair<int, int>> fresh;
+    std::set_difference(now.pairs.begin(), now.pairs.end(), rest_base_pairs_->pairs.begin(),
+                        rest_base_pairs_->pairs.end(), std::back_inserter(fresh));
+    if (fresh.empty()) return {};
+    std::vector<int> seeds, subset, next;
+    for (const auto& [i, j] : fresh) seeds.insert(seeds.end(), {i, j});
+    std::vector<char> in;
+    grow_rings(seeds, opt_.base_crossing_rings, in, subset, next);
+    return in;
+  }
+
+  // ReconstructStats' pair counts of the result kept.
+  static void report_pairs(const Outcome& o, ReconstructStats& st) {
+    st.new_intersecting_pairs = o.counted ? static_cast<long long>(o.new_pairs) : -1;
+    st.contact_pairs = o.listed ? static_cast<long long>(o.contact_pairs) : -1;
+    st.base_crossing_pairs = o.listed ? static_cast<long long>(o.crossing_pairs) : -1;
+  }
+
   // The new pairs are counted (retry_on_new_intersections) for a converged result, and for an
   // unconverged one only if \p count_unconverged: during the solve an unconverged result is
   // retried, or compared by its error, regardless; the result kept in the end is checked either
@@ -1008,31 +1078,45 @@ class VolumeReconstructor::Impl {
       // follows: a rest detail cut short leaves the check undone (no pair is known to be new, and
       // counting the result would only spend the budget again); a result cut short counts as
       // max_pairs new pairs, none listed (far above what the repair takes on).
-      IntersectionOptions io = bounded_intersection_options(enc_.detail_faces.size());
-      io.collect_pairs = true;
-      io.cancel = opt_.cancel;
-      // On the solver's threads (ReconstructOptions::threads): the count is the same on any
-      // number of them (the pairs are sorted).
-      io.parallel = arena_ != nullptr;
-      auto search = [&](const std::vector<Vec3>& p) {
-        if (!arena_) return find_self_intersections(p, enc_.detail_faces, io);
-        return arena_->execute([&] { return find_self_intersections(p, enc_.detail_faces, io); });
-      };
       if (!rest_pairs_) rest_pairs_ = std::make_unique<IntersectionResult>(search(enc_.detail_rest));
       if (rest_pairs_->truncated) return o;  // not counted
       const IntersectionResult now = search(s.P);
       o.counted = true;
       if (now.truncated) {
-        o.new_pairs = io.max_pairs;
+        o.new_pairs = search_options().max_pairs;
         return o;
       }
       o.new_pairs = count_new_intersections(*rest_pairs_, now);
       std::vector<std::pair<int, int>> fresh;
       std::set_difference(now.pairs.begin(), now.pairs.end(), rest_pairs_->pairs.begin(),
                           rest_pairs_->pairs.end(), std::back_inserter(fresh));
-      for (const auto& [i, j] : fresh) {
-        o.new_pair_faces.push_back(i);
-        o.new_pair_faces.push_back(j);
+      o.listed = true;
+      // The pairs that the edited base explains are not the solver's folds: contacts
+      // (contact_ratio), and pairs next to the base's own new crossings (base_crossing_rings).
+      std::vector<char> contact(fresh.size(), 0);
+      if (opt_.contact_ratio > 0 && !fresh.empty()) {
+        if (!s.contact)
+          s.contact = std::make_unique<internal::ContactTest>(
+              internal::BaseGraph{&F.faces, &F.vf_offsets, &F.vf, &s.Q}, opt_.contact_ratio);
+        for (std::size_t k = 0; k < fresh.size(); ++k)
+          contact[k] = (*s.contact)(fresh[k].first, fresh[k].second);
+      }
+      const bool folds_left = std::find(contact.begin(), contact.end(), 0) != contact.end();
+      if (folds_left && !s.near_crossings) s.near_crossings = near_base_crossings(s);
+      const std::vector<char>& near = folds_left ? *s.near_crossings : no_crossings_;
+      auto near_crossing = [&](int j) {
+        const Face& f = F.faces[j];
+        return near[f[0]] || near[f[1]] || near[f[2]];
+      };
+      for (std::size_t k = 0; k < fresh.size(); ++k) {
+        if (contact[k]) {
+          ++o.contact_pairs;
+          continue;
+        }
+        if (!near.empty() && (near_crossing(fresh[k].first) || near_crossing(fresh[k].second)))
+          ++o.crossing_pairs;
+        o.new_pair_faces.push_back(fresh[k].first);
+        o.new_pair_faces.push_back(fresh[k].second);
       }
       std::sort(o.new_pair_faces.begin(), o.new_pair_faces.end());
       o.new_pair_faces.erase(std::unique(o.new_pair_faces.begin(), o.new_pair_faces.end()),
@@ -1070,6 +1154,8 @@ class VolumeReconstructor::Impl {
       o.fold_repair_local_rings = opt_.fold_repair_local_rings;
       o.fold_repair_local_rounds = opt_.fold_repair_local_rounds;
       o.renumber_for_locality = false;  // enc_ is in the solver's numbering already
+      o.contact_ratio = opt_.contact_ratio;
+      o.base_crossing_rings = opt_.base_crossing_rings;
       o.progress = opt_.progress;
       o.cancel = opt_.cancel;
       o.fallback_schedule = false;
@@ -1090,6 +1176,8 @@ class VolumeReconstructor::Impl {
     // The rest detail's pairs, counted already (first.counted), are the same for it.
     if (!fallback_->rest_pairs_ && rest_pairs_)
       fallback_->rest_pairs_ = std::make_unique<IntersectionResult>(*rest_pairs_);
+    if (!fallback_->rest_base_pairs_ && rest_base_pairs_)
+      fallback_->rest_base_pairs_ = std::make_unique<IntersectionResult>(*rest_base_pairs_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;
@@ -1098,6 +1186,9 @@ class VolumeReconstructor::Impl {
     other.tolerance = opt_.tolerance;
     other.counted = r.stats.new_intersecting_pairs >= 0;
     other.new_pairs = other.counted ? static_cast<std::size_t>(r.stats.new_intersecting_pairs) : 0;
+    other.listed = r.stats.contact_pairs >= 0 && r.stats.base_crossing_pairs >= 0;
+    other.contact_pairs = other.listed ? static_cast<std::size_t>(r.stats.contact_pairs) : 0;
+    other.crossing_pairs = other.listed ? static_cast<std::size_t>(r.stats.base_crossing_pairs) : 0;
     if (other.counted && other.better_than(first)) {
       s.P = std::move(r.positions);
       first = std::move(other);
@@ -1116,11 +1207,11 @@ class VolumeReconstructor::Impl {
   // leaves no new pairs). The second pass is the repair as it was before the first existed, so
   // the outcome is never worse by Outcome::better_than's order.
   void repair_folds(State& s, double a, ReconstructStats& st, std::vector<double>& V, Outcome& best) const {
-    if (!best.counted || best.new_pairs == 0 || opt_.fold_repair_rounds <= 0) return;
+    if (!best.counted || best.repairable() == 0 || opt_.fold_repair_rounds <= 0) return;
     // Many pairs are a global self-contact (a limb bent into the body: the armadillo's top in a
     // layered model had 10-12% of its prisms' triangles in new pairs), which local smoothing
     // cannot undo; local folds touch far fewer (the 100k rings: 246 pairs, 0.25%).
-    if (static_cast<double>(best.new_pairs) > opt_.fold_repair_max_fraction * levels_.back().faces.size())
+    if (static_cast<double>(best.repairable()) > opt_.fold_repair_max_fraction * levels_.back().faces.size())
       return;
     if (!opt_.fold_repair_local_first) {
       repair_rounds(s, a, st, V, best, /*whole_level=*/true, opt_.fold_repair_rounds);
@@ -1131,7 +1222,7 @@ class VolumeReconstructor::Impl {
     const int local_rounds =
         opt_.fold_repair_local_rounds < 0 ? opt_.fold_repair_rounds : opt_.fold_repair_local_rounds;
     repair_rounds(s, a, st, V, local, /*whole_level=*/false, local_rounds);
-    if (local.converged && local.new_pairs == 0) {
+    if (local.converged && local.repairable() == 0) {
       best = std::move(local);
       return;
     }
@@ -1177,7 +1268,7 @@ class VolumeReconstructor::Impl {
       const bool local_done = local_polish(local_set(more_rings > 0 ? moving : subset), s, a, opt_.tolerance,
                                            st, opt_.max_final_steps, damping);
       if (local_done || count) o = outcome(s, a, V, count);
-      if (whole_level && (!o.converged || o.new_pairs > 0)) {
+      if (whole_level && (!o.converged || o.repairable() > 0)) {
         local_result.swap(s.P);
         s.P = smoothed;
         s.gn.damping = kMinDamping;
@@ -1194,7 +1285,7 @@ class VolumeReconstructor::Impl {
         kept = s.P;
         best = std::move(o);
         stalled = 0;
-        if (best.new_pairs == 0) break;
+        if (best.repairable() == 0) break;
       } else if (++stalled == 2) {
         break;  // two rounds without progress: the rest would not do better
       }
@@ -2093,6 +2184,9 @@ class VolumeReconstructor::Impl {
   // The rest detail's own intersecting pairs (found at the first retry check), so that a result's
   // new pairs can be told. Mutable like the levels' factorizations.
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
+  // The rest base points' crossings (near_base_crossings()), searched on first use.
+  mutable std::unique_ptr<IntersectionResult> rest_base_pairs_;
+  const std::vector<char> no_crossings_;
   // The other preset's solver (ReconstructOptions::fallback_schedule), built on first use.
   mutable std::unique_ptr<Impl> fallback_;
   const char* phase_ = "reconstruct";  // "fallback" in the fallback's Impl
@@ -2155,6 +2249,10 @@ void check_reconstruct_options(const ReconstructOptions& o) {
         "between 0 and 1");
   count(o.volume_iterations, "volume_iterations", 1, 100000);
   count(o.retry_volume_iterations, "retry_volume_iterations", 0, 100000);
+  // A ratio below 1 would call a fold's straight neighbours a contact; 1e6 bounds each search.
+  check(o.contact_ratio == 0 || (o.contact_ratio >= 1 && o.contact_ratio <= 1e6), "contact_ratio",
+        o.contact_ratio, "0 (off) or 1-1e6");
+  count(o.base_crossing_rings, "base_crossing_rings", -1, 1000, "-1: off");
   count(o.fold_repair_rounds, "fold_repair_rounds", 0, 1000);
   count(o.fold_repair_local_rings, "fold_repair_local_rings", 0, 1000);
   count(o.fold_repair_local_rounds, "fold_repair_local_rounds", -1, 1000, "-1: fold_repair_rounds");

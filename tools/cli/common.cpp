@@ -513,6 +513,8 @@ json iterations_json(const std::optional<ReconstructStats>& stats) {
               {"fold_repairs", s.fold_repairs},
               {"fold_repair_polishes", s.fold_repair_polishes},
               {"solver_new_intersecting_pairs", s.new_intersecting_pairs},
+              {"solver_contact_pairs", s.contact_pairs},
+              {"solver_base_crossing_pairs", s.base_crossing_pairs},
               {"final_sweeps", s.final_sweeps},
               {"constraint_updates", s.constraint_updates},
               {"solver_max_relative_error", s.max_relative_error},

@@ -126,6 +126,27 @@ struct ReconstructOptions {
   //! result whose search is cut short counts as its max_pairs (10 million) new pairs.
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
+  //! New intersecting pairs that the edited base explains are not the solver's folds: they
+  //! trigger no retry, fold repair or fallback schedule (no schedule undoes what is in the base),
+  //! and the result is chosen by its other new pairs first. Two kinds, counted apart in
+  //! ReconstructStats::contact_pairs and base_crossing_pairs:
+  //! - a contact: the shortest path between the pair's two triangles' base points along the
+  //!   detail's edges (over the edited base) is longer than contact_ratio times their straight
+  //!   distance plus the longer of their base edges. A fold's triangles lie over one stretch of
+  //!   base, while the path between the sides of a contact (a limb bent into the body) runs around
+  //!   through the base. 0: no pair is a contact. Must be 0 or at least 1.
+  //! - next to a crossing of the base itself: a triangle of the pair is within
+  //!   base_crossing_rings vertex rings of a pair of detail triangles whose base points' triangles
+  //!   cross on the edited base (and not on the rest base). -1: none is.
+  //! Measured (2026-11-28, twenty-first session, strata_bench_layers on refined_elephant, the top
+  //! bent 90 degrees at band 0): band 1's first solve had 560 new pairs, 240 contacts and the 320
+  //! others all within 4 rings of the 421 crossings of its base (band 0's limit surface bent into
+  //! itself); band 2's 2,686, 1,516 contacts and 1,170 within 4 rings of its base's 1,894
+  //! crossings. Each band then ran five more solves (a retry, the other preset with its own
+  //! retries), none with fewer new pairs. Both 0 / -1: every new pair is a fold, as in .strata
+  //! files written before.
+  double contact_ratio = 3.0;
+  int base_crossing_rings = 8;
   //! The solver renumbers the detail's vertices (along a Morton curve of their rest positions) and
   //! faces for memory locality when the encoding's numbering scatters neighbours: at least 16,384
   //! vertices, and more than 10% of the face edges joining vertices more than 4,096 indices apart
@@ -463,6 +484,12 @@ struct ReconstructStats {
   //! drag's state, converged or not); -1 if not counted (also when the rest detail's search was
   //! cut short), 10 million if the result's search was (see retry_on_new_intersections).
   long long new_intersecting_pairs = -1;
+  //! Of new_intersecting_pairs, those that are a contact made by the edit, and of the others those
+  //! next to a crossing of the edited base itself (ReconstructOptions::contact_ratio,
+  //! base_crossing_rings); the rest are the solver's folds. -1 if the new pairs were not counted
+  //! or not listed (a search cut short).
+  long long contact_pairs = -1;
+  long long base_crossing_pairs = -1;
   long long cg_iterations = 0;       //!< conjugate-gradient iterations over all Gauss-Newton steps
   long long constraint_updates = 0;  //!< prism constraints visited by volume steps (for throughput)
 };
