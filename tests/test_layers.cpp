@@ -792,9 +792,9 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_TRUE(back.renumber_for_locality);  // the default, written since 2026-11-28
   EXPECT_EQ(back.contact_ratio, 3.0);
   EXPECT_EQ(back.base_crossing_rings, 8);
-  for (const char* key :
-       {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings",
-        "fold_repair_local_rounds", "renumber_for_locality", "contact_ratio", "base_crossing_rings"}) {
+  for (const char* key : {"retry_other_regularization", "fold_repair_local_first", "fold_repair_local_rings",
+                          "fold_repair_local_rounds", "renumber_for_locality", "contact_ratio",
+                          "base_crossing_rings", "intermediate_regularized_levels"}) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
     ASSERT_TRUE(j["options"]["reconstruct"].contains(key));
@@ -813,6 +813,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
       EXPECT_EQ(read.contact_ratio, 0.0);  // no new pair a contact, as then
     else if (k == "base_crossing_rings")
       EXPECT_EQ(read.base_crossing_rings, -1);  // no new pair the base's crossing, as then
+    else if (k == "intermediate_regularized_levels")
+      EXPECT_EQ(read.intermediate_regularized_levels, 0);  // every coarse level solved, as then
     else
       EXPECT_FALSE(k == "retry_other_regularization" ? read.retry_other_regularization
                                                      : read.fold_repair_local_first)

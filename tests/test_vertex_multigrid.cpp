@@ -436,6 +436,11 @@ TEST(MultigridPreset, ALocalEndThatMovesTooFarIsUndone) {
   const DetailEncoding e = encode_detail(c.detail, c.base);
   ReconstructOptions ro = multigrid_reconstruct_options();
   ro.threads = 1;
+  // Every coarse level solved at the intermediate scales, as the preset did when this case was
+  // measured: with the second-finest level regularized only there (the preset since 2026-11-28,
+  // twenty-first session) this round trip's local ends move farther and are undone by the default
+  // bound too (0.278% of the diagonal off in the end, against 0.157%).
+  ro.intermediate_regularized_levels = 0;
   const ReconstructResult kept = VolumeReconstructor(e, ro).reconstruct(c.base.vertices);
   ASSERT_TRUE(kept.stats.converged);
   EXPECT_GE(kept.stats.local_ends, 1);

@@ -72,6 +72,7 @@ json options_json(const ModelOptions& o) {
             {"volume_iterations", r.volume_iterations},
             {"finest_volume_iterations", r.finest_volume_iterations},
             {"finest_intermediate_solves", r.finest_intermediate_solves},
+            {"intermediate_regularized_levels", r.intermediate_regularized_levels},
             {"retry_volume_iterations", r.retry_volume_iterations},
             {"retry_on_new_intersections", r.retry_on_new_intersections},
             {"renumber_for_locality", r.renumber_for_locality},
@@ -206,6 +207,12 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       r.contains("retry_on_new_intersections") && h.boolean(r, "retry_on_new_intersections", wr);
   // Absent in files written before 2026-11-28, whose solves kept the band's numbering.
   ro.renumber_for_locality = r.contains("renumber_for_locality") && h.boolean(r, "renumber_for_locality", wr);
+  // Absent in files written before 2026-11-28 (twenty-first session), whose solves solved every
+  // coarse level at every scale.
+  ro.intermediate_regularized_levels =
+      r.contains("intermediate_regularized_levels")
+          ? static_cast<int>(h.integer(r, "intermediate_regularized_levels", wr, 0, 100))
+          : 0;
   // Absent in files written before 2026-11-28 (twenty-first session), whose solves counted every
   // new pair as a fold. (check_model_options() checks the ranges.)
   ro.contact_ratio = r.contains("contact_ratio") ? h.number(r, "contact_ratio", wr) : 0.0;

@@ -43,6 +43,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"fold_repair_sweeps", &o.fold_repair_sweeps},
           {"finest_volume_iterations", &o.finest_volume_iterations},
           {"finest_intermediate_solves", &o.finest_intermediate_solves},
+          {"intermediate_regularized_levels", &o.intermediate_regularized_levels},
           {"regularization_iterations", &o.regularization_iterations},
           {"coarse_regularization_iterations", &o.coarse_regularization_iterations},
           {"coarsest_regularization_iterations", &o.coarsest_regularization_iterations},

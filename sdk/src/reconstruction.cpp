@@ -936,10 +936,19 @@ class VolumeReconstructor::Impl {
   // A level's share of a clean start's work (ReconstructOptions::progress): its prisms, three
   // times the finest level's at the full scale (the cycles and the polish), a tenth where it is
   // only regularized.
+  // Whether coarse level l only follows by prolongation and regularization in a clean start's
+  // intermediate pass (ReconstructOptions::intermediate_regularized_levels); never the coarsest.
+  bool regularized_only(int l, bool full_scale, bool coarse_only) const {
+    const int nl = static_cast<int>(levels_.size());
+    return coarse_only && !full_scale && l > 0 && l + 1 < nl &&
+           nl - 1 - l <= opt_.intermediate_regularized_levels;
+  }
+
   double level_work(int l, bool full_scale, bool coarse_only) const {
     const bool finest = l + 1 == static_cast<int>(levels_.size());
     const double prisms = static_cast<double>(levels_[l].faces.size());
-    if (finest && coarse_only && levels_.size() > 1) return 0.1 * prisms;
+    if ((finest && coarse_only && levels_.size() > 1) || regularized_only(l, full_scale, coarse_only))
+      return 0.1 * prisms;
     return finest && full_scale ? 3.0 * prisms : prisms;
   }
 
@@ -1540,6 +1549,13 @@ class VolumeReconstructor::Impl {
         s.work_done += level_work(l, full_scale, coarse_only);
         report(s.phase, std::min(1.0, s.work_done / s.work_total));
       };
+      if (regularized_only(l, full_scale, coarse_only)) {
+        // ReconstructOptions::intermediate_regularized_levels: the coarse levels next to the
+        // finest follow by regularization too at the intermediate scales.
+        regularize_sweeps(L, ls, st);
+        level_done();
+        continue;
+      }
       if (finest && coarse_only && nl > 1) {
         // Section 5: the finest level follows by regularization only.
         regularize_sweeps(L, s, st);
@@ -2215,6 +2231,7 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.coarsest_max_cycles = 10;
   o.volume_iterations = 1;
   o.finest_intermediate_solves = false;
+  o.intermediate_regularized_levels = 1;
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.25;
   o.multigrid.retry_iterations = 20;
@@ -2253,6 +2270,7 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(o.contact_ratio == 0 || (o.contact_ratio >= 1 && o.contact_ratio <= 1e6), "contact_ratio",
         o.contact_ratio, "0 (off) or 1-1e6");
   count(o.base_crossing_rings, "base_crossing_rings", -1, 1000, "-1: off");
+  count(o.intermediate_regularized_levels, "intermediate_regularized_levels", 0, 100);
   count(o.fold_repair_rounds, "fold_repair_rounds", 0, 1000);
   count(o.fold_repair_local_rings, "fold_repair_local_rings", 0, 1000);
   count(o.fold_repair_local_rounds, "fold_repair_local_rounds", -1, 1000, "-1: fold_repair_rounds");

@@ -555,6 +555,7 @@ int main(int argc, char** argv) {
             {"volume_iterations", ro.volume_iterations},
             {"finest_volume_iterations", ro.finest_volume_iterations},
             {"finest_intermediate_solves", ro.finest_intermediate_solves},
+            {"intermediate_regularized_levels", ro.intermediate_regularized_levels},
             {"retry_volume_iterations", ro.retry_volume_iterations},
             {"retry_on_new_intersections", ro.retry_on_new_intersections},
             {"renumber_for_locality", ro.renumber_for_locality},

@@ -246,6 +246,17 @@ struct ReconstructOptions {
   //! 1.79 s, bumps / rings / cuboid, 0 new pairs either way; see sdk/docs/engine-log.md,
   //! 2026-11-27, ninth session).
   bool finest_intermediate_solves = true;
+  //! With finest_intermediate_solves false: at the clean start's intermediate volume scales, this
+  //! many coarse levels next to the finest follow the coarser levels' solution by prolongation
+  //! and m regularization sweeps too, as the finest does, instead of being solved (never the
+  //! coarsest; drags and warm starts solve every coarse level). The multigrid preset takes 1: the
+  //! second-finest level's cycles at the intermediate scales took about 70% of its time, whose
+  //! volumes the full scale solves anyway. Measured (2026-11-28, twenty-first session,
+  //! strata_bench --case bumps --sizes 100000,1000000 --jitter 0.4 --solver multigrid --repeat 3,
+  //! one thread): 100k 0.581 -> 0.522 s, 1M 6.90 -> 6.11 s (the second-finest level 1.06 -> 0.40
+  //! s), CG iterations 205 -> 181 and 268 -> 242, max error 4.84e-4 -> 4.66e-4 and 4.99e-4 ->
+  //! 4.99e-4, 0 new pairs either way. 0: every coarse level solved (.strata files written before).
+  int intermediate_regularized_levels = 0;
   //! m: regularization sweeps per cycle on the finest level.
   int regularization_iterations = 2;
   //! m on the coarse levels of the clean-start solve (cheap there: a quarter of the vertices and
