@@ -72,4 +72,8 @@ TEST(Contact, TheSheetsOfAUAreAContactAndNeighboursOnOneSheetAreNot) {
   // With a ratio so large that the bound exceeds the way around, no pair is a contact.
   internal::ContactTest lenient({&s.faces, &adj.face_offsets, &vf, &s.points}, 100.0);
   EXPECT_FALSE(lenient(lower, upper));
+  // A spent budget of visits answers "fold" (the solver's retries as before): the contact above
+  // needs more than a few of them.
+  internal::ContactTest spent({&s.faces, &adj.face_offsets, &vf, &s.points}, 3.0, 1e-3);
+  EXPECT_FALSE(spent(lower, upper));
 }

@@ -375,6 +375,8 @@ static long long expect_fell_back_to(const FoldingRings& f, const ReconstructOpt
   const ReconstructResult r = f.solve(o);
   other.tolerance = o.tolerance;
   other.fallback_schedule = false;
+  // The caller's, as its fold repair options (.strata files written before solve as then).
+  other.intermediate_regularized_levels = o.intermediate_regularized_levels;
   const ReconstructResult theirs = f.solve(other);
   EXPECT_EQ(r.stats.fallbacks, 1);
   EXPECT_TRUE(r.stats.fallback_kept);

@@ -979,15 +979,13 @@ class VolumeReconstructor::Impl {
     // Those the fold repair takes on: all but the contacts (local smoothing may still undo a pair
     // next to a crossing of the base: the camel's neck bend, 2 such pairs).
     std::size_t repairable() const { return new_pairs - contact_pairs; }
-    // Fewer folds first, then fewer repairable pairs, then fewer new pairs.
-    bool fewer_pairs(const Outcome& o) const {
-      return std::make_tuple(folds(), repairable(), new_pairs) <
-             std::make_tuple(o.folds(), o.repairable(), o.new_pairs);
-    }
-    bool no_more_pairs(const Outcome& o) const { return !o.fewer_pairs(*this); }
     bool better_than(const Outcome& o) const {
       if (converged != o.converged) return converged;
-      if (converged) return fewer_pairs(o);
+      // By all the new pairs, as before the base's pairs were told apart: they only decide
+      // whether another schedule runs. (Choosing by the other pairs first kept 1,101 new pairs,
+      // none of them a fold, over 567 with 6 on the camel's band 2 when its top bends into the
+      // body.)
+      if (converged) return new_pairs < o.new_pairs;
       // Two unconverged results whose pairs were counted (a fold repair after a solve that ends
       // above the tolerance): better only if worse in neither, so that a repair never trades
       // volume accuracy for folds or back. Errors within 1% of the tolerance, or within
@@ -998,8 +996,9 @@ class VolumeReconstructor::Impl {
       // to 6.3e-14 with 56 new pairs, repaired 4.2e-14 to 5.2e-14 with none, by OpenBLAS's kernel
       // set; with 1% of the tolerance alone the Zen and Haswell kernels' repairs were refused).
       if (counted && o.counted)
-        return (fewer_pairs(o) && max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
-               (no_more_pairs(o) && max_error < o.max_error);
+        return (new_pairs < o.new_pairs &&
+                max_error <= o.max_error + std::max(1e-2 * tolerance, kRoundingError)) ||
+               (new_pairs <= o.new_pairs && max_error < o.max_error);
       return max_error < o.max_error;
     }
   };
@@ -1163,6 +1162,10 @@ class VolumeReconstructor::Impl {
       o.fold_repair_local_rings = opt_.fold_repair_local_rings;
       o.fold_repair_local_rounds = opt_.fold_repair_local_rounds;
       o.renumber_for_locality = false;  // enc_ is in the solver's numbering already
+      // The caller's, as the fold repair's: a .strata file written before solves as then, and the
+      // default options (0) fall back to the preset with every coarse level solved, as before the
+      // preset took 1 (with 1 the camel's top bend kept 781 new pairs on band 2 against 567).
+      o.intermediate_regularized_levels = opt_.intermediate_regularized_levels;
       o.contact_ratio = opt_.contact_ratio;
       o.base_crossing_rings = opt_.base_crossing_rings;
       o.progress = opt_.progress;

@@ -127,8 +127,9 @@ struct ReconstructOptions {
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! New intersecting pairs that the edited base explains are not the solver's folds: they
-  //! trigger no retry, fold repair or fallback schedule (no schedule undoes what is in the base),
-  //! and the result is chosen by its other new pairs first. Two kinds, counted apart in
+  //! trigger no retry or fallback schedule (no schedule undoes what is in the base), and the fold
+  //! repair takes on only the second kind below; the result kept is chosen by all its new pairs,
+  //! as before. Two kinds, counted apart in
   //! ReconstructStats::contact_pairs and base_crossing_pairs:
   //! - a contact: the shortest path between the pair's two triangles' base points along the
   //!   detail's edges (over the edited base) is longer than contact_ratio times their straight
@@ -175,7 +176,8 @@ struct ReconstructOptions {
   //! If a clean-start solve still has new intersecting pairs after its retries and fold repairs,
   //! solve once more with the other solver's preset (the multigrid preset,
   //! multigrid_reconstruct_options(), for a step_solver other than Multigrid; these defaults for
-  //! Multigrid), with the same tolerance and threads, and keep the better result (converged first,
+  //! Multigrid), with the same tolerance, threads, fold repair options and
+  //! intermediate_regularized_levels, and keep the better result (converged first,
   //! then fewer new pairs; Outcome as for the retry). It builds that solver's hierarchy on first use
   //! and costs a second solve, only then. Why: which schedule folds depends on the mesh, and the
   //! two presets fail on different ones. Measured (2026-11-26): the defaults left 18 new pairs on

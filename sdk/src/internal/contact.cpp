@@ -6,8 +6,11 @@
 
 namespace strata::internal {
 
-ContactTest::ContactTest(const BaseGraph& graph, double ratio)
-    : g_(graph), ratio_(ratio), dist_(graph.vf_offsets->size() - 1, INFINITY) {
+ContactTest::ContactTest(const BaseGraph& graph, double ratio, double visits_per_vertex)
+    : g_(graph),
+      ratio_(ratio),
+      visits_left_(visits_per_vertex * static_cast<double>(graph.vf_offsets->size() - 1)),
+      dist_(graph.vf_offsets->size() - 1, INFINITY) {
   assert(ratio >= 1.0);
 }
 
@@ -51,6 +54,11 @@ bool ContactTest::within(int a, int b, double bound) {
   for (int v : (*g_.faces)[static_cast<std::size_t>(a)]) relax(v, 0.0);
   bool found = false;
   while (!heap_.empty()) {
+    if (!(visits_left_ > 0)) {
+      found = true;  // the budget is spent: a fold, as if every new pair were one
+      break;
+    }
+    visits_left_ -= 1;
     const auto [f, v] = heap_.top();
     heap_.pop();
     if (f > bound) break;  // every path through the vertices left is longer

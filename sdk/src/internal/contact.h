@@ -36,11 +36,15 @@ struct BaseGraph {
 //! a geodesic by less than 1.5); across a contact it runs around through the base. An A* search
 //! (the straight distance to the other face as its estimate) stops at that bound, so a fold costs
 //! about its path's vertices and a contact the ellipse within the bound. Answers are remembered
-//! per pair (the base points are fixed while a reconstruction checks its results).
+//! per pair (the base points are fixed while a reconstruction checks its results). The searches
+//! share a budget of vertex visits, `visits_per_vertex` times the vertex count: a result with
+//! millions of new pairs (a solve gone wrong) costs a few passes over the mesh, not millions of
+//! searches. Once it is spent every further pair counts as a fold, the answer that leaves the
+//! solver's retries as they were (deterministic: the pairs come sorted).
 class ContactTest {
  public:
   //! \pre the graph's arrays are consistent; ratio >= 1.
-  ContactTest(const BaseGraph& graph, double ratio);
+  ContactTest(const BaseGraph& graph, double ratio, double visits_per_vertex = 20.0);
   //! \pre a and b are face indices, a != b.
   bool operator()(int a, int b);
 
@@ -48,6 +52,7 @@ class ContactTest {
   bool within(int a, int b, double bound);
   BaseGraph g_;
   double ratio_;
+  double visits_left_;        // the searches' budget (vertices taken off the heap)
   std::vector<double> dist_;  // per vertex: the path length found so far (infinite: none)
   std::vector<int> touched_;  // the vertices whose dist_ a search set
   std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>, std::greater<>> heap_;
