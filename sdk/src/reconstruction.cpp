@@ -933,9 +933,6 @@ class VolumeReconstructor::Impl {
       throw Cancelled("reconstruction cancelled (ReconstructOptions::cancel)");
   }
 
-  // A level's share of a clean start's work (ReconstructOptions::progress): its prisms, three
-  // times the finest level's at the full scale (the cycles and the polish), a tenth where it is
-  // only regularized.
   // Whether coarse level l only follows by prolongation and regularization in a clean start's
   // intermediate pass (ReconstructOptions::intermediate_regularized_levels); never the coarsest.
   bool regularized_only(int l, bool full_scale, bool coarse_only) const {
@@ -944,6 +941,9 @@ class VolumeReconstructor::Impl {
            nl - 1 - l <= opt_.intermediate_regularized_levels;
   }
 
+  // A level's share of a clean start's work (ReconstructOptions::progress): its prisms, three
+  // times the finest level's at the full scale (the cycles and the polish), a tenth where it is
+  // only regularized.
   double level_work(int l, bool full_scale, bool coarse_only) const {
     const bool finest = l + 1 == static_cast<int>(levels_.size());
     const double prisms = static_cast<double>(levels_[l].faces.size());
@@ -963,7 +963,7 @@ class VolumeReconstructor::Impl {
     double max_error = 0.0;
     std::size_t new_pairs = 0;
     // Of new_pairs, those that are a contact made by the edit (ReconstructOptions::contact_ratio):
-    // no schedule or repair undoes them, so the folds alone decide retries, repair and choice.
+    // no schedule or repair undoes them, so they start no retry, repair or fallback.
     std::size_t contact_pairs = 0;
     // Of new_pairs, the others near the edited base's own new crossings (base_crossing_rings).
     std::size_t crossing_pairs = 0;
@@ -1552,16 +1552,10 @@ class VolumeReconstructor::Impl {
         s.work_done += level_work(l, full_scale, coarse_only);
         report(s.phase, std::min(1.0, s.work_done / s.work_total));
       };
-      if (regularized_only(l, full_scale, coarse_only)) {
-        // ReconstructOptions::intermediate_regularized_levels: the coarse levels next to the
-        // finest follow by regularization too at the intermediate scales.
+      // Section 5: the finest level follows by regularization only, and so do the coarse levels
+      // next to it at the intermediate scales (ReconstructOptions::intermediate_regularized_levels).
+      if ((finest && coarse_only && nl > 1) || regularized_only(l, full_scale, coarse_only)) {
         regularize_sweeps(L, ls, st);
-        level_done();
-        continue;
-      }
-      if (finest && coarse_only && nl > 1) {
-        // Section 5: the finest level follows by regularization only.
-        regularize_sweeps(L, s, st);
         level_done();
         continue;
       }
