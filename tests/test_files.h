@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -16,9 +17,12 @@ class ScratchDir {
   explicit ScratchDir(const std::string& prefix = "strata_test") {
     static int counter = 0;
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = info ? info->name() : "x";
+    // A parameterized test's name is "Test/param": one directory, not a nested pair whose
+    // parent the destructor would leave behind.
+    std::replace(name.begin(), name.end(), '/', '_');
     path_ = std::filesystem::temp_directory_path() /
-            (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-             (info ? std::string(info->name()) : std::string("x")));
+            (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" + name);
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
