@@ -650,14 +650,6 @@ TEST(IntersectBenchmark, Sphere100k) {
   measure("icosphere level 6", ico);
 }
 
-// Run with --gtest_also_run_disabled_tests.
-TEST(IntersectBenchmark, DISABLED_Sphere1M) {
-  const TriMesh m = uv_sphere(1000, 501);
-  ASSERT_EQ(m.num_faces(), 1000000);
-  measure("UV sphere", m);
-  const TriMesh a = icosphere(6);
-  measure("two overlapping icospheres level 6", concatenate(a, translated(a, Vec3(0.5, 0.1, 0.05))));
-}
 
 }  // namespace
 }  // namespace strata
