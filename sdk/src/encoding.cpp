@@ -151,10 +151,11 @@ class Encoder {
 // The regularization weights of the detail at rest (section 4.2): normalized clamped cotangent
 // weights of its own connectivity.
 void set_regularization_weights(DetailEncoding& e) {
-  const internal::Adjacency adj = internal::build_adjacency(e.num_detail_vertices(), e.detail_faces);
-  e.weight_offsets = adj.neighbor_offsets;
-  e.weight_neighbors = adj.neighbors;
-  e.weights = internal::normalized_cotan_weights(e.detail_rest, e.detail_faces, adj);
+  const auto threads = internal::Threads::Caller;
+  internal::Adjacency adj = internal::build_adjacency(e.num_detail_vertices(), e.detail_faces, threads);
+  e.weights = internal::normalized_cotan_weights(e.detail_rest, e.detail_faces, adj, threads);
+  e.weight_offsets = std::move(adj.neighbor_offsets);
+  e.weight_neighbors = std::move(adj.neighbors);
 }
 
 // What every encoding stores once its base points are known (sections 3 and 4.2): the base
@@ -167,25 +168,36 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
   e.base_rest_tangents = frames.tangents;
   e.normal_offsets.resize(n);
   e.tangential_offsets.resize(n);
-  for (int i = 0; i < n; ++i) {
-    const Vec3 d = detail.vertices[i] - frames.points[i];
-    const Vec3& nrm = frames.normals[i];
-    const Vec3& t = frames.tangents[i];
-    e.normal_offsets[i] = d.dot(nrm);
-    const Vec3 tang = d - e.normal_offsets[i] * nrm;
-    // Normal projections are parallel up to round-off: keep exact zeros for them, so the
-    // regularizer's rest state is exactly the paper's.
-    const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
-    e.tangential_offsets[i] =
-        projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
-    if (!projected) e.report.max_tangential_offset = std::max(e.report.max_tangential_offset, tang.norm());
-  }
-  e.target_volumes.resize(detail.faces.size());
-  for (std::size_t j = 0; j < detail.faces.size(); ++j) {
-    const Face& f = detail.faces[j];
-    e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
-                                       frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
-  }
+  // Per vertex and per face on the caller's threads: every entry is independent (and a max is
+  // the same in any order), so the encoding does not depend on them. Serial, these loops and the
+  // weights were most of a scattered 1M-prism encoding's time.
+  std::vector<double> max_tangential(n, 0.0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i != r.end(); ++i) {
+      const Vec3 d = detail.vertices[i] - frames.points[i];
+      const Vec3& nrm = frames.normals[i];
+      const Vec3& t = frames.tangents[i];
+      e.normal_offsets[i] = d.dot(nrm);
+      const Vec3 tang = d - e.normal_offsets[i] * nrm;
+      // Normal projections are parallel up to round-off: keep exact zeros for them, so the
+      // regularizer's rest state is exactly the paper's.
+      const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
+      e.tangential_offsets[i] =
+          projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
+      if (!projected) max_tangential[i] = tang.norm();
+    }
+  });
+  for (double t : max_tangential)
+    e.report.max_tangential_offset = std::max(e.report.max_tangential_offset, t);
+  const int m = static_cast<int>(detail.faces.size());
+  e.target_volumes.resize(m);
+  tbb::parallel_for(tbb::blocked_range<int>(0, m, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int j = r.begin(); j != r.end(); ++j) {
+      const Face& f = detail.faces[j];
+      e.target_volumes[j] = prism_volume(detail.vertices[f[0]], detail.vertices[f[1]], detail.vertices[f[2]],
+                                         frames.points[f[0]], frames.points[f[1]], frames.points[f[2]]);
+    }
+  });
   set_regularization_weights(e);
 }
 

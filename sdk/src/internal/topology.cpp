@@ -1,5 +1,8 @@
 #include "internal/topology.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -8,7 +11,24 @@
 
 namespace strata::internal {
 
-Adjacency build_adjacency(int nv, const std::vector<Face>& faces) {
+namespace {
+
+// f(i) for i in [0, n): with Threads::Caller on TBB's threads of the caller's task arena, else
+// serially. Each index writes only its own outputs, so the result is the same either way.
+template <class F>
+void for_each_index(Threads threads, int n, F&& f) {
+  if (threads == Threads::Serial || n < 8192) {
+    for (int i = 0; i < n; ++i) f(i);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 2048), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i != r.end(); ++i) f(i);
+  });
+}
+
+}  // namespace
+
+Adjacency build_adjacency(int nv, const std::vector<Face>& faces, Threads threads) {
   Adjacency a;
   a.face_offsets.assign(nv + 1, 0);
   for (const Face& f : faces)
@@ -23,22 +43,29 @@ Adjacency build_adjacency(int nv, const std::vector<Face>& faces) {
       a.faces[slot] = fi;
       a.corners[slot] = static_cast<std::uint8_t>(c);
     }
-  // Neighbours: the other two corners of every incident face, deduplicated.
+  // Neighbours: the other two corners of every incident face, deduplicated. Each vertex's sorted
+  // list goes to its own stretch of a scratch array (two slots per incident face), then the
+  // stretches are packed: both passes per vertex, so they can run on threads.
+  std::vector<int> lists(2 * a.faces.size());
   a.neighbor_offsets.assign(nv + 1, 0);
-  std::vector<int> scratch;
-  for (int v = 0; v < nv; ++v) {
-    scratch.clear();
+  for_each_index(threads, nv, [&](int v) {
+    const auto b = lists.begin() + 2 * a.face_offsets[v];
+    auto e = b;
     for (int k = a.face_offsets[v]; k < a.face_offsets[v + 1]; ++k) {
       const Face& f = faces[a.faces[k]];
       const int c = a.corners[k];
-      scratch.push_back(f[(c + 1) % 3]);
-      scratch.push_back(f[(c + 2) % 3]);
+      *e++ = f[(c + 1) % 3];
+      *e++ = f[(c + 2) % 3];
     }
-    std::sort(scratch.begin(), scratch.end());
-    scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
-    a.neighbors.insert(a.neighbors.end(), scratch.begin(), scratch.end());
-    a.neighbor_offsets[v + 1] = static_cast<int>(a.neighbors.size());
-  }
+    std::sort(b, e);
+    a.neighbor_offsets[v + 1] = static_cast<int>(std::unique(b, e) - b);
+  });
+  for (int i = 0; i < nv; ++i) a.neighbor_offsets[i + 1] += a.neighbor_offsets[i];
+  a.neighbors.resize(a.neighbor_offsets[nv]);
+  for_each_index(threads, nv, [&](int v) {
+    std::copy_n(lists.begin() + 2 * a.face_offsets[v], a.neighbor_offsets[v + 1] - a.neighbor_offsets[v],
+                a.neighbors.begin() + a.neighbor_offsets[v]);
+  });
   return a;
 }
 
@@ -70,38 +97,60 @@ std::vector<char> boundary_vertices(int nv, const std::vector<Face>& faces) {
   return out;
 }
 
-std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
-                                          const Adjacency& adj) {
-  std::vector<double> w(adj.neighbors.size(), 0.0);
-  auto slot = [&](int v, int u) {
-    const auto b = adj.neighbors.begin() + adj.neighbor_offsets[v];
-    const auto e = adj.neighbors.begin() + adj.neighbor_offsets[v + 1];
-    return static_cast<std::size_t>(std::lower_bound(b, e, u) - adj.neighbors.begin());
+namespace {
+
+// Half the cotangent of the angle at corner o of a face with corners x0, x1, x2, the weight it
+// gives the opposite edge; false for a degenerate corner (no weight).
+bool half_cot(const Vec3* x, int o, double& cot) {
+  const Vec3 ea = x[(o + 1) % 3] - x[o], eb = x[(o + 2) % 3] - x[o];
+  const double s = ea.cross(eb).norm();
+  if (!(s > 0.0)) return false;
+  cot = 0.5 * ea.dot(eb) / s;
+  return true;
+}
+
+// Vertex v's clamped weights, into w at v's neighbour slots. Gathered per vertex: the slot (v, u)
+// sums the angles opposite the edge (v, u) in its faces in ascending order, as a scatter over the
+// faces in order would, so the weights do not depend on the order the vertices are visited in.
+void vertex_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces, const Adjacency& adj,
+                          int v, std::vector<double>& w) {
+  const int b = adj.neighbor_offsets[v], e = adj.neighbor_offsets[v + 1];
+  auto slot = [&](int u) {
+    return static_cast<std::size_t>(
+        std::lower_bound(adj.neighbors.begin() + b, adj.neighbors.begin() + e, u) - adj.neighbors.begin());
   };
-  for (const Face& f : faces)
-    for (int c = 0; c < 3; ++c) {
-      // The angle at corner c weighs the opposite edge (a,b).
-      const int o = f[c], a = f[(c + 1) % 3], b = f[(c + 2) % 3];
-      const Vec3 ea = x[a] - x[o], eb = x[b] - x[o];
-      const double s = ea.cross(eb).norm();
-      if (!(s > 0.0)) continue;
-      const double cot = 0.5 * ea.dot(eb) / s;
-      w[slot(a, b)] += cot;
-      w[slot(b, a)] += cot;
-    }
-  for (double& v : w) v = std::max(v, 0.0);
+  for (int k = b; k < e; ++k) w[k] = 0.0;
+  for (int k = adj.face_offsets[v]; k < adj.face_offsets[v + 1]; ++k) {
+    const Face& f = faces[adj.faces[k]];
+    const int c = adj.corners[k];
+    const Vec3 p[3] = {x[f[0]], x[f[1]], x[f[2]]};
+    double cot;
+    // The edge (v, f[c + 1]) is opposite corner c + 2, the edge (v, f[c + 2]) corner c + 1.
+    if (half_cot(p, (c + 2) % 3, cot)) w[slot(f[(c + 1) % 3])] += cot;
+    if (half_cot(p, (c + 1) % 3, cot)) w[slot(f[(c + 2) % 3])] += cot;
+  }
+  for (int k = b; k < e; ++k) w[k] = std::max(w[k], 0.0);
+}
+
+}  // namespace
+
+std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
+                                          const Adjacency& adj, Threads threads) {
+  std::vector<double> w(adj.neighbors.size());
+  for_each_index(threads, adj.num_vertices(), [&](int v) { vertex_cotan_weights(x, faces, adj, v, w); });
   return w;
 }
 
 std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const std::vector<Face>& faces,
-                                             const Adjacency& adj) {
-  std::vector<double> w = clamped_cotan_weights(x, faces, adj);
-  for (int v = 0; v < adj.num_vertices(); ++v) {
+                                             const Adjacency& adj, Threads threads) {
+  std::vector<double> w(adj.neighbors.size());
+  for_each_index(threads, adj.num_vertices(), [&](int v) {
+    vertex_cotan_weights(x, faces, adj, v, w);
     const int b = adj.neighbor_offsets[v], e = adj.neighbor_offsets[v + 1];
     double sum = 0.0;
     for (int k = b; k < e; ++k) sum += w[k];
     for (int k = b; k < e; ++k) w[k] = sum > 0.0 ? w[k] / sum : 1.0 / (e - b);
-  }
+  });
   return w;
 }
 

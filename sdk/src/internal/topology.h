@@ -21,7 +21,13 @@ struct Adjacency {
   int num_vertices() const { return static_cast<int>(face_offsets.size()) - 1; }
 };
 
-Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces);
+//! Where the per-vertex loops below run: on the calling thread, or on TBB's threads of the
+//! caller's task arena (the encoding's; the solver's set-up keeps to its own thread count). The
+//! results are the same bit for bit.
+enum class Threads { Serial, Caller };
+
+Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces,
+                          Threads threads = Threads::Serial);
 
 //! Throws InvalidInput "WHAT: face F has vertex index V out of range (N vertices)" for the first
 //! index of \p faces outside [0, num_vertices): what build_adjacency() and the per-vertex arrays
@@ -41,12 +47,13 @@ std::vector<char> boundary_vertices(int num_vertices, const std::vector<Face>& f
 //! Cotangent weights (cot alpha + cot beta) / 2 of each vertex's neighbours, clamped to be
 //! non-negative. Aligned with Adjacency::neighbors.
 std::vector<double> clamped_cotan_weights(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
-                                          const Adjacency& adj);
+                                          const Adjacency& adj, Threads threads = Threads::Serial);
 
 //! Cotangent weights of each vertex's neighbours on the mesh (positions, faces), clamped to be
 //! non-negative and normalized to sum to 1 per vertex (uniform where all clamp to zero). Aligned
 //! with Adjacency::neighbors.
 std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& positions,
-                                             const std::vector<Face>& faces, const Adjacency& adj);
+                                             const std::vector<Face>& faces, const Adjacency& adj,
+                                             Threads threads = Threads::Serial);
 
 }  // namespace strata::internal
