@@ -103,8 +103,8 @@ void check_encode_options(const EncodeOptions& options);
 //! to the base's interpolated (Phong) vertex normal at q_i, then stores the target volumes, the
 //! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
 //! have any connectivity. Where no such point exists near the closest point, the closest point
-//! is used and counted in the report. The projections run on TBB's threads (the caller's task
-//! arena); the result does not depend on their number.
+//! is used and counted in the report. The projections, the target volumes and the weights run on
+//! TBB's threads (the caller's task arena); the result does not depend on their number.
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).
 //! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates, or
 //! an option is out of range (check_encode_options()), or a base point's face has no normal
