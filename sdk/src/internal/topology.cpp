@@ -43,27 +43,42 @@ Adjacency build_adjacency(int nv, const std::vector<Face>& faces, Threads thread
       a.faces[slot] = fi;
       a.corners[slot] = static_cast<std::uint8_t>(c);
     }
-  // Neighbours: the other two corners of every incident face, deduplicated. Each vertex's sorted
-  // list goes to its own stretch of a scratch array (two slots per incident face), then the
-  // stretches are packed: both passes per vertex, so they can run on threads.
-  std::vector<int> lists(2 * a.faces.size());
-  a.neighbor_offsets.assign(nv + 1, 0);
-  for_each_index(threads, nv, [&](int v) {
-    const auto b = lists.begin() + 2 * a.face_offsets[v];
-    auto e = b;
+  // Neighbours: the other two corners of every incident face, deduplicated and sorted.
+  auto candidates = [&](int v, std::vector<int>::iterator out) {
     for (int k = a.face_offsets[v]; k < a.face_offsets[v + 1]; ++k) {
       const Face& f = faces[a.faces[k]];
       const int c = a.corners[k];
-      *e++ = f[(c + 1) % 3];
-      *e++ = f[(c + 2) % 3];
+      *out++ = f[(c + 1) % 3];
+      *out++ = f[(c + 2) % 3];
     }
+    return out;
+  };
+  a.neighbor_offsets.assign(nv + 1, 0);
+  if (threads == Threads::Serial) {
+    std::vector<int> scratch;
+    for (int v = 0; v < nv; ++v) {
+      scratch.resize(2 * static_cast<std::size_t>(a.face_offsets[v + 1] - a.face_offsets[v]));
+      std::sort(scratch.begin(), candidates(v, scratch.begin()));
+      scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+      a.neighbors.insert(a.neighbors.end(), scratch.begin(), scratch.end());
+      a.neighbor_offsets[v + 1] = static_cast<int>(a.neighbors.size());
+    }
+    return a;
+  }
+  // On threads: each vertex's list goes to its own stretch of a scratch array (two slots per
+  // incident face), then the stretches are packed (a temporary of 24 bytes a face, which the
+  // serial path, the solver's set-up, does without).
+  std::vector<int> lists(2 * a.faces.size());
+  auto stretch = [&](int v) { return lists.begin() + 2 * static_cast<std::ptrdiff_t>(a.face_offsets[v]); };
+  for_each_index(threads, nv, [&](int v) {
+    const auto b = stretch(v), e = candidates(v, b);
     std::sort(b, e);
     a.neighbor_offsets[v + 1] = static_cast<int>(std::unique(b, e) - b);
   });
   for (int i = 0; i < nv; ++i) a.neighbor_offsets[i + 1] += a.neighbor_offsets[i];
   a.neighbors.resize(a.neighbor_offsets[nv]);
   for_each_index(threads, nv, [&](int v) {
-    std::copy_n(lists.begin() + 2 * a.face_offsets[v], a.neighbor_offsets[v + 1] - a.neighbor_offsets[v],
+    std::copy_n(stretch(v), a.neighbor_offsets[v + 1] - a.neighbor_offsets[v],
                 a.neighbors.begin() + a.neighbor_offsets[v]);
   });
   return a;
