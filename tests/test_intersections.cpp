@@ -650,6 +650,5 @@ TEST(IntersectBenchmark, Sphere100k) {
   measure("icosphere level 6", ico);
 }
 
-
 }  // namespace
 }  // namespace strata
