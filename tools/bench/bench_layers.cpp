@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "stats_json.h"
 #include "strata/layers/model.h"
 #include "strata/mesh_io.h"
 #include "strata/reconstruction.h"
@@ -152,21 +153,8 @@ int main(int argc, char** argv) {
                            {"rigid_vertices", b.rigid_vertices},
                            {"max_relative_error", b.volume.max_relative_error},
                            {"seconds", b.seconds},
-                           {"stats",
-                            {{"levels", b.stats.levels},
-                             {"cycles", b.stats.cycles},
-                             {"cg_iterations", b.stats.cg_iterations},
-                             {"factorizations", b.stats.factorizations},
-                             {"retries", b.stats.retries},
-                             {"fallbacks", b.stats.fallbacks},
-                             {"fold_repairs", b.stats.fold_repairs},
-                             {"new_intersecting_pairs", b.stats.new_intersecting_pairs},
-                             {"contact_pairs", b.stats.contact_pairs},
-                             {"base_crossing_pairs", b.stats.base_crossing_pairs},
-                             {"renumbered", b.stats.renumbered},
-                             {"seconds_levels", b.stats.seconds_levels},
-                             {"seconds_polish", b.stats.seconds_polish},
-                             {"seconds_folds", b.stats.seconds_folds}}}});
+                           {"stats", strata::tools::stats_json(b.stats)},
+                           {"solve_phases", strata::tools::solve_phases_json(b.stats)}});
       r["bend_band0_rebuilt"] = rebuilt;
       t = Clock::now();
       back.set_amplitude(1, 0.0);

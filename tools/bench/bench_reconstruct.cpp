@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "paper_cases.h"
+#include "stats_json.h"
 #include "strata/encoding.h"
 #include "strata/intersections.h"
 #include "strata/metrics.h"
@@ -76,11 +77,6 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
-
-// A solve's phases (ReconstructStats::seconds_levels, _polish, _folds).
-json phases_json(const ReconstructStats& st) {
-  return json{{"levels", st.seconds_levels}, {"polish", st.seconds_polish}, {"folds", st.seconds_folds}};
 }
 
 long long max_rss_bytes() {
@@ -250,7 +246,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   // medians in place of the first run's.
   std::vector<double> wall{sec["reconstruct"].get<double>()}, cpus{cpu["reconstruct"].get<double>()},
       solves{st.seconds_solve}, frame_secs{st.seconds_frames};
-  std::vector<json> phases{phases_json(st)};
+  std::vector<json> phases{strata::tools::solve_phases_json(st)};
   for (int k = 1; k < args.repeat; ++k) {
     const auto t0 = Clock::now();
     const double c0 = cpu_seconds();
@@ -259,7 +255,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
     cpus.push_back(cpu_seconds() - c0);
     solves.push_back(again.stats.seconds_solve);
     frame_secs.push_back(again.stats.seconds_frames);
-    phases.push_back(phases_json(again.stats));
+    phases.push_back(strata::tools::solve_phases_json(again.stats));
     if (again.positions != r.positions)
       throw std::runtime_error("run " + std::to_string(k + 1) +
                                " of --repeat gave other positions than the first");
@@ -313,35 +309,9 @@ json run_size(const Args& args, int size, long long parent_rss) {
               {"detail_vertices", e.num_detail_vertices()},
               {"base_vertices", base_vertices},
               {"base_faces", base_faces},
-              {"levels", st.levels},
-              {"level_vertices", st.level_vertices},
-              {"level_faces", st.level_faces},
-              {"renumbered", st.renumbered},
               {"seconds", sec},
               {"cpu_seconds", cpu},
-              {"stats",
-               {{"cycles", st.cycles},
-                {"volume_sweeps", st.volume_sweeps},
-                {"regularization_sweeps", st.regularization_sweeps},
-                {"cg_iterations", st.cg_iterations},
-                {"factorizations", st.factorizations},
-                {"local_factorizations", st.local_factorizations},
-                {"local_ends", st.local_ends},
-                {"local_ends_undone", st.local_ends_undone},
-                {"max_local_end_prisms", st.max_local_end_prisms},
-                {"retries", st.retries},
-                {"fallbacks", st.fallbacks},
-                {"fallback_kept", st.fallback_kept},
-                {"fold_repairs", st.fold_repairs},
-                {"fold_repair_polishes", st.fold_repair_polishes},
-                {"solver_new_intersecting_pairs", st.new_intersecting_pairs},
-                {"contact_pairs", st.contact_pairs},
-                {"base_crossing_pairs", st.base_crossing_pairs},
-                {"final_sweeps", st.final_sweeps},
-                {"finest_cycles_per_scale", st.finest_cycles_per_scale},
-                {"constraint_updates", st.constraint_updates},
-                {"solver_max_relative_error", st.max_relative_error},
-                {"converged", st.converged}}},
+              {"stats", strata::tools::stats_json(st)},
               {"throughput",
                {{"constraint_updates_per_second", static_cast<double>(st.constraint_updates) / solve},
                 {"prisms_per_second_per_multigrid_pass",

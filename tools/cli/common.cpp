@@ -16,6 +16,7 @@
 #include <sstream>
 #include <utility>
 
+#include "stats_json.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
@@ -491,41 +492,11 @@ json intersections_json(std::size_t input_pairs, const MethodOutcome& o, double 
 }
 
 json iterations_json(const std::optional<ReconstructStats>& stats) {
-  if (!stats) return nullptr;
-  const ReconstructStats& s = *stats;
-  return json{{"levels", s.levels},
-              {"level_vertices", s.level_vertices},
-              {"level_faces", s.level_faces},
-              {"renumbered", s.renumbered},
-              {"cycles", s.cycles},
-              {"finest_cycles_per_scale", s.finest_cycles_per_scale},
-              {"volume_sweeps", s.volume_sweeps},
-              {"regularization_sweeps", s.regularization_sweeps},
-              {"cg_iterations", s.cg_iterations},
-              {"factorizations", s.factorizations},
-              {"local_factorizations", s.local_factorizations},
-              {"local_ends", s.local_ends},
-              {"local_ends_undone", s.local_ends_undone},
-              {"max_local_end_prisms", s.max_local_end_prisms},
-              {"retries", s.retries},
-              {"fallbacks", s.fallbacks},
-              {"fallback_kept", s.fallback_kept},
-              {"fold_repairs", s.fold_repairs},
-              {"fold_repair_polishes", s.fold_repair_polishes},
-              {"solver_new_intersecting_pairs", s.new_intersecting_pairs},
-              {"solver_contact_pairs", s.contact_pairs},
-              {"solver_base_crossing_pairs", s.base_crossing_pairs},
-              {"final_sweeps", s.final_sweeps},
-              {"constraint_updates", s.constraint_updates},
-              {"solver_max_relative_error", s.max_relative_error},
-              {"solver_rms_relative_error", s.rms_relative_error},
-              {"converged", s.converged}};
+  return stats ? tools::stats_json(*stats) : json(nullptr);
 }
 
 json solve_phases_json(const std::optional<ReconstructStats>& stats) {
-  if (!stats) return nullptr;
-  return json{
-      {"levels", stats->seconds_levels}, {"polish", stats->seconds_polish}, {"folds", stats->seconds_folds}};
+  return stats ? tools::solve_phases_json(*stats) : json(nullptr);
 }
 
 json timing_json(const PhaseTimes& t) {

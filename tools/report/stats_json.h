@@ -1,0 +1,17 @@
+// The solver's statistics as JSON, one mapping for the tools' reports (the CLI's `iterations`
+// and `solve_phases_seconds`, and the benchmark programs' per-run and per-band stats).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "strata/reconstruction.h"
+
+namespace strata::tools {
+
+//! Every counter of \p stats, under the names README's *Report fields* lists for `iterations`.
+nlohmann::json stats_json(const ReconstructStats& stats);
+
+//! The solve's phases in seconds: `levels` (coarsest first), `polish`, `folds`.
+nlohmann::json solve_phases_json(const ReconstructStats& stats);
+
+}  // namespace strata::tools
