@@ -66,7 +66,8 @@ cmake --build build-asan -j"$JOBS" --target strata_tests strata strata_bench str
   strata_bench_layers
 
 section "fast tests under ASan + UBSan (excluding: $ASAN_EXCLUDE)"
-# A sanitizer report exits with a code no test expects, so the CLI's error-path tests catch it too.
+# A sanitizer report exits with a code no test expects (86, 87), and the CLI scripts' error paths
+# require the exact code (1 or 2; tests/cli/lib/expect.sh), so they catch it too.
 # STRATA_TEST_TIME_SCALE stretches the CLI scripts' own hang limits: the instrumented build runs the
 # bounded quadratic searches about 30x slower (bad_input.sh's sheared sheet: 34 s on two free cores,
 # over its 60 s Release limit beside another test, which failed CI once).

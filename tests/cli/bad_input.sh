@@ -13,7 +13,8 @@ cd "$TMP"
 mkdir out
 failures=0
 
-# expect_fail <label> <text the message must contain> <strata arguments...>
+# expect_fail <label> <pattern the message must match (grep's basic regular expression): the file
+# and the problem> <strata arguments...>
 expect_fail() {
   local label=$1 needle=$2
   shift 2
@@ -25,7 +26,7 @@ expect_fail() {
     echo "FAIL [$label]: exit code $rc (crash?), expected 1 or 2" >&2; cat stderr.txt >&2; failures=$((failures + 1))
   elif ! grep -q "^strata: error: " stderr.txt; then
     echo "FAIL [$label]: no 'strata: error:' line on stderr:" >&2; cat stderr.txt >&2; failures=$((failures + 1))
-  elif ! grep -qF -- "$needle" stderr.txt; then
+  elif ! grep -q -- "$needle" stderr.txt; then
     echo "FAIL [$label]: message does not mention '$needle':" >&2; cat stderr.txt >&2; failures=$((failures + 1))
   fi
   if [ -n "$(ls -A out)" ]; then
@@ -58,31 +59,31 @@ PY
 cp good/detail.obj detail.xyz
 
 G=good
-expect_fail "missing detail"        missing.obj      $(rec missing.obj $G/base.obj $G/edited_base.obj)
-expect_fail "missing base"          nobase.obj       $(rec $G/detail.obj nobase.obj $G/edited_base.obj)
-expect_fail "garbage text"          garbage.obj      $(rec garbage.obj $G/base.obj $G/edited_base.obj)
-expect_fail "garbage bytes"         binary.obj       $(rec binary.obj $G/base.obj $G/edited_base.obj)
-expect_fail "truncated OBJ"         truncated.obj    $(rec truncated.obj $G/base.obj $G/edited_base.obj)
-expect_fail "NaN coordinate"        nan.obj          $(rec nan.obj $G/base.obj $G/edited_base.obj)
-expect_fail "unsupported extension" detail.xyz       $(rec detail.xyz $G/base.obj $G/edited_base.obj)
+expect_fail "missing detail"        "missing.obj: cannot open: No such file" $(rec missing.obj $G/base.obj $G/edited_base.obj)
+expect_fail "missing base"          "nobase.obj: cannot open: No such file" $(rec $G/detail.obj nobase.obj $G/edited_base.obj)
+expect_fail "garbage text"          "garbage.obj: line 2: vertex has 2 coordinates, needs 3" $(rec garbage.obj $G/base.obj $G/edited_base.obj)
+expect_fail "garbage bytes"         "binary.obj: line 1: contains a NUL byte" $(rec binary.obj $G/base.obj $G/edited_base.obj)
+expect_fail "truncated OBJ"         "truncated.obj: line [0-9]*: .*(file truncated?)" $(rec truncated.obj $G/base.obj $G/edited_base.obj)
+expect_fail "NaN coordinate"        "nan.obj: vertex 0 has a non-finite coordinate" $(rec nan.obj $G/base.obj $G/edited_base.obj)
+expect_fail "unsupported extension" "detail.xyz: unsupported mesh file extension '.xyz'" $(rec detail.xyz $G/base.obj $G/edited_base.obj)
 expect_fail "edited base +1 vertex" "extra_vertex.obj: edited base has" $(rec $G/detail.obj $G/base.obj extra_vertex.obj)
-expect_fail "edited base faces"     swapped_faces.obj $(rec $G/detail.obj $G/base.obj swapped_faces.obj)
-expect_fail "edited base = detail"  detail.obj       $(rec $G/detail.obj $G/base.obj $G/detail.obj)
-expect_fail "unknown method"        bogus            $(rec $G/detail.obj $G/base.obj $G/edited_base.obj --method bogus)
-expect_fail "vectors, bad base"     garbage.obj      $(rec $G/detail.obj garbage.obj $G/edited_base.obj --method vectors)
-expect_fail "output dir missing"    nodir/result.obj reconstruct --detail $G/detail.obj --base $G/base.obj \
+expect_fail "edited base faces"     "swapped_faces.obj: face 0 of the edited base is (1,49,48), in base" $(rec $G/detail.obj $G/base.obj swapped_faces.obj)
+expect_fail "edited base = detail"  "good/detail.obj: edited base has [0-9]* vertices, base good/base.obj has [0-9]*" $(rec $G/detail.obj $G/base.obj $G/detail.obj)
+expect_fail "unknown method"        "--method: bogus not in {volumes,vectors}" $(rec $G/detail.obj $G/base.obj $G/edited_base.obj --method bogus)
+expect_fail "vectors, bad base"     "garbage.obj: line 2: vertex has 2 coordinates, needs 3" $(rec $G/detail.obj garbage.obj $G/edited_base.obj --method vectors)
+expect_fail "output dir missing"    "nodir/result.obj: cannot write: directory nodir does not exist" reconstruct --detail $G/detail.obj --base $G/base.obj \
   --edited-base $G/edited_base.obj -o nodir/result.obj
-expect_fail "report dir missing"    nodir/r.json     reconstruct --detail $G/detail.obj --base $G/base.obj \
+expect_fail "report dir missing"    "nodir/r.json: cannot write: directory nodir does not exist" reconstruct --detail $G/detail.obj --base $G/base.obj \
   --edited-base $G/edited_base.obj -o out/result.obj --report nodir/r.json
-expect_fail "stats missing"         missing.obj      stats missing.obj
-expect_fail "stats truncated"       truncated.obj    stats --json truncated.obj
-expect_fail "cage fit missing"      missing.obj      cage fit missing.obj -o out/cage.obj
-expect_fail "cage fit truncated"    truncated.obj    cage fit truncated.obj -o out/cage.obj
-expect_fail "cage fit too many"     base.obj         cage fit $G/base.obj --faces 1000000 -o out/cage.obj
-expect_fail "cage fit output dir"   nodir/cage.obj   cage fit $G/base.obj -o out/nodir/cage.obj
+expect_fail "stats missing"         "missing.obj: cannot open: No such file" stats missing.obj
+expect_fail "stats truncated"       "truncated.obj: line [0-9]*: .*(file truncated?)" stats --json truncated.obj
+expect_fail "cage fit missing"      "missing.obj: cannot open: No such file" cage fit missing.obj -o out/cage.obj
+expect_fail "cage fit truncated"    "truncated.obj: line [0-9]*: .*(file truncated?)" cage fit truncated.obj -o out/cage.obj
+expect_fail "cage fit too many"     "good/base.obj: cage fit: the scan has [0-9]* faces, fewer than the cage's 1000000" cage fit $G/base.obj --faces 1000000 -o out/cage.obj
+expect_fail "cage fit output dir"   "out/nodir/cage.obj: cannot write: directory out/nodir does not exist" cage fit $G/base.obj -o out/nodir/cage.obj
 expect_fail "cage, no subcommand"   "subcommand is required" cage
-expect_fail "generate unknown case" sphere           generate --case sphere --out-dir out/case
-expect_fail "generate bad bend"     bend-degrees     generate --case bumps --bend-degrees 400 --out-dir out/case
+expect_fail "generate unknown case" "--case: sphere not in {bumps,rings,cuboid}" generate --case sphere --out-dir out/case
+expect_fail "generate bad bend"     "--bend-degrees: must be 0 to 360, not 400" generate --case bumps --bend-degrees 400 --out-dir out/case
 # generate's three meshes land together: with the third unwritable (a directory in its place),
 # detail.obj was left behind.
 mkdir -p gen/edited_base.obj
@@ -94,12 +95,12 @@ expect_fail "empty path"            "an empty path names no mesh file" stats ""
 # A PLY vertex element without coordinates (a quad's fan read the missing vertices: a crash).
 printf 'ply\nformat ascii 1.0\nelement vertex 4\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n4 0 1 2 3\n' >noxyz.ply
 expect_fail "PLY without x"         "noxyz.ply: vertex element has no property x" stats noxyz.ply
-expect_fail "PLY without x, rec"    noxyz.ply        $(rec noxyz.ply $G/base.obj $G/edited_base.obj)
+expect_fail "PLY without x, rec"    "noxyz.ply: vertex element has no property x" $(rec noxyz.ply $G/base.obj $G/edited_base.obj)
 # A report that cannot be written: the mesh must not land either (the outputs are committed
 # together), and the command fails.
-expect_fail "report unwritable"     /proc/strata_report.json reconstruct -q --detail $G/detail.obj --base $G/base.obj \
+expect_fail "report unwritable"     "/proc/strata_report.json: cannot create a temporary file" reconstruct -q --detail $G/detail.obj --base $G/base.obj \
   --edited-base $G/edited_base.obj -o out/result.obj --report /proc/strata_report.json
-expect_fail "cage report unwritable" /proc/strata_report.json cage fit $G/base.obj -o out/cage.obj \
+expect_fail "cage report unwritable" "/proc/strata_report.json: cannot create a temporary file" cage fit $G/base.obj -o out/cage.obj \
   --report /proc/strata_report.json
 # A weight that would drive the solve out of range is refused (1e308 failed in the pair count on NaN
 # coordinates, then as non-finite positions).
@@ -175,7 +176,7 @@ echo '{"creases": [{"edge": [0, 99999]}]}' >bad_tags.json
 expect_fail "tags not on the cage"  "fitted_cage.obj with bad_tags.json: crease (0,99999)" deform $G/detail.obj \
   --edit edit.json --base subdiv --cage fitted_cage.obj --cage-tags bad_tags.json -o out/d.obj
 # With -q a failed build still says why on stderr (it was only in the table on stdout).
-expect_fail "build -q failure"      "truncated.obj" build -q truncated.obj -o out/m.strata
+expect_fail "build -q failure"      "truncated.obj: line [0-9]*: .*(file truncated?)" build -q truncated.obj -o out/m.strata
 # STL holds triangles only: a vertex in no face is not written, and a warning says so.
 "$STRATA" reconstruct -q --detail stray.obj --base $G/base.obj --edited-base $G/edited_base.obj -o stray_out.stl \
   >stdout.txt 2>stderr.txt || { echo "FAIL [stl stray]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1)); }

@@ -4,6 +4,7 @@
 set -euo pipefail
 STRATA=${1:?usage: cage_fit.sh <path-to-strata> <tests/data dir>}
 STRATA=$(cd "$(dirname "$STRATA")" && pwd)/$(basename "$STRATA")
+source "$(dirname "${BASH_SOURCE[0]}")/lib/expect.sh"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 cd "$TMP"
@@ -47,10 +48,13 @@ assert 0 < e["region_faces"] < r["input"]["faces"], e
 PY
 [ -s bent_cage.obj ] || fail "no edited cage written"
 cmp -s cage.obj bent_cage.obj && fail "the edited cage equals the cage"
-if "$STRATA" deform case/detail.obj --edit bend.json --cage cage.obj -o x.obj 2>err.txt; then
-  fail "--cage without --base subdiv was accepted"
-fi
-grep -q "need --base subdiv" err.txt || fail "no clear message for --cage without --base subdiv"
+expect_exit 2 "need --base subdiv" err.txt "$STRATA" deform case/detail.obj --edit bend.json --cage cage.obj -o x.obj
+[ ! -e x.obj ] || fail "an output was written for --cage without --base subdiv"
+expect_exit 2 "cage-tags needs --cage" err.txt "$STRATA" deform case/detail.obj --edit bend.json --base subdiv \
+  --cage-tags tags.json -o x.obj
+expect_exit 2 "cage-faces applies to a fitted cage, not to --cage" err.txt "$STRATA" deform case/detail.obj \
+  --edit bend.json --base subdiv --cage cage.obj --cage-faces 100 -o x.obj
+[ ! -e x.obj ] || fail "an output was written after a usage error"
 # a quad cage from a file is a Catmull-Clark cage; --write-base keeps its quads
 python3 - <<'PY'
 import math
@@ -80,9 +84,7 @@ PY
 # --handle-rings: negative solves every vertex over a cage; rejected over the faired base
 "$STRATA" deform case/detail.obj --edit bend.json --base subdiv --cage quad.obj --handle-rings -1 -o all.obj \
   -q >/dev/null || fail "--handle-rings -1 over a cage failed"
-if "$STRATA" deform case/detail.obj --edit bend.json --handle-rings -1 -o x.obj 2>err.txt >/dev/null; then
-  fail "--handle-rings -1 with the faired base was accepted"
-fi
-grep -q "handle-rings must be >= 0" err.txt || fail "no clear message for a negative --handle-rings"
+expect_exit 2 "handle-rings must be >= 0" err.txt "$STRATA" deform case/detail.obj --edit bend.json --handle-rings -1 -o x.obj
+[ ! -e x.obj ] || fail "an output was written for a negative --handle-rings"
 ls -A | grep -q '\.tmp' && fail "temporary file left behind"
 echo "cage_fit: all checks passed"

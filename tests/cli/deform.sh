@@ -7,6 +7,7 @@ set -euo pipefail
 STRATA=${1:?usage: deform.sh <path-to-strata> <tests/data dir>}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/lib/expect.sh"
 
 "$STRATA" generate --case bumps --triangles 8000 --out-dir "$TMP/case" >/dev/null
 MESH="$TMP/case/detail.obj"
@@ -95,10 +96,7 @@ PY
 expect_error() {  # <name> <expected text> <script text>
   printf '%s' "$3" >"$TMP/$1.json"
   rm -f "$TMP/out.obj"
-  if "$STRATA" deform "$MESH" --edit "$TMP/$1.json" -o "$TMP/out.obj" -q >/dev/null 2>"$TMP/err"; then
-    echo "FAIL: $1 accepted" >&2; exit 1
-  fi
-  grep -q "$1.json" "$TMP/err" || { echo "FAIL: $1: message does not name the script: $(cat "$TMP/err")" >&2; exit 1; }
+  expect_exit 1 "$1.json" "$TMP/err" "$STRATA" deform "$MESH" --edit "$TMP/$1.json" -o "$TMP/out.obj" -q
   grep -q "$2" "$TMP/err" || { echo "FAIL: $1: expected '$2' in: $(cat "$TMP/err")" >&2; exit 1; }
   [ ! -e "$TMP/out.obj" ] || { echo "FAIL: $1 left an output file" >&2; exit 1; }
   ls "$TMP" | grep -q '\.tmp' && { echo "FAIL: $1 left a temporary file" >&2; exit 1; }
@@ -123,16 +121,11 @@ expect_error huge_scale "the mesh edited by .*huge_scale.json: face [0-9]* has z
 expect_error far_then_near "far_then_near.json: edit 2: the region's fairing system could not be factorized" \
   "{\"edits\": [{$R, $H, \"transform\": {\"translate\": [1e6, 0, 0]}}, {$R, $H, \"transform\": {\"translate\": [1, 0, 0]}}]}"
 rm -f "$TMP/out.obj"
-if "$STRATA" deform "$MESH" --edit "$TMP/missing.json" -o "$TMP/out.obj" -q 2>"$TMP/err"; then
-  echo "FAIL: missing script accepted" >&2; exit 1
-fi
-grep -q "missing.json" "$TMP/err" || { echo "FAIL: missing script not named" >&2; exit 1; }
+expect_exit 1 "missing.json" "$TMP/err" "$STRATA" deform "$MESH" --edit "$TMP/missing.json" -o "$TMP/out.obj" -q
+[ ! -e "$TMP/out.obj" ] || { echo "FAIL: missing script left an output" >&2; exit 1; }
 # Two outputs on one file are refused before any work.
 for opt in "--report" "--write-base"; do
-  if "$STRATA" deform "$MESH" --edit "$TMP/bend.json" -o "$TMP/same.obj" $opt "$TMP/same.obj" -q 2>"$TMP/err"; then
-    echo "FAIL: $opt on the output's file accepted" >&2; exit 1
-  fi
-  grep -q "same file" "$TMP/err" || { echo "FAIL: $opt: $(cat "$TMP/err")" >&2; exit 1; }
+  expect_exit 1 "same file" "$TMP/err" "$STRATA" deform "$MESH" --edit "$TMP/bend.json" -o "$TMP/same.obj" $opt "$TMP/same.obj" -q
   [ ! -e "$TMP/same.obj" ] || { echo "FAIL: $opt left an output" >&2; exit 1; }
 done
 echo "deform: ok"

@@ -6,6 +6,7 @@ set -euo pipefail
 STRATA=${1:?usage: reconstruct_report.sh <path-to-strata> <tests/data dir>}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/lib/expect.sh"
 
 "$STRATA" generate --case bumps --triangles 2000 --out-dir "$TMP/case" >/dev/null
 for m in volumes vectors; do
@@ -209,9 +210,7 @@ if not (faces >= 80000 and r.get("solver") == "multigrid" and r.get("solver_requ
     sys.exit(1)
 print("reconstruct_report: auto checks passed")
 PY
-if "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
-  --edited-base "$TMP/irregular/edited_base.obj" --solver magic -o "$TMP/x.obj" >/dev/null 2>&1; then
-  echo "FAIL: --solver magic accepted" >&2
-  exit 1
-fi
+expect_exit 2 "^strata: error: --solver: magic not in {auto,legacy,multigrid}" "$TMP/err.txt" \
+  "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
+  --edited-base "$TMP/irregular/edited_base.obj" --solver magic -o "$TMP/x.obj"
 [ ! -e "$TMP/x.obj" ] || { echo "FAIL: output written for a bad --solver" >&2; exit 1; }

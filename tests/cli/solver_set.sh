@@ -6,6 +6,7 @@ set -euo pipefail
 STRATA=${1:?usage: solver_set.sh <path-to-strata> <tests/data dir>}
 DATA=${2:?usage: solver_set.sh <path-to-strata> <tests/data dir>}
 fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib/expect.sh"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
@@ -41,12 +42,11 @@ for bad in "frob=1:unknown reconstruction option 'frob'" "volume_scales=two:'two
   [ ! -e "$TMP/bad.obj" ] || fail "--set $kv wrote an output"
 done
 # Parsed, but out of the solver's range: an error (not a usage error), no output.
-err=$(rec range --set volume_scales=0 2>&1); rc=$?
-[ "$rc" -ne 0 ] && [ "$rc" -ne 2 ] || fail "--set volume_scales=0 exited $rc"
-grep -q "out of range" <<<"$err" || fail "--set volume_scales=0: $err"
+set -e
+expect_exit 1 "reconstruction option volume_scales = 0 is out of range (1-1000)" "$TMP/err.txt" rec range --set volume_scales=0
 [ ! -e "$TMP/range.obj" ] || fail "--set volume_scales=0 wrote an output"
 # deform takes it too.
-err=$("$STRATA" deform "$TMP/case/detail.obj" --edit "$DATA/edits/man_arm.json" --set frob=1 -o "$TMP/d.obj" 2>&1); rc=$?
-[ "$rc" -eq 2 ] || fail "deform --set frob=1 exited $rc, expected 2: $err"
-set -e
+expect_exit 2 "unknown reconstruction option 'frob'" "$TMP/err.txt" \
+  "$STRATA" deform "$TMP/case/detail.obj" --edit "$DATA/edits/man_arm.json" --set frob=1 -o "$TMP/d.obj"
+[ ! -e "$TMP/d.obj" ] || fail "deform --set frob=1 wrote an output"
 echo "solver_set: all checks passed"

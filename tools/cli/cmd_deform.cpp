@@ -85,14 +85,15 @@ int run_deform(const DeformCmdOptions& o) {
   const Method method = parse_method(o.method);
   check_outputs(o.output, {o.base_output}, o.report, {o.input, o.edit, o.cage, o.cage_tags});
   const bool subdiv = o.base == "subdiv";
+  // Options that do not go together: usage errors (exit 2, with the pointer to --help), as CLI11's.
   if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
-    throw InvalidInput("--cage, --cage-tags and --cage-faces need --base subdiv");
-  if (!o.cage_tags.empty() && o.cage.empty()) throw InvalidInput("--cage-tags needs --cage");
+    throw CLI::ValidationError("--cage, --cage-tags and --cage-faces need --base subdiv");
+  if (!o.cage_tags.empty() && o.cage.empty()) throw CLI::ValidationError("--cage-tags needs --cage");
   if (!subdiv && o.handle_rings < 0)
-    throw InvalidInput(
+    throw CLI::ValidationError(
         "--handle-rings must be >= 0 with --base faired (negative: solve every vertex, --base subdiv)");
   if (!o.cage.empty() && o.cage_faces > 0)
-    throw InvalidInput("--cage-faces applies to a fitted cage, not to --cage");
+    throw CLI::ValidationError("--cage-faces applies to a fitted cage, not to --cage");
   Stopwatch total;
   Stopwatch sw;
   log.phase("reading " + o.input + " and " + o.edit);

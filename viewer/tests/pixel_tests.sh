@@ -77,36 +77,49 @@ r=$("$VIEWER" "$MESH" --edit "$T/bend.json" --screenshot "$T/mesh_edit.png" "${C
 s=$($STATS "$T/mesh_edit.png" "$T/scan.png")
 check "plain mesh edit (RegionEditor): image changes, vectors error red" \
   "s['changed'] > 0.05 and s['reddish'] > 0.005 and r['edit_steps'] == 1" "$s" "$r"
+# The intersection map: the scan has no intersecting pairs (strata stats counts 0) and no red;
+# two triangles that cross each other are one pair, both drawn red.
 r=$("$VIEWER" "$MESH" --screenshot "$T/isect.png" "${COMMON[@]}" --color intersections)
-check "intersection map runs" "r['intersecting_pairs'] >= 0 and r['gl_errors'] == 0" '{}' "$r"
+s=$($STATS "$T/isect.png")
+check "intersection map of the scan: 0 pairs, no red" \
+  "r['intersecting_pairs'] == 0 and s['reddish'] == 0 and s['centre_foreground'] > 0.9 and r['gl_errors'] == 0" "$s" "$r"
+printf 'v 0 0 0\nv 2 0 0\nv 1 2 0\nv 1 0.5 -1\nv 1 0.5 1\nv 1 1.5 0\nf 1 2 3\nf 4 5 6\n' > "$T/crossing.obj"
+r=$("$VIEWER" "$T/crossing.obj" --screenshot "$T/crossing.png" --size 320x240 --view iso --color intersections)
+s=$($STATS "$T/crossing.png")
+check "intersection map of two crossing triangles: 1 pair, red" \
+  "r['intersecting_pairs'] == 1 and s['reddish'] > 0.25 * s['foreground'] > 0.01 and r['gl_errors'] == 0" "$s" "$r"
 
 # 4. Bad inputs: exit 1, one "strata-viewer: error:" message, the PNG untouched.
 printf 'not a png' > "$T/keep.png"
 printf 'v 0 0 0\nv 1 0\nf 1 2 3\n' > "$T/corrupt.obj"
 head -c 300 "$T/model.strata" > "$T/truncated.strata"
 printf '{"region": {"sphere": {"center": [0, 0], "radius": 1}}}' > "$T/bad_edit.json"
+# bad NAME PATTERN ARGS...: exit 1 and one message "strata-viewer: error: " matching PATTERN (an
+# extended regular expression: the file or option, and the problem).
 bad() {
-  local name=$1; shift
+  local name=$1 pattern=$2; shift 2
   local out code=0
   out=$("$VIEWER" "$@" --screenshot "$T/keep.png" 2>&1 >/dev/null) || code=$?
-  if [[ $code -eq 1 && $out == "strata-viewer: error: "* && $(cat "$T/keep.png") == "not a png" ]]; then
+  if [[ $code -eq 1 && $out == "strata-viewer: error: "* && $out =~ $pattern && $(cat "$T/keep.png") == "not a png" ]]; then
     pass "$name: $out"
   else
-    fail "$name (exit $code, message '$out')"
+    fail "$name (exit $code, message '$out', expected '$pattern')"
   fi
 }
-bad "missing file" "$T/missing.obj"
-bad "corrupt mesh" "$T/corrupt.obj"
-bad "truncated model" "$T/truncated.strata"
-bad "bad --band (mesh)" "$MESH" --band 1
-bad "bad --band (model)" "$T/model.strata" --band 7
-bad "bad --amplitude band" "$T/model.strata" --amplitude 0=0.5
-bad "bad --view" "$MESH" --view sideways
-bad "bad --size" "$MESH" --size 0x10
-bad "bad edit script" "$MESH" --edit "$T/bad_edit.json"
-bad "unknown option" "$MESH" --frobnicate
+bad "missing file" "missing\.obj: cannot open: No such file" "$T/missing.obj"
+bad "corrupt mesh" "corrupt\.obj: line 2: vertex has 2 coordinates, needs 3" "$T/corrupt.obj"
+bad "truncated model" "truncated\.strata: truncated: the header ends at byte [0-9]+, file has 300 bytes" \
+  "$T/truncated.strata"
+bad "bad --band (mesh)" "band 1 is out of range \(.*detail\.obj has 1 band: 0\)" "$MESH" --band 1
+bad "bad --band (model)" "band 7 is out of range \(.*model\.strata has 3 bands: 0 \.\. 2\)" "$T/model.strata" --band 7
+bad "bad --amplitude band" "band 0 \(the cage\) has no amplitude" "$T/model.strata" --amplitude 0=0.5
+bad "bad --view" "--view: unknown view 'sideways'" "$MESH" --view sideways
+bad "bad --size" "--size width expects an integer in \[16, 8192\], got '0'" "$MESH" --size 0x10
+bad "bad edit script" "bad_edit\.json: edit\.region\.sphere\.center: expected three numbers" "$MESH" --edit "$T/bad_edit.json"
+bad "unknown option" "unknown option '--frobnicate'" "$MESH" --frobnicate
 out=$("$VIEWER" "$MESH" --screenshot "$T/nodir/x.png" 2>&1 >/dev/null) && code=0 || code=$?
-[[ $code -eq 1 && $out == "strata-viewer: error: "* ]] && pass "unwritable output: $out" || fail "unwritable output ($code: $out)"
+[[ $code -eq 1 && $out == "strata-viewer: error: "*"nodir/x.png: cannot create a temporary file"* ]] && pass "unwritable output: $out" ||
+  fail "unwritable output ($code: $out)"
 
 if ((fails)); then
   echo "$fails pixel test(s) failed"
