@@ -2,6 +2,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <set>
 
 #include "paper_cases.h"
 #include "strata/encoding.h"
@@ -67,6 +68,37 @@ TEST(Encoding, TargetsAreThePrismVolumesOverTheOriginalBase) {
   const double R = 1.0, L = 6.0;
   EXPECT_GT(m.total_target, M_PI * L * ((R + 0.175) * (R + 0.175) - R * R) * 0.95);
   EXPECT_LT(m.total_target, M_PI * L * ((R + 0.525) * (R + 0.525) - R * R));
+  // Exactly: the volume of the closed layer by the divergence theorem, without prism_volume().
+  // Its surface is the detail's triangles, the base points' triangles reversed, and at the
+  // tube's two open ends each boundary edge's side quad (q_i, q_j, p_j, p_i), split at its
+  // centroid as a prism splits it (the inner quads, shared by two prisms, cancel).
+  const std::vector<Vec3>& p = c.detail.vertices;
+  std::vector<Vec3> q(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const BasePoint& bp = e.base_points[i];
+    const Face& f = c.base.faces[bp.face];
+    q[i] = bp.bary[0] * c.base.vertices[f[0]] + bp.bary[1] * c.base.vertices[f[1]] +
+           bp.bary[2] * c.base.vertices[f[2]];
+  }
+  auto det = [](const Vec3& a, const Vec3& b, const Vec3& d) { return a.dot(b.cross(d)); };
+  std::set<std::pair<int, int>> directed;
+  for (const Face& f : c.detail.faces)
+    for (int k = 0; k < 3; ++k) directed.emplace(f[k], f[(k + 1) % 3]);
+  double six_volume = 0.0;
+  int boundary_edges = 0;
+  for (const Face& f : c.detail.faces) {
+    six_volume += det(p[f[0]], p[f[1]], p[f[2]]) - det(q[f[0]], q[f[1]], q[f[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const int i = f[k], j = f[(k + 1) % 3];
+      if (directed.count({j, i})) continue;  // an inner edge
+      ++boundary_edges;
+      const Vec3 quad[4] = {q[i], q[j], p[j], p[i]};
+      const Vec3 centroid = (quad[0] + quad[1] + quad[2] + quad[3]) / 4.0;
+      for (int t = 0; t < 4; ++t) six_volume += det(quad[t], quad[(t + 1) % 4], centroid);
+    }
+  }
+  EXPECT_GT(boundary_edges, 0);  // the tube's two rims
+  EXPECT_NEAR(m.total_target, six_volume / 6.0, 1e-12 * m.total_target);
 }
 
 TEST(Encoding, DetailOnTheBaseHasZeroOffsetsAndVolumes) {

@@ -484,6 +484,7 @@ TEST(IntersectLimit, MaxTestsStopsTheSearch) {
     o.max_tests = 1;
     const IntersectionResult some = find_self_intersections(combs.vertices, combs.faces, o);
     ASSERT_TRUE(some.truncated);
+    ASSERT_GT(some.num_pairs, 0u);  // the first batch of tests finds some
     EXPECT_LE(some.num_pairs, exact.num_pairs);
     EXPECT_EQ(some.pairs.size(), some.num_pairs);
     for (const Pair& p : some.pairs)
@@ -497,6 +498,7 @@ TEST(IntersectLimit, MaxTestsStopsTheSearch) {
   EXPECT_FALSE(b.truncated);
   EXPECT_EQ(b.pairs, find(spheres).pairs);
   EXPECT_LT(b.num_tests, spheres.faces.size());
+  // The limits the header documents: 50 million + 200 per face tests, 10 million pairs.
   EXPECT_EQ(bounded_intersection_options(0).max_tests, 50000000u);
   EXPECT_EQ(bounded_intersection_options(1000).max_tests, 50200000u);
   EXPECT_EQ(bounded_intersection_options(1000).max_pairs, 10000000u);
