@@ -1,4 +1,4 @@
-// Scratch directories for the file tests.
+// Scratch directories for the file tests, and a check of a thrown error's type and message.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -44,5 +44,22 @@ class ScratchDir {
  private:
   std::filesystem::path path_;
 };
+
+//! Passes if f() throws exactly an E (or subclass) whose message contains every part.
+template <class E, class F>
+::testing::AssertionResult throws_with(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+  } catch (const E& e) {
+    const std::string msg = e.what();
+    for (const std::string& p : parts)
+      if (msg.find(p) == std::string::npos)
+        return ::testing::AssertionFailure() << "message \"" << msg << "\" lacks \"" << p << "\"";
+    return ::testing::AssertionSuccess() << msg;
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "wrong exception type, message: " << e.what();
+  }
+  return ::testing::AssertionFailure() << "no exception thrown";
+}
 
 }  // namespace strata::test

@@ -727,6 +727,13 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
             for (layers::Section& s : v.sections)
               if (s.name == "band0.points") std::fill(s.bytes.begin(), s.bytes.end(), 0);
           });
+  // Found by a probe of the API (2026-11-28): a crease's vertex of 2^32 + 7 was read as 7, a
+  // crease on another edge, and the model worked on.
+  variant("crease_wrap", "band 0: a crease's edge has vertex 4294967303, outside 0\\.\\.",
+          [](nlohmann::json& m, layers::StrataContainer&) {
+            m["bands"][0]["tags"]["creases"] =
+                nlohmann::json::array({{{"edge", {4294967303LL, 1}}, {"sharpness", 10.0}}});
+          });
   // A fourth pass: a triangle band with a repeated face was read, and info, amplitude and edit
   // wrote it on; the same in the cage was blamed on band 1 (whose base the cage's surface is).
 
@@ -918,6 +925,41 @@ TEST(LayersFile, TheCagesRefinementBudgetRoundTrips) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("max_refined_faces"), std::string::npos) << e.what();
   }
+}
+
+// assemble() checks the values of each band's encoding, not only their sizes: a limit point off
+// the cage's surface or a NaN target volume was assembled, every later edit or amplitude failed on
+// it, and the file written was refused by the reader (found by a probe of the API, 2026-11-28).
+TEST(LayersFile, AssembleChecksTheEncodingsValues) {
+  const LayeredModel& camel = model_of("camel");
+  auto assemble_with = [&](auto&& change) {
+    std::vector<layers::Band> bands;
+    for (int k = 0; k < camel.num_bands(); ++k) bands.push_back(camel.band(k));
+    change(bands);
+    LayeredModel::assemble(bands, camel.options(), camel.history());
+  };
+  EXPECT_NO_THROW(assemble_with([](std::vector<layers::Band>&) {}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] { assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.limit_points[0].face = 9999; }); },
+      {"band 1: the encoding's base points over its base at rest: "}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.limit_points[3].u = std::nan(""); });
+      },
+      {"band 1: the encoding's base points over its base at rest: "}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with([](std::vector<layers::Band>& b) { b[2].encoding.target_volumes[5] = std::nan(""); });
+      },
+      {"band 2: the encoding's target volume 5 is not finite"}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.normal_offsets[2] = INFINITY; });
+      },
+      {"band 1: the encoding's normal offset 2 is not finite"}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] { assemble_with([](std::vector<layers::Band>& b) { b[2].base_rest[4].x() = std::nan(""); }); },
+      {"band 2: its base's rest vertex 4 has a non-finite coordinate"}));
 }
 
 TEST(LayersFile, ForeignAndMissingFilesAreNamed) {

@@ -52,22 +52,7 @@ std::string read_bytes(const std::string& path) {
   return ss.str();
 }
 
-//! Passes if f() throws exactly an E (or subclass) whose message contains every part.
-template <class E, class F>
-::testing::AssertionResult throws_with(F&& f, std::initializer_list<std::string> parts) {
-  try {
-    f();
-  } catch (const E& e) {
-    const std::string msg = e.what();
-    for (const std::string& p : parts)
-      if (msg.find(p) == std::string::npos)
-        return ::testing::AssertionFailure() << "message \"" << msg << "\" lacks \"" << p << "\"";
-    return ::testing::AssertionSuccess() << msg;
-  } catch (const std::exception& e) {
-    return ::testing::AssertionFailure() << "wrong exception type, message: " << e.what();
-  }
-  return ::testing::AssertionFailure() << "no exception thrown";
-}
+using test::throws_with;
 
 bool same_bits(double a, double b) {
   return std::memcmp(&a, &b, sizeof a) == 0;

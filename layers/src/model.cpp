@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <unordered_map>
 
 #include "json_limits.h"
@@ -623,14 +624,18 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                              "orientation)");
       }
     check_coordinates(b.mesh.vertices, name + ":");
+    // Finite first: a NaN rest point was reported as all the points coinciding.
+    check_coordinates(e.detail_rest, name + ": the encoding's rest");
+    check_coordinates(b.base_rest, name + ": its base's rest");
     if (!(bbox_diagonal(b.mesh.vertices) > 0) || !(bbox_diagonal(e.detail_rest) > 0) ||
         !(bbox_diagonal(b.base_rest) > 0))
       throw InvalidInput(name + ": its points (current, at rest, or its base's at rest) all coincide");
     check_amplitude(b.amplitude, name + ": the amplitude");
     const int base_n = k == 1 ? bands[0].cage.num_vertices() : bands[k - 1].mesh.num_vertices();
     if (e.base_num_vertices != base_n || static_cast<int>(b.base_rest.size()) != base_n)
-      throw InvalidInput(name + ": its base has " + std::to_string(base_n) + " vertices, the encoding " +
-                         std::to_string(e.base_num_vertices));
+      throw InvalidInput(name + ": its base has " + std::to_string(base_n) +
+                         " vertices; the encoding's base " + std::to_string(e.base_num_vertices) +
+                         " and the band's base_rest " + std::to_string(b.base_rest.size()));
     if (k == 1 ? (!e.over_limit_surface() || e.cage_faces != bands[0].cage.faces)
                : (e.over_limit_surface() || e.base_faces != bands[k - 1].mesh.faces))
       throw InvalidInput(name + ": the encoding's base is not band " + std::to_string(k - 1) + "'s surface");
@@ -638,6 +643,31 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     // band 0's gave another surface (the file stores band 0's, so the model read back changed).
     if (k == 1 && !same_subdivision(e, bands[0]))
       throw InvalidInput(name + ": the encoding's subdivision tags or options are not band 0's");
+    // Its values are finite (a NaN target volume or offset was assembled, and every later edit
+    // or amplitude failed on it) and its base points lie on its base at rest (a limit point on a
+    // face past the cage's, or with a NaN (u, v), was assembled and written, and the reader then
+    // refused the file).
+    auto finite = [&](const auto& values, const char* what) {
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        bool ok = true;
+        if constexpr (std::is_arithmetic_v<std::decay_t<decltype(values[i])>>)
+          ok = std::isfinite(values[i]);
+        else
+          ok = values[i].allFinite();
+        if (!ok)
+          throw InvalidInput(name + ": the encoding's " + what + " " + std::to_string(i) + " is not finite");
+      }
+    };
+    finite(e.target_volumes, "target volume");
+    finite(e.normal_offsets, "normal offset");
+    finite(e.tangential_offsets, "tangential offset");
+    finite(e.base_rest_points, "rest base point");
+    finite(e.weights, "regularization weight");
+    try {
+      (void)evaluate_base_frames(e, b.base_rest);
+    } catch (const InvalidInput& x) {
+      throw InvalidInput(name + ": the encoding's base points over its base at rest: " + x.what());
+    }
   }
   LayeredModel model;
   model.impl_->bands = std::move(bands);

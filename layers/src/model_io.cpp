@@ -482,7 +482,15 @@ LayeredModel read_model(const std::string& path) {
       const json& e = h.at(cr, "edge", "a crease");
       if (!e.is_array() || e.size() != 2 || !e[0].is_number_integer() || !e[1].is_number_integer())
         h.fail("band 0: a crease's edge is not two vertex numbers");
-      cage.tags.creases.push_back({e[0].get<int>(), e[1].get<int>(), h.number(cr, "sharpness", "a crease")});
+      // As long long: get<int>() wrapped 2^32 + 7 into 7, a crease on another edge.
+      auto vertex = [&](const json& x) {
+        const long long v = x.get<long long>();
+        if (v < 0 || v >= nv)
+          h.fail("band 0: a crease's edge has vertex " + std::to_string(v) + ", outside 0.." +
+                 std::to_string(nv - 1));
+        return static_cast<int>(v);
+      };
+      cage.tags.creases.push_back({vertex(e[0]), vertex(e[1]), h.number(cr, "sharpness", "a crease")});
     }
     for (const json& co : corners)
       cage.tags.corners.push_back({static_cast<int>(h.integer(co, "vertex", "a corner", 0, nv - 1)),

@@ -45,11 +45,15 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   const int n = cage.num_vertices();
   check_cage_selection(n, region, handle);
   // The cage's faces index its points (an out-of-range index overflowed the Laplacian's assembly).
-  for (std::size_t f = 0; f < cage.faces.size(); ++f)
+  for (std::size_t f = 0; f < cage.faces.size(); ++f) {
+    if (cage.faces[f].size() < 3)  // a face of 0-2 corners shapes no surface
+      throw InvalidInput("cage face " + std::to_string(f) + " has " + std::to_string(cage.faces[f].size()) +
+                         " corners, fewer than 3");
     for (int v : cage.faces[f])
       if (v < 0 || v >= n)
         throw InvalidInput("cage face " + std::to_string(f) + " has vertex index " + std::to_string(v) +
                            " out of range (the cage has " + std::to_string(n) + " points)");
+  }
   const Eigen::SparseMatrix<double> L = internal::cage_laplacian(cage, false);
   const Eigen::SparseMatrix<double> B = L.transpose() * L;
   std::vector<int> free_id(n, -1), free;
@@ -101,6 +105,7 @@ class CageEditor::Impl {
         detail_(opt_.method, opt_.reconstruct, opt_.drag, opt_.drag_end, opt_.drag_end_cycles) {
     const int n = base_.num_control_points();
     check_cage_selection(n, region, handle);
+    if (mesh.faces.empty() || mesh.vertices.empty()) throw InvalidInput("cage edit: the mesh has no faces");
     // INT_MAX rings overflowed the ring search's bound.
     if (opt_.handle_solved_rings > 1000)
       throw InvalidInput(

@@ -94,6 +94,8 @@ PolyMesh read_cage(const std::string& path) {
 }
 
 void write_cage(const PolyMesh& cage, const std::string& path) {
+  // What read_cage() refuses is not written (a cage of 1e300 was, and could not be read back).
+  check_coordinates(cage.vertices, path + ":");
   write_polygon_mesh(cage.vertices, cage.faces, path);
 }
 

@@ -98,13 +98,14 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
     const json& r = j["rotate"];
     check_keys(c, w, r, {"axis", "degrees", "pivot"});
     const Vec3 axis = vec3(c, w + ".axis", required(c, w, r, "axis"));
-    if (!(axis.norm() > 0)) c.fail(w + ".axis", "must not be zero");
+    const double largest = axis.cwiseAbs().maxCoeff();  // scaled first, as EditTransform::rotation()
+    if (!(largest > 0)) c.fail(w + ".axis", "must not be zero");
     const double deg = number(c, w + ".degrees", required(c, w, r, "degrees"));
     if (r.contains("pivot")) {
       if (j.contains("pivot")) c.fail(w + ".pivot", "give the pivot once (here or in the transform)");
       t.pivot = vec3(c, w + ".pivot", r["pivot"]);
     }
-    R = Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+    R = Eigen::AngleAxisd(deg * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
   }
   if (j.contains("scale")) {
     const json& s = j["scale"];

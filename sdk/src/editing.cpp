@@ -100,9 +100,12 @@ EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Ve
                                       const Vec3& translation) {
   if (!finite(axis) || !std::isfinite(degrees) || !finite(pivot) || !finite(translation))
     throw InvalidInput("rotation has a non-finite value");
-  if (!(axis.norm() > 0)) throw InvalidInput("rotation axis is zero");
+  // Normalized after scaling by its largest coordinate: the squares of an axis of 1e160 overflowed
+  // (a zero axis, the "rotation" 6e-17 I) and those of 1e-160 lost their digits (not orthonormal).
+  const double largest = axis.cwiseAbs().maxCoeff();
+  if (!(largest > 0)) throw InvalidInput("rotation axis is zero");
   EditTransform t;
-  t.linear = Eigen::AngleAxisd(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+  t.linear = Eigen::AngleAxisd(degrees * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
   t.pivot = pivot;
   t.translation = translation;
   return t;

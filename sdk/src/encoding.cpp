@@ -406,6 +406,8 @@ void check_base_part(const DetailEncoding& e) {
   const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
   if (e.base_num_vertices < 0) throw InvalidInput("encoding has a negative base vertex count");
   const bool limit = e.over_limit_surface();
+  if (limit && !e.base_points.empty())
+    throw InvalidInput("encoding has both base points (a triangle base) and limit points (a limit surface)");
   const std::size_t points = limit ? e.limit_points.size() : e.base_points.size();
   if (points != nv)
     throw InvalidInput("encoding has " + std::to_string(points) + " base points for " + std::to_string(nv) +
@@ -478,6 +480,8 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
   fr.tangents.resize(n);
   for (int i = 0; i < n; ++i) {
     const BasePoint& bp = e.base_points[i];
+    if (!bp.bary.allFinite())
+      throw InvalidInput("base point " + std::to_string(i) + " has non-finite barycentric coordinates");
     const Face& F = e.base_faces[bp.face];
     const Vec3 &x0 = x[F[0]], &x1 = x[F[1]], &x2 = x[F[2]];
     fr.points[i] = bp.bary[0] * x0 + bp.bary[1] * x1 + bp.bary[2] * x2;
@@ -588,7 +592,15 @@ void frame_at(const DetailEncoding& e, const SubdivSurface& surface, int i, cons
     nrm = s2.du.cross(s2.dv);
     u = s2.du;
   }
-  nrm = nrm.norm() > 1e-300 ? Vec3(nrm.normalized()) : Vec3(Vec3::UnitZ());
+  // Still none: the surface itself is degenerate there (its cage collapsed to a point or a line
+  // around it), as a triangle base's face without a normal. (An arbitrary normal was taken, and a
+  // reconstruction over a collapsed cage returned positions without an error.)
+  if (!(nrm.norm() > 1e-300))
+    throw InvalidInput("base limit point " + std::to_string(i) + " (ptex face " +
+                       std::to_string(e.limit_points[i].face) +
+                       ") has no normal: the limit surface is degenerate there (its cage points coincide or "
+                       "lie on a line around it)");
+  nrm.normalize();
   Vec3 t = u - u.dot(nrm) * nrm;
   if (!(t.norm() > 0.0)) t = nrm.unitOrthogonal();
   normal = nrm;
@@ -625,9 +637,21 @@ std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames&
   check_encoding(e);
   const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
   if (fr.points.size() != nv || fr.normals.size() != nv || fr.tangents.size() != nv)
-    throw InvalidInput("reconstruct_vectors: " + std::to_string(fr.points.size()) + " base frames for " +
-                       std::to_string(nv) + " detail vertices");
-  return internal::vectors_unchecked(e, fr, amplitude);
+    throw InvalidInput("reconstruct_vectors: base frames with " + std::to_string(fr.points.size()) +
+                       " points, " + std::to_string(fr.normals.size()) + " normals and " +
+                       std::to_string(fr.tangents.size()) + " tangents for " + std::to_string(nv) +
+                       " detail vertices");
+  if (!(std::abs(amplitude) <= kMaxAmplitude)) {
+    std::ostringstream m;
+    m << "reconstruct_vectors: the amplitude " << amplitude << " is not within +-" << kMaxAmplitude;
+    throw InvalidInput(m.str());
+  }
+  std::vector<Vec3> p = internal::vectors_unchecked(e, fr, amplitude);
+  for (std::size_t i = 0; i < nv; ++i)
+    if (!p[i].allFinite())
+      throw InvalidInput("reconstruct_vectors: detail vertex " + std::to_string(i) +
+                         ": its base frame or its offsets are not finite");
+  return p;
 }
 
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const std::vector<Vec3>& base_vertices) {

@@ -23,6 +23,15 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
+void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what) {
+  const long long n = static_cast<long long>(num_vertices);
+  for (std::size_t j = 0; j < faces.size(); ++j)
+    for (int v : faces[j])
+      if (v < 0 || v >= n)
+        throw InvalidInput(what + ": face " + std::to_string(j) + " has vertex index " + std::to_string(v) +
+                           ", out of range (" + std::to_string(num_vertices) + " vertices)");
+}
+
 namespace {
 // |v|, with v scaled by a power of two (exact) first, so that its squares neither underflow nor
 // overflow: the same bits as v.norm() wherever that does neither.
@@ -61,6 +70,7 @@ double bbox_diagonal(const std::vector<Vec3>& points) {
 void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                   const std::string& what) {
   if (faces.empty()) return;
+  check_face_indices(vertices.size(), faces, what);
   const auto [lo, hi] = face_box(vertices, faces);
   const double extent = scaled_norm(hi - lo);
   if (extent >= kMinExtent) return;
@@ -72,6 +82,7 @@ void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& fa
 
 Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   if (faces.empty()) return Vec3::Zero();
+  check_face_indices(vertices.size(), faces, "bbox_centre");
   const auto [lo, hi] = face_box(vertices, faces);
   return lo / 2.0 + hi / 2.0;  // halves first: no overflow
 }
@@ -81,6 +92,7 @@ bool back_at_rest(const Vec3& p, const Vec3& rest, double scale) {
 }
 
 std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  check_face_indices(vertices.size(), faces, "vertex_normals");
   std::vector<Vec3> normals(vertices.size(), Vec3::Zero());
   for (const Face& f : faces) {
     const Vec3 n = triangle_area_normal(vertices[f[0]], vertices[f[1]], vertices[f[2]]);
@@ -101,6 +113,7 @@ std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::v
 }
 
 double signed_volume(const TriMesh& mesh) {
+  check_face_indices(mesh.vertices.size(), mesh.faces, "signed_volume");
   double v = 0.0;
   for (const Face& f : mesh.faces)
     v += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]]));

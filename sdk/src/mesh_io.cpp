@@ -876,10 +876,15 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
       for (int c = 0; c < 3; ++c)
         if (is_vertex && p.name == std::string(1, static_cast<char>('x' + c))) {
           if (p.is_list) fail_io(name, "vertex property " + p.name + " must not be a list");
+          // Which one holds the coordinate? (The last was read, silently.)
+          if (xyz[c] >= 0) fail_io(name, "vertex property " + p.name + " declared twice");
           xyz[c] = k;
         }
       if (is_face && p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index")) {
         if (!ply_is_integer(p.type)) fail_io(name, "face property " + p.name + " must have an integer type");
+        if (index_prop >= 0)
+          fail_io(name, "face properties " + e.props[index_prop].name + " and " + p.name +
+                            ": two lists of vertex indices");
         index_prop = k;
       }
     }

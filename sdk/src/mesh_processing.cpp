@@ -16,6 +16,14 @@
 namespace strata {
 namespace {
 
+// Finite coordinates (any magnitude: a cage is fitted to a scan of 1e100 as to one of 1).
+void check_finite(const std::vector<Vec3>& x, const char* what) {
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (!x[v].allFinite())
+      throw InvalidInput(std::string(what) + ": vertex " + std::to_string(v) +
+                         " has a non-finite coordinate");
+}
+
 struct DoubleTraits : public OpenMesh::DefaultTraits {
   typedef OpenMesh::Vec3d Point;
   typedef OpenMesh::Vec3d Normal;
@@ -26,6 +34,8 @@ using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
 std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   if (steps < 0) throw InvalidInput("taubin_smooth: steps must be >= 0");
+  check_face_indices(m.vertices.size(), m.faces, "taubin_smooth");
+  check_finite(m.vertices, "taubin_smooth");
   std::vector<Vec3> x = m.vertices;
   if (steps == 0) return x;
   const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
@@ -54,6 +64,15 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
 
 TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
+  check_face_indices(mesh.vertices.size(), mesh.faces, "decimate_mesh");
+  for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
+    const Face& f = mesh.faces[j];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])  // OpenMesh's add_face asserts on it
+      throw InvalidInput("decimate_mesh: face " + std::to_string(j) + " repeats a vertex (" +
+                         std::to_string(f[0]) + "," + std::to_string(f[1]) + "," + std::to_string(f[2]) +
+                         ")");
+  }
+  check_finite(mesh.vertices, "decimate_mesh");
   // Relative to the centre of the bounding box: the quadrics' error terms are squares of plane
   // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
   // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed

@@ -1,6 +1,7 @@
 #include "strata/metrics.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "strata/exceptions.h"
@@ -34,6 +35,14 @@ VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, 
     throw InvalidInput("volume_metrics: expected " + std::to_string(n) +
                        " detail positions and base points, got " + std::to_string(p.size()) + " and " +
                        std::to_string(frames.points.size()));
+  // A NaN volume would pass std::max() unseen: the max error came out 0 for NaN positions.
+  if (!std::isfinite(amplitude)) throw InvalidInput("volume_metrics: the amplitude is not finite");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!p[i].allFinite())
+      throw InvalidInput("volume_metrics: detail position " + std::to_string(i) + " is not finite");
+    if (!frames.points[i].allFinite())
+      throw InvalidInput("volume_metrics: base point " + std::to_string(i) + " is not finite");
+  }
   const std::vector<double> v = prism_volumes(e.detail_faces, p, frames.points);
   VolumeMetrics m;
   double sq = 0.0, mx = 0.0, abs_sum = 0.0;
@@ -51,6 +60,8 @@ VolumeMetrics volume_metrics(const DetailEncoding& e, const BaseFrames& frames, 
     if (m.mean_abs_target > 0) {
       m.max_relative_error = mx / m.mean_abs_target;
       m.rms_relative_error = std::sqrt(sq / v.size()) / m.mean_abs_target;
+    } else if (mx > 0) {  // volumes where every target is 0 (a muted band): no relative error fits
+      m.max_relative_error = m.rms_relative_error = std::numeric_limits<double>::infinity();
     }
   }
   if (m.total_target != 0.0)

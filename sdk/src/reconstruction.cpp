@@ -216,14 +216,17 @@ DragState& DragState::operator=(DragState&&) noexcept = default;
 void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
   const std::size_t n = start.size();
   if (frames.points.size() != n || frames.normals.size() != n || frames.tangents.size() != n)
-    throw InvalidInput("drag start has " + std::to_string(n) + " positions but " +
-                       std::to_string(frames.points.size()) + " base frames");
+    throw InvalidInput("drag start has " + std::to_string(n) + " positions but base frames with " +
+                       std::to_string(frames.points.size()) + " points, " +
+                       std::to_string(frames.normals.size()) + " normals and " +
+                       std::to_string(frames.tangents.size()) + " tangents");
   for (std::size_t i = 0; i < n; ++i)
     if (!start[i].allFinite() || !frames.points[i].allFinite() || !frames.normals[i].allFinite() ||
         !frames.tangents[i].allFinite())
       throw InvalidInput("drag start: vertex " + std::to_string(i) + " or its base frame is not finite");
   check_coordinates(start, "drag start:");
   check_coordinates(frames.points, "drag start's base frames:");
+  if (!impl_) impl_ = std::make_unique<Impl>();  // a moved-from state starts anew
   impl_->frames = frames;
   impl_->start = std::move(start);
   impl_->level.clear();
@@ -233,7 +236,7 @@ void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
 }
 
 bool DragState::started() const {
-  return impl_->started;
+  return impl_ && impl_->started;
 }
 
 // A NaN tolerance made a warm start end unconverged at once; negative counts passed unnoticed.
@@ -872,6 +875,9 @@ class VolumeReconstructor::Impl {
     }
     s.dRho.assign(n, 0.0);
     s.dT.assign(n, Vec3::Zero());
+    // Checked with no pinned vertex too (the header's contract): a short array was taken silently.
+    if (request.pinned_positions && static_cast<int>(request.pinned_positions->size()) != n)
+      check_pinned_positions(*request.pinned_positions, [](int) { return false; });
     if (enc_.pinned.empty()) return;
     if (!request.pinned_positions) {
       s.pinned_at = internal::vectors_unchecked(enc_, fr, s.amplitude);  // both checked already
@@ -888,7 +894,9 @@ class VolumeReconstructor::Impl {
     const int n = enc_.num_detail_vertices();
     if (static_cast<int>(fr.points.size()) != n || static_cast<int>(fr.normals.size()) != n ||
         static_cast<int>(fr.tangents.size()) != n)
-      throw InvalidInput("base frames have " + std::to_string(fr.points.size()) + " points, the detail has " +
+      throw InvalidInput("base frames have " + std::to_string(fr.points.size()) + " points, " +
+                         std::to_string(fr.normals.size()) + " normals and " +
+                         std::to_string(fr.tangents.size()) + " tangents; the detail has " +
                          std::to_string(n) + " vertices");
     for (int i = 0; i < n; ++i)
       if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
@@ -1006,17 +1014,21 @@ class VolumeReconstructor::Impl {
   // A solve driven out of range (e.g. a regularization weight of 1e308) is named as such, not as
   // the non-finite coordinates that a count or a writer would meet next.
   // The vertex named is the caller's: the smallest caller index among the non-finite ones.
+  // Positions beyond ten times the range the inputs are checked to lie in count too (over a cage
+  // flattened to a plane a solve returned coordinates of 8e21).
   void check_finite(const State& s) const {
     int bad = -1;
     for (std::size_t i = 0; i < s.P.size(); ++i)
-      if (!s.P[i].allFinite()) {
+      if (!s.P[i].allFinite() || s.P[i].cwiseAbs().maxCoeff() > 10 * kMaxCoordinate) {
         const int v = renum_.empty() ? static_cast<int>(i) : renum_.old_of_new[i];
         if (bad < 0 || v < bad) bad = v;
         if (renum_.empty()) break;
       }
     if (bad >= 0)
       throw SolverError(
-          "reconstruction produced non-finite positions (detail vertex " + std::to_string(bad) +
+          "reconstruction produced non-finite positions or positions beyond the engine's range (detail "
+          "vertex " +
+          std::to_string(bad) +
           "): the solve diverged (a base edited beyond what the detail can follow, or options out of a "
           "workable range)");
   }
@@ -2379,6 +2391,7 @@ ReconstructResult VolumeReconstructor::reconstruct_from(const std::vector<Vec3>&
 ReconstructResult VolumeReconstructor::drag_step(const BaseFrames& edited_frames, DragState& state,
                                                  const WarmStartOptions& warm,
                                                  const ReconstructRequest& request) const {
+  if (!state.impl_) throw InvalidInput("drag_step() with a moved-from DragState: reset() it first");
   BaseFrames copy;
   const BaseFrames& fr = impl_->solver_frames(edited_frames, copy);
   return impl_->in_solver_order(nullptr, request, [&](const std::vector<Vec3>*, const ReconstructRequest& q) {
@@ -2388,6 +2401,7 @@ ReconstructResult VolumeReconstructor::drag_step(const BaseFrames& edited_frames
 ReconstructResult VolumeReconstructor::drag_step(const std::vector<Vec3>& edited_base, DragState& state,
                                                  const WarmStartOptions& warm,
                                                  const ReconstructRequest& request) const {
+  if (!state.impl_) throw InvalidInput("drag_step() with a moved-from DragState: reset() it first");
   const auto t0 = std::chrono::steady_clock::now();
   const BaseFrames fr = impl_->frames_for(edited_base);  // in the solver's numbering
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -155,7 +155,8 @@ class SubdivSurface::Impl {
       throw InvalidInput("the Loop scheme needs an all-triangle cage");
     for (const SubdivTags::Crease& c : tags_.creases) {
       if (!(c.sharpness >= 0))
-        throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") has a negative sharpness");
+        throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") has a " +
+                           (std::isnan(c.sharpness) ? "NaN" : "negative") + " sharpness");
       if (c.v0 < 0 || c.v1 < 0 || c.v0 >= nv || c.v1 >= nv || !edge_ids_.count(pair_key(c.v0, c.v1)))
         throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") is not an edge of the cage");
     }
@@ -163,7 +164,8 @@ class SubdivSurface::Impl {
       if (c.vertex < 0 || c.vertex >= nv)
         throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + ", which the cage does not have");
       if (!(c.sharpness >= 0))
-        throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + " has a negative sharpness");
+        throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + " has a " +
+                           (std::isnan(c.sharpness) ? "NaN" : "negative") + " sharpness");
     }
     if (opt_.isolation_level < 1 || opt_.isolation_level > 10)
       throw InvalidInput("subdivision isolation level must be in 1..10, got " + vtx(opt_.isolation_level));
@@ -650,8 +652,9 @@ LimitTessellation SubdivSurface::tessellate(int resolution) const {
 }
 
 SubdivSurface::EdgeCrossing SubdivSurface::across_edge(int face, int edge, double t) const {
-  if (face < 0 || face >= impl_->num_ptex_ || edge < 0 || edge >= impl_->corners_ || !std::isfinite(t))
+  if (face < 0 || face >= impl_->num_ptex_ || edge < 0 || edge >= impl_->corners_)
     throw InvalidInput("ptex edge (" + vtx(face) + "," + vtx(edge) + ") out of range");
+  if (!std::isfinite(t)) throw InvalidInput("across_edge: the edge parameter t is not finite");
   return impl_->across(face, edge, std::clamp(t, 0.0, 1.0));
 }
 

@@ -48,8 +48,8 @@ struct CageEditOptions {
 //! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
-//!        handle is empty, the handle is the whole region, or a cage face's index is out of
-//!        range. A region that is the whole cage (of
+//!        handle is empty, the handle is the whole region, a cage face has fewer than 3 corners
+//!        or an index out of range. A region that is the whole cage (of
 //!        one piece) gives s = 1 everywhere: the edit moves the model rigidly. A cage vertex in
 //!        no face (it shapes no surface) keeps s = 0, or 1 on the handle.
 //! \throw SolverError if the field's system cannot be factorized or solved.

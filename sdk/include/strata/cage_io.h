@@ -32,7 +32,8 @@ SubdivTags read_subdiv_tags(const std::string& path);
 PolyMesh read_cage(const std::string& path);
 
 //! Writes a cage with its polygons (write_polygon_mesh, atomically); read_cage gives it back.
-//! \throw as write_polygon_mesh() (e.g. STL and a non-triangle face).
+//! \throw as write_polygon_mesh() (e.g. STL and a non-triangle face); InvalidInput as
+//!        check_coordinates() for what read_cage() would refuse, before anything is written.
 void write_cage(const PolyMesh& cage, const std::string& path);
 
 }  // namespace strata

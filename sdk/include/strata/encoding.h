@@ -200,9 +200,14 @@ SubdivSurface limit_surface_for(const DetailEncoding& encoding, const std::vecto
 //! \throw InvalidInput as evaluate_base_frames(), or as check_encoding() (the whole encoding is read).
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const std::vector<Vec3>& base_vertices);
 
+//! The largest amplitude magnitude a reconstruction takes (ReconstructRequest::amplitude,
+//! reconstruct_vectors()): the target volumes scale with it, and 1e300 overflowed the solve.
+constexpr double kMaxAmplitude = 1000.0;
+
 //! Same, from already evaluated base frames, with the displacements scaled by \p amplitude (a
 //! band's amplitude in a layered model: 0 puts every vertex on its base point).
-//! \throw InvalidInput if \p frames does not hold one frame per detail vertex, or as check_encoding().
+//! \throw InvalidInput if \p frames does not hold one frame per detail vertex, if |amplitude|
+//!        is not within kMaxAmplitude, if a frame or an offset is not finite, or as check_encoding().
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames,
                                       double amplitude = 1.0);
 

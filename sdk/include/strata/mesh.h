@@ -23,6 +23,11 @@ struct TriMesh {
   int num_faces() const { return static_cast<int>(faces.size()); }
 };
 
+//! Checks that every corner of \p faces indexes one of \p num_vertices vertices: what the
+//! functions over a mesh's faces below need before they index its vertices.
+//! \throw InvalidInput "<what>: face F has vertex index I, out of range (N vertices)".
+void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what);
+
 //! Length of the diagonal of the axis-aligned bounding box of \p points (0 for no points),
 //! computed without squares that underflow or overflow (points of 1e-200 have a diagonal).
 double bbox_diagonal(const std::vector<Vec3>& points);
@@ -30,7 +35,7 @@ double bbox_diagonal(const std::vector<Vec3>& points);
 //! faces; vertices in no face, which may hold anything, are left out). Algorithms whose precision
 //! depends on the coordinates' size (quadrics, float boxes, least squares) work relative to it,
 //! so that a scan far from the origin (a georeferenced one) is treated as at it.
-//! \pre every face index is in range.
+//! \throw InvalidInput if a face index is out of range (check_face_indices()).
 Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
 
 //! Whether \p p is \p rest up to rounding: within 1e-12 of \p scale (a diagonal of the points
@@ -52,7 +57,7 @@ constexpr double kMaxCoordinate = 1e20;
 constexpr double kMinExtent = 1e-20;
 
 //! Checks that the vertices \p faces use span at least kMinExtent (nothing for no faces).
-//! \pre every face index is in range.
+//! \throw InvalidInput if a face index is out of range (check_face_indices()).
 //! \throw InvalidInput "<what> has an extent (bounding box diagonal) of <x>, below the engine's
 //!        range (1e-20): ...".
 void check_extent(const std::vector<Vec3>& vertices, const std::vector<Face>& faces, const std::string& what);
@@ -69,10 +74,12 @@ inline Vec3 triangle_area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 //! Unit vertex normals, each the angle-weighted average of the incident face normals.
 //! A vertex with no incident face (or only degenerate ones) gets the zero vector.
+//! \throw InvalidInput if a face index is out of range (check_face_indices()).
 std::vector<Vec3> vertex_normals(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
 
 //! Sum of the signed volumes of the tetrahedra (origin, a, b, c) over all faces: the enclosed
 //! volume for a closed, outward-oriented mesh.
+//! \throw InvalidInput if a face index is out of range (check_face_indices()).
 double signed_volume(const TriMesh& mesh);
 
 }  // namespace strata

@@ -13,8 +13,8 @@ namespace strata {
 //! passes: a low-pass filter that, unlike plain Laplacian smoothing, does not shrink the surface.
 //! A boundary vertex averages its boundary neighbours only, so open boundaries are smoothed
 //! along themselves instead of pulled inwards. Returns the smoothed positions (mesh's order).
-//! \pre mesh's face indices are in range (validate_mesh()).
-//! \throw InvalidInput if steps < 0.
+//! \throw InvalidInput if steps < 0, a face index is out of range or a coordinate is not finite
+//!        (one NaN spread over the mesh).
 std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 
 //! Quadric-error decimation (Garland and Heckbert, OpenMesh's decimater) of \p mesh to about
@@ -22,8 +22,10 @@ std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 //! create slivers (aspect ratio above 8). Unreferenced vertices are dropped and the rest renumbered.
 //! A face whose corners make a non-manifold vertex is left out
 //! of the input. The result keeps the mesh's orientation.
-//! \pre mesh is a valid triangle mesh (validate_mesh()).
-//! \throw InvalidInput if target_faces < 4.
+//! \pre mesh is a valid triangle mesh (validate_mesh()); what would crash OpenMesh or give NaN
+//!      vertices is checked.
+//! \throw InvalidInput if target_faces < 4, a face index is out of range, a face repeats a
+//!        vertex or a coordinate is not finite.
 //! \throw SolverError if the decimater cannot be initialized or leaves fewer than 4 faces.
 TriMesh decimate_mesh(const TriMesh& mesh, int target_faces);
 

@@ -20,8 +20,10 @@ struct VolumeMetrics {
 };
 
 //! Measures the prisms spanned by \p detail_positions over the base points in \p frames.
-//! \throw InvalidInput if positions or frames do not have one entry per detail vertex, or as
-//! check_encoding().
+//! Where every target is 0 (amplitude 0), the relative errors are 0 if every volume is 0 and
+//! infinite otherwise; total_volume_change is 0 if total_target is 0.
+//! \throw InvalidInput if positions or frames do not have one entry per detail vertex, if one of
+//! them or the amplitude is not finite, or as check_encoding().
 //! With \p amplitude, the targets are amplitude times V*_j (a layered model's band amplitude).
 VolumeMetrics volume_metrics(const DetailEncoding& encoding, const BaseFrames& frames,
                              const std::vector<Vec3>& detail_positions, double amplitude = 1.0);

@@ -532,10 +532,6 @@ struct WarmStartOptions {
   int max_cycles = 0;
 };
 
-//! The largest amplitude magnitude a reconstruction takes (ReconstructRequest::amplitude): the
-//! target volumes scale with it, and 1e300 overflowed the solve.
-constexpr double kMaxAmplitude = 1000.0;
-
 //! Per-call inputs of a clean-start reconstruction beyond the edited base (layered models).
 struct ReconstructRequest {
   //! Scales every target volume and rest offset (a band's amplitude, issue 5): 1 keeps the
@@ -567,7 +563,7 @@ class DragState {
   //! (e.g. the encoded detail over the base at rest). Every level starts from these positions.
   //! \throw InvalidInput if the sizes differ or a value is not finite.
   void reset(const BaseFrames& frames, std::vector<Vec3> start);
-  //! Whether reset() was called.
+  //! Whether reset() was called (false for a moved-from state, which reset() starts anew).
   bool started() const;
 
  private:
@@ -596,8 +592,8 @@ class VolumeReconstructor {
   //! \pre edited_base has the encoding's base connectivity (same vertex count); over a subdivision
   //! base it holds the edited cage's control points.
   //! \throw InvalidInput on a vertex-count mismatch or non-finite coordinates; SolverError if the
-  //! iteration produces non-finite positions; Cancelled once ReconstructOptions::cancel is set
-  //! (every reconstruct(), reconstruct_from() and drag_step()).
+  //! iteration produces non-finite positions or positions beyond 10 kMaxCoordinate; Cancelled once
+  //! ReconstructOptions::cancel is set (every reconstruct(), reconstruct_from() and drag_step()).
   ReconstructResult reconstruct(const std::vector<Vec3>& edited_base) const;
 
   //! The same over base frames evaluated by the caller (e.g. evaluate_base_frames() on a

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "strata/editing.h"
+#include "strata/exceptions.h"
 
 namespace strata::internal {
 
@@ -17,7 +19,15 @@ class DetailSolve {
         reconstruct_(std::move(reconstruct)),
         drag_(drag),
         drag_end_(drag_end),
-        drag_end_cycles_(drag_end_cycles) {}
+        drag_end_cycles_(drag_end_cycles) {
+    // Enums cast from integers (a method of 9 ran as volumes).
+    if (method != EditOptions::Method::Volumes && method != EditOptions::Method::Vectors)
+      throw InvalidInput("edit option method = " + std::to_string(static_cast<int>(method)) +
+                         " is not volumes or vectors");
+    if (drag_end != EditOptions::DragEnd::FromDragState && drag_end != EditOptions::DragEnd::CleanStart)
+      throw InvalidInput("edit option drag_end = " + std::to_string(static_cast<int>(drag_end)) +
+                         " is not from_drag_state or clean_start");
+  }
 
   //! Set once by the editor before the first solve (the reconstructor is built from it lazily).
   DetailEncoding& encoding() { return enc_; }
