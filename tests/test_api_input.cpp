@@ -145,6 +145,24 @@ TEST(ApiInput, RotationsAboutHugeOrTinyAxesAreRotations) {
       [] { EditTransform::rotation(Vec3::Zero(), 90.0, Vec3::Zero(), Vec3::Zero()); }, {"axis is zero"}));
 }
 
+TEST(ApiInput, AnEditScriptWithAKeyTwiceIsRefused) {
+  // JSON keeps the later value: the second "region" (or "degrees") won, silently.
+  const std::string R = R"("region": {"box": {"min": [-9, -9, -9], "max": [9, 9, 0]}})";
+  const std::string H = R"("handle": {"box": {"min": [-9, -9, -9], "max": [9, 9, -1]}})";
+  const std::string T = R"("transform": {"rotate": {"axis": [1, 0, 0], "degrees": 90}})";
+  EXPECT_NO_THROW(parse_edit_script("{" + R + ", " + H + ", " + T + "}", "ok.json"));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] { parse_edit_script("{" + R + ", " + R + ", " + H + ", " + T + "}", "r.json"); },
+      {"r.json: the key \"region\" appears twice in one object"}));
+  const std::string T2 = R"("transform": {"rotate": {"axis": [1, 0, 0], "degrees": 90, "degrees": 45}})";
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { parse_edit_script("{" + R + ", " + H + ", " + T2 + "}", "d.json"); },
+                                {"d.json: the key \"degrees\" appears twice"}));
+  // The same key in two objects is no repetition.
+  EXPECT_NO_THROW(parse_edit_script(
+      R"({"edits": [{)" + R + ", " + H + ", " + T + "}, {" + R + ", " + H + ", " + T + "}]}", "two.json"));
+}
+
 TEST(ApiInput, DisplacementVectorsCheckTheAmplitudeFramesAndOffsets) {
   const cases::CylinderCase& c = small_case();
   DetailEncoding e = encode_detail(c.detail, c.base);

@@ -146,11 +146,28 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
   if (text.find('\0') != std::string::npos)
     throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
   json j;
+  // A key given twice in one object: JSON keeps the later value, silently (a second "region" won).
+  std::vector<std::set<std::string>> keys;  // per open object, its keys so far
+  std::string twice;
+  const json::parser_callback_t note_keys = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) {
+      keys.emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      keys.pop_back();
+    } else if (event == json::parse_event_t::key && !keys.empty()) {
+      const std::string& key = parsed.get_ref<const std::string&>();
+      if (!keys.back().insert(key).second && twice.empty()) twice = key;
+    }
+    return true;
+  };
   try {
-    j = json::parse(text);
+    j = json::parse(text, note_keys);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InvalidInput(name + ": not valid JSON: " + e.what());
   }
+  if (!twice.empty())
+    throw InvalidInput(name + ": the key \"" + twice +
+                       "\" appears twice in one object (which one is meant?)");
   EditScript script;
   const json* list = &j;
   std::string where = "edits";
