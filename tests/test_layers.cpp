@@ -941,17 +941,23 @@ TEST(LayersFile, AssembleChecksTheEncodingsValues) {
   EXPECT_NO_THROW(assemble_with([](std::vector<layers::Band>&) {}));
   EXPECT_TRUE(test::throws_with<InvalidInput>(
       [&] { assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.limit_points[0].face = 9999; }); },
-      {"band 1: the encoding's base points over its base at rest: "}));
+      {"band 1: the encoding's limit point 0 is not on a ptex face"}));
   EXPECT_TRUE(test::throws_with<InvalidInput>(
       [&] {
         assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.limit_points[3].u = std::nan(""); });
       },
-      {"band 1: the encoding's base points over its base at rest: "}));
+      {"band 1: the encoding's limit point 3 is not on a ptex face"}));
   EXPECT_TRUE(test::throws_with<InvalidInput>(
       [&] {
         assemble_with([](std::vector<layers::Band>& b) { b[2].encoding.target_volumes[5] = std::nan(""); });
       },
       {"band 2: the encoding's target volume 5 is not finite"}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with(
+            [](std::vector<layers::Band>& b) { b[2].encoding.base_points[7].bary[0] = std::nan(""); });
+      },
+      {"band 2: base point 7 has non-finite barycentric coordinates"}));
   EXPECT_TRUE(test::throws_with<InvalidInput>(
       [&] {
         assemble_with([](std::vector<layers::Band>& b) { b[1].encoding.normal_offsets[2] = INFINITY; });

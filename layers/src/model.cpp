@@ -578,8 +578,9 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                        std::to_string(bands[0].subdiv.max_refined_faces));
   // The cage's current points make a limit surface (a NaN point passed `info` and `export`, and an
   // edit blamed its script).
+  std::optional<SubdivSurface> surface;
   try {
-    const SubdivSurface surface(bands[0].cage, bands[0].tags, bands[0].subdiv);
+    surface.emplace(bands[0].cage, bands[0].tags, bands[0].subdiv);
   } catch (const InvalidInput& e) {
     throw InvalidInput("band 0: " + std::string(e.what()));
   }
@@ -644,9 +645,9 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     if (k == 1 && !same_subdivision(e, bands[0]))
       throw InvalidInput(name + ": the encoding's subdivision tags or options are not band 0's");
     // Its values are finite (a NaN target volume or offset was assembled, and every later edit
-    // or amplitude failed on it) and its base points lie on its base at rest (a limit point on a
-    // face past the cage's, or with a NaN (u, v), was assembled and written, and the reader then
-    // refused the file).
+    // or amplitude failed on it), and band 1's limit points lie on band 0's surface (whose tags and
+    // options it has): one on a face past the cage's, or with a NaN (u, v), was assembled and
+    // written, and the reader refused the file. (A triangle base's points: check_encoding().)
     auto finite = [&](const auto& values, const char* what) {
       for (std::size_t i = 0; i < values.size(); ++i) {
         bool ok = true;
@@ -663,10 +664,12 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     finite(e.tangential_offsets, "tangential offset");
     finite(e.base_rest_points, "rest base point");
     finite(e.weights, "regularization weight");
-    try {
-      (void)evaluate_base_frames(e, b.base_rest);
-    } catch (const InvalidInput& x) {
-      throw InvalidInput(name + ": the encoding's base points over its base at rest: " + x.what());
+    if (k == 1) {
+      try {
+        check_limit_points(e.limit_points, *surface);
+      } catch (const InvalidInput& x) {
+        throw InvalidInput(name + ": the encoding's " + x.what());
+      }
     }
   }
   LayeredModel model;

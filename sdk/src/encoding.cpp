@@ -328,6 +328,15 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
   return e;
 }
 
+void check_limit_points(const std::vector<LimitPoint>& points, const SubdivSurface& surface) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const LimitPoint& p = points[i];
+    if (p.face < 0 || p.face >= surface.num_ptex_faces() || !(p.u >= -1e-6 && p.u <= 1 + 1e-6) ||
+        !(p.v >= -1e-6 && p.v <= 1 + 1e-6))
+      throw InvalidInput("limit point " + std::to_string(i) + " is not on a ptex face");
+  }
+}
+
 DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
                                 std::vector<LimitPoint> limit_points) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -335,11 +344,10 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base
   if (limit_points.size() != detail.vertices.size())
     throw InvalidInput("encoding: " + std::to_string(limit_points.size()) + " limit points for " +
                        std::to_string(detail.vertices.size()) + " detail vertices");
-  for (std::size_t i = 0; i < limit_points.size(); ++i) {
-    const LimitPoint& p = limit_points[i];
-    if (p.face < 0 || p.face >= base.num_ptex_faces() || !(p.u >= -1e-6 && p.u <= 1 + 1e-6) ||
-        !(p.v >= -1e-6 && p.v <= 1 + 1e-6))
-      throw InvalidInput("encoding: limit point " + std::to_string(i) + " is not on a ptex face");
+  try {
+    check_limit_points(limit_points, base);
+  } catch (const InvalidInput& x) {
+    throw InvalidInput(std::string("encoding: ") + x.what());
   }
   DetailEncoding e = encoding_over_limit(detail, base, std::move(limit_points));
   e.report.seconds = seconds_since(t0);
@@ -420,9 +428,13 @@ void check_base_part(const DetailEncoding& e) {
       if (v < 0 || v >= e.base_num_vertices)
         throw InvalidInput("encoding has a base face index out of range (the base has " +
                            std::to_string(e.base_num_vertices) + " vertices)");
-  for (const BasePoint& b : e.base_points)
+  for (std::size_t i = 0; i < e.base_points.size(); ++i) {
+    const BasePoint& b = e.base_points[i];
     if (b.face < 0 || b.face >= static_cast<int>(e.base_faces.size()))
       throw InvalidInput("encoding has a base point on a missing base face");
+    if (!b.bary.allFinite())  // the frames' point was NaN
+      throw InvalidInput("base point " + std::to_string(i) + " has non-finite barycentric coordinates");
+  }
 }
 
 }  // namespace
@@ -480,8 +492,6 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
   fr.tangents.resize(n);
   for (int i = 0; i < n; ++i) {
     const BasePoint& bp = e.base_points[i];
-    if (!bp.bary.allFinite())
-      throw InvalidInput("base point " + std::to_string(i) + " has non-finite barycentric coordinates");
     const Face& F = e.base_faces[bp.face];
     const Vec3 &x0 = x[F[0]], &x1 = x[F[1]], &x2 = x[F[2]];
     fr.points[i] = bp.bary[0] * x0 + bp.bary[1] * x1 + bp.bary[2] * x2;

@@ -14,11 +14,7 @@ std::vector<double> prism_volumes(const std::vector<Face>& faces, const std::vec
   if (p.size() != q.size())
     throw InvalidInput("prism_volumes: " + std::to_string(p.size()) + " detail positions and " +
                        std::to_string(q.size()) + " base points");
-  for (const Face& f : faces)
-    for (int v : f)
-      if (v < 0 || v >= static_cast<int>(p.size()))
-        throw InvalidInput("prism_volumes: a face index is out of range (" + std::to_string(p.size()) +
-                           " vertices)");
+  check_face_indices(p.size(), faces, "prism_volumes");
   std::vector<double> v(faces.size());
   for (std::size_t j = 0; j < faces.size(); ++j) {
     const Face& f = faces[j];

@@ -140,13 +140,19 @@ DetailEncoding encode_detail_at(const TriMesh& detail, const TriMesh& base,
 DetailEncoding encode_detail_at(const TriMesh& detail, const SubdivSurface& base,
                                 std::vector<LimitPoint> limit_points);
 
+//! Checks that every limit point lies on a ptex face of \p surface with (u, v) in [0, 1]^2 (to
+//! 1e-6), as encode_detail_at() requires of them.
+//! \throw InvalidInput "limit point <i> is not on a ptex face".
+void check_limit_points(const std::vector<LimitPoint>& points, const SubdivSurface& surface);
+
 //! Checks that \p encoding's arrays fit together, so that what reads them stays within them: one
 //! offset, rest base point, base point (or limit point) and, if any, rest frame and pinned flag per
 //! detail vertex; one target volume per detail face; face indices within the detail and the base;
-//! base points on existing base faces; the weight graph's rows and neighbours. An encoding from
-//! encode_detail() passes; every function here that takes one checks it first. Values are not
-//! checked (the reconstruction checks those it reads; limit points' patches are checked where a
-//! limit surface evaluates them).
+//! base points on existing base faces with finite barycentric coordinates; not both base and
+//! limit points; the weight graph's rows and neighbours. An encoding from encode_detail() passes;
+//! every function here that takes one checks it first. Other values are not checked (the
+//! reconstruction checks those it reads; limit points are checked against a surface by
+//! check_limit_points(), and where a limit surface evaluates them).
 //! \throw InvalidInput naming the first array that does not fit.
 void check_encoding(const DetailEncoding& encoding);
 
