@@ -15,6 +15,7 @@
 #include "strata/editing.h"
 #include "strata/encoding.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 #include "strata/mesh_io.h"
 #include "strata/mesh_processing.h"
 #include "strata/metrics.h"
@@ -161,6 +162,31 @@ TEST(ApiInput, AnEditScriptWithAKeyTwiceIsRefused) {
   // The same key in two objects is no repetition.
   EXPECT_NO_THROW(parse_edit_script(
       R"({"edits": [{)" + R + ", " + H + ", " + T + "}, {" + R + ", " + H + ", " + T + "}]}", "two.json"));
+}
+
+TEST(ApiInput, JsonStructureLimits) {
+  // The checks that edit scripts and .strata headers share, at their limits.
+  EXPECT_EQ(json_structure_problem(std::string(256, '[') + std::string(256, ']')), "");
+  EXPECT_EQ(json_structure_problem(std::string(257, '[') + std::string(257, ']')),
+            "nested deeper than 256 levels");
+  // Stops at the level too many: the rest is not read (a million levels, at once).
+  EXPECT_EQ(json_structure_problem(std::string(1000000, '[')), "nested deeper than 256 levels");
+  std::string keys = "{";
+  for (int k = 0; k < 1025; ++k) keys += (k ? ",\"" : "\"") + std::to_string(k) + "\":0";
+  EXPECT_EQ(json_structure_problem(keys + "}"), "an object has more than 1024 keys");
+  EXPECT_EQ(json_structure_problem(keys + "}", JsonLimits{256, 0, true}), "");
+  EXPECT_EQ(json_structure_problem(R"({"a":{"b":1},"c":[{"b":2,"b":3}]})"),
+            "the key \"b\" appears twice in one object");
+  EXPECT_EQ(json_structure_problem(R"({"a":{"b":1},"c":[{"b":2,"b":3}]})", JsonLimits{256, 1024, false}), "");
+  // A syntax error is the parse's to report; so is an empty text.
+  EXPECT_EQ(json_structure_problem("{\"a\": }"), "");
+  EXPECT_EQ(json_structure_problem(""), "");
+  // An edit script too deep is refused before it is parsed.
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [] {
+        parse_edit_script(R"({"edits": )" + std::string(300, '[') + std::string(300, ']') + "}", "deep.json");
+      },
+      {"deep.json: nested deeper than 256 levels"}));
 }
 
 TEST(ApiInput, DisplacementVectorsCheckTheAmplitudeFramesAndOffsets) {

@@ -360,7 +360,7 @@ TEST(Layers, AnIdentityEditOfATriangleBandChangesNothing) {
 }
 
 // An edit's provenance that is JSON is kept in the history as JSON, unless it exceeds the file
-// format's limits (an object of 1,025 keys or more, 257 levels): then as text, so that the model
+// format's limits (an object of 1,025 keys or more, 257 levels, a key twice): then as text, so that the model
 // still writes (a caller's JSON of 2,000 keys made every later write_model() fail).
 TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   LayeredModel model = model_of("camel");
@@ -372,14 +372,17 @@ TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   const std::string deep = std::string(300, '[') + std::string(300, ']');
   model.edit(1, step, keys);
   model.edit(1, step, deep);
+  const std::string twice = "{\"script\":\"a.json\",\"script\":\"b.json\"}";  // as JSON, one would be lost
+  model.edit(1, step, twice);
   model.edit(1, step, "{\"script\":\"bend.json\"}");
   test::ScratchDir tmp("strata_layers");
   layers::write_model(model, tmp.file("p.strata"));
   const std::vector<std::string> h = layers::read_model(tmp.file("p.strata")).history();
-  ASSERT_GE(h.size(), 3u);
+  ASSERT_GE(h.size(), 4u);
   const auto edit_of = [](const std::string& entry) { return nlohmann::json::parse(entry).at("edit"); };
-  EXPECT_EQ(edit_of(h[h.size() - 3]), nlohmann::json(keys));
-  EXPECT_EQ(edit_of(h[h.size() - 2]), nlohmann::json(deep));
+  EXPECT_EQ(edit_of(h[h.size() - 4]), nlohmann::json(keys));
+  EXPECT_EQ(edit_of(h[h.size() - 3]), nlohmann::json(deep));
+  EXPECT_EQ(edit_of(h[h.size() - 2]), nlohmann::json(twice));
   EXPECT_EQ(edit_of(h[h.size() - 1]), nlohmann::json::parse("{\"script\":\"bend.json\"}"));
 }
 

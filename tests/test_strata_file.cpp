@@ -428,6 +428,18 @@ TEST(StrataFile, WriteRejectsBadInputAndLeavesTheTargetUntouched) {
     expect_rejected(c, "too deep");
   }
   {
+    // A key twice, at any depth: JSON would keep one of the values silently.
+    StrataContainer c;
+    for (const std::string model : {"{\"a\":1,\"a\":1}", "{\"b\":[{\"x\":1,\"y\":2,\"x\":3}]}"}) {
+      c.model_json = model;
+      expect_rejected(c, "a key twice: " + model);
+    }
+    c.model_json = "{\"a\":{\"x\":1},\"b\":{\"x\":1}}";  // the same key in two objects is fine
+    strata::test::ScratchDir other{"strata_file_twice"};
+    write_strata_container(c, other.file("twice.strata"));
+    EXPECT_EQ(read_strata_container(other.file("twice.strata")).model_json, c.model_json);
+  }
+  {
     StrataContainer c;
     c.model_json = many_keys(1025);
     expect_rejected(c, "1025 keys");
@@ -671,6 +683,22 @@ TEST(StrataFile, MalformedHeadersAreReported) {
     strata::test::ScratchDir dir{"strata_file_objects"};
     write_strata_container(c, dir.file("o.strata"));
     EXPECT_EQ(read_strata_container(dir.file("o.strata")).model_json, c.model_json);
+  }
+  {
+    // A key given twice, with the header's checksum valid: in the header itself, in a section
+    // entry (the first value right, the second wrong), and inside the model.
+    const std::string text = good.dump();
+    auto twice = [&](const std::string& find, const std::string& replace) {
+      std::string t = text;
+      const std::size_t at = t.find(find);
+      EXPECT_NE(at, std::string::npos) << find;
+      return at == std::string::npos ? t : t.replace(at, find.size(), replace);
+    };
+    check(twice("{", "{\"version\":1,"), both, "the key \"version\" appears twice in one object");
+    check(twice("\"name\":\"one\"", "\"name\":\"one\",\"name\":\"two\""), both,
+          "the key \"name\" appears twice");
+    check(twice("\"model\":{}", "\"model\":{\"a\":[{\"k\":1,\"k\":1}]}"), both,
+          "malformed header: the key \"k\" appears twice");
   }
   // Section table entries. (Changing a header field can change the header's length and so the
   // canonical offsets: those cases expect whichever offset or length error follows.)

@@ -13,9 +13,9 @@
 #include <type_traits>
 #include <unordered_map>
 
-#include "json_limits.h"
 #include "strata/cage_editing.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 #include "strata/mesh_io.h"
 #include "strata/mesh_processing.h"
 
@@ -715,8 +715,7 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   // Provenance that is JSON is kept as JSON, within the file format's limits; otherwise as text
   // (a caller's JSON of 2,000 keys would have made every later write of the model fail).
   try {
-    if (!internal::json_limit_problem(provenance.data(), provenance.data() + provenance.size()).empty())
-      throw std::length_error("over the file's JSON limits");
+    if (!json_structure_problem(provenance).empty()) throw std::length_error("over the file's JSON limits");
     h["edit"] = json::parse(provenance);
   } catch (const std::exception&) {
     h["edit"] = provenance;

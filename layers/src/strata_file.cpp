@@ -10,9 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "json_limits.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 
 namespace strata::layers {
 namespace {
@@ -34,7 +34,6 @@ constexpr unsigned char kMagic[8] = {0x89, 'S', 'T', 'R', 'A', 'T', 'A', 0x0A};
 constexpr std::size_t kPrefixSize = 20;  // magic, version, header length, header CRC-32
 constexpr std::size_t kAlignment = 8;
 constexpr std::size_t kMaxNameLength = 64;
-using internal::json_limit_problem;
 
 std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size) {
   uLong crc = ::crc32(0L, Z_NULL, 0);
@@ -82,11 +81,12 @@ std::string name_problem(const std::string& name) {
   return "";
 }
 
-//! Parses \p text; returns "" or, if it nests deeper than kMaxJsonDepth or has an object of more
-//! than kMaxJsonKeys keys, the problem (\p out is then left unset; no value is built). Throws
-//! nlohmann's exceptions on malformed JSON.
+//! Parses \p text; returns "" or, if it is outside the format's JsonLimits (too deep, an object
+//! with too many keys or a key twice), the problem (\p out is then left unset; no value is
+//! built). Throws nlohmann's exceptions on malformed JSON.
 std::string parse_json_limited(const char* begin, const char* end, Json& out) {
-  std::string problem = json_limit_problem(begin, end);
+  std::string problem =
+      json_structure_problem(std::string_view(begin, static_cast<std::size_t>(end - begin)));
   if (problem.empty()) out = Json::parse(begin, end);
   return problem;
 }

@@ -8,6 +8,7 @@
 
 #include "internal/read_file.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 
 namespace strata {
 namespace {
@@ -146,46 +147,15 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
   if (text.find('\0') != std::string::npos)
     throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
   json j;
-  // A key given twice in one object: JSON keeps the later value, silently (a second "region" won).
-  // Found by a SAX pass that builds nothing: nlohmann's callback parser rescans a container after
-  // each object in it ends (an array of 200k objects took 5 s).
-  struct Keys {
-    std::vector<std::set<std::string>> open;  // per open object, its keys so far
-    std::string twice;
-    bool null() { return true; }
-    bool boolean(bool) { return true; }
-    bool number_integer(json::number_integer_t) { return true; }
-    bool number_unsigned(json::number_unsigned_t) { return true; }
-    bool number_float(json::number_float_t, const json::string_t&) { return true; }
-    bool string(json::string_t&) { return true; }
-    bool binary(json::binary_t&) { return true; }
-    bool start_object(std::size_t) {
-      open.emplace_back();
-      return true;
-    }
-    bool key(json::string_t& k) {
-      if (open.back().insert(k).second) return true;
-      twice = k;
-      return false;
-    }
-    bool end_object() {
-      open.pop_back();
-      return true;
-    }
-    bool start_array(std::size_t) { return true; }
-    bool end_array() { return true; }
-    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) { return false; }
-  } keys;
-  json::sax_parse(text, &keys);  // a syntax error is left to the parse below, which names it
-  const std::string& twice = keys.twice;
+  // Checked before the parse: a key given twice in one object (JSON keeps the later value
+  // silently: a second "region" won), or JSON too deep or too wide to handle.
+  if (const std::string problem = json_structure_problem(text); !problem.empty())
+    throw InvalidInput(name + ": " + problem);
   try {
     j = json::parse(text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InvalidInput(name + ": not valid JSON: " + e.what());
   }
-  if (!twice.empty())
-    throw InvalidInput(name + ": the key \"" + twice +
-                       "\" appears twice in one object (which one is meant?)");
   EditScript script;
   const json* list = &j;
   std::string where = "edits";

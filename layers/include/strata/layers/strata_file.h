@@ -39,8 +39,8 @@ struct StrataContainer {
 //! Writes \p container to \p path atomically (write_file_atomically: a temporary file, then a
 //! rename; on any error \p path is left as it was).
 //! \throw InvalidInput if model_json is not a JSON object (or nests deeper than 256 levels, or has
-//!        an object of more than 1024 keys), or a section name is empty, too long, not printable
-//!        ASCII, or repeated. Nothing is written then.
+//!        an object of more than 1024 keys or with a key twice: json_structure_problem()), or a
+//!        section name is empty, too long, not printable ASCII, or repeated. Nothing is written then.
 //! \throw IoError if the file cannot be written.
 void write_strata_container(const StrataContainer& container, const std::string& path);
 
