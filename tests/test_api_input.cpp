@@ -221,6 +221,15 @@ TEST(ApiInput, EncodingsWithNonFiniteOrMixedBasePointsAreRefused) {
       throws_with<InvalidInput>([&] { check_encoding(both); }, {"both base points", "and limit points"}));
 }
 
+TEST(ApiInput, AnEmptyEncodingIsCalledEmpty) {
+  // It was reported by its weight offsets' count ("0 weight offsets for 1 ...").
+  EXPECT_TRUE(throws_with<InvalidInput>([] { check_encoding(DetailEncoding{}); }, {"encoding is empty"}));
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([] { VolumeReconstructor r{DetailEncoding{}}; }, {"encoding is empty"}));
+  EXPECT_TRUE(throws_with<InvalidInput>([] { reconstruct_vectors(DetailEncoding{}, BaseFrames{}); },
+                                        {"encoding is empty"}));
+}
+
 TEST(ApiInput, ADegenerateLimitSurfaceHasNoNormalsAndSaysSo) {
   const TriMesh sphere = icosphere(2, 1.2);
   const DetailEncoding e = encode_detail(sphere, SubdivSurface(cube_cage()));

@@ -1370,7 +1370,14 @@ TEST(MeshIoValidate, ExactMessages) {
   EXPECT_EQ(message(t, "v.obj"), "v.obj: face 0 has zero area");
   // A sliver below the relative threshold (area 1e-15 * bbox^2) is zero area; one above is not.
   t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 2e-15, 0}};
-  EXPECT_EQ(message(t, "s"), "s: face 0 has zero area");
+  EXPECT_EQ(message(t, "s"),
+            "s: face 0 has zero area for the mesh's size (area 1e-15, bounding-box diagonal 1)");
+  // A face of area 0.5 is zero area next to a vertex at 1e300; the message says why.
+  t.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1e300, 0, 0}};
+  t.faces = {{0, 1, 2}, {1, 3, 2}};
+  EXPECT_EQ(message(t, "far"),
+            "far: face 0 has zero area for the mesh's size (area 0.5, bounding-box diagonal 1e+300)");
+  t.faces = {{0, 1, 2}};
   t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-12, 0}};
   EXPECT_EQ(message(t, "s"), "(no error)");
 

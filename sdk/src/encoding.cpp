@@ -440,6 +440,8 @@ void check_base_part(const DetailEncoding& e) {
 }  // namespace
 
 void check_encoding(const DetailEncoding& e) {
+  // encode_detail() needs faces; an empty encoding is a caller's default-constructed one.
+  if (e.detail_faces.empty()) throw InvalidInput("encoding is empty (no detail faces)");
   check_base_part(e);
   const int n = e.num_detail_vertices();
   const std::size_t nf = e.detail_faces.size();

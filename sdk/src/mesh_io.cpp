@@ -1117,7 +1117,8 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
     if (used[v]) max_abs = std::max(max_abs, mesh.vertices[v].cwiseAbs().maxCoeff());
   int exponent = 0;
   std::frexp(max_abs, &exponent);
-  const double scale = max_abs > 0.0 ? std::ldexp(1.0, std::min(-exponent, 1000)) : 1.0;  // 2^1000 < DBL_MAX
+  const int scale_exponent = max_abs > 0.0 ? std::min(-exponent, 1000) : 0;  // 2^1000 < DBL_MAX
+  const double scale = std::ldexp(1.0, scale_exponent);
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (size_t v = 0; v < used.size(); ++v)
     if (used[v]) {
@@ -1133,7 +1134,19 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
     const double double_area = triangle_area_normal(a, b, c).norm();
     if (double_area == 0.0 || double_area <= min_double_area) {
       at = static_cast<long long>(f);
-      return "face " + std::to_string(f) + " has zero area";
+      const std::string what = "face " + std::to_string(f) + " has zero area";
+      // Small only for the mesh's size, say, next to a vertex at 1e300 (whose scale can flush the
+      // face's area to 0): give both, unscaled.
+      const double area =
+          double_area > 0.0
+              ? std::ldexp(0.5 * double_area, -2 * scale_exponent)
+              : 0.5 * triangle_area_normal(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]])
+                          .norm();
+      if (area == 0.0) return what;
+      char sizes[96];
+      std::snprintf(sizes, sizeof sizes, " for the mesh's size (area %.3g, bounding-box diagonal %.3g)", area,
+                    std::ldexp(diag, -scale_exponent));
+      return what + sizes;
     }
   }
 

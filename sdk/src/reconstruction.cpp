@@ -605,9 +605,8 @@ class VolumeReconstructor::Impl {
 
  private:
   void validate() const {
+    check_encoding(enc_);  // not empty; sizes and indices
     const int n = enc_.num_detail_vertices();
-    if (n == 0 || enc_.detail_faces.empty()) throw InvalidInput("encoding has no detail vertices or faces");
-    check_encoding(enc_);  // sizes and indices
     // The hierarchy's decimation orders edges by length: a non-finite one has no place there.
     check_coordinates(enc_.detail_rest, "encoding's detail at rest:");
     for (const BasePoint& b : enc_.base_points)

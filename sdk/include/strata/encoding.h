@@ -153,7 +153,8 @@ void check_limit_points(const std::vector<LimitPoint>& points, const SubdivSurfa
 //! every function here that takes one checks it first. Other values are not checked (the
 //! reconstruction checks those it reads; limit points are checked against a surface by
 //! check_limit_points(), and where a limit surface evaluates them).
-//! \throw InvalidInput naming the first array that does not fit.
+//! \throw InvalidInput "encoding is empty (no detail faces)" for one without detail faces (as a
+//!        default-constructed DetailEncoding), or naming the first array that does not fit.
 void check_encoding(const DetailEncoding& encoding);
 
 //! The part of \p encoding spanned by the detail faces \p faces (indices into detail_faces): its
