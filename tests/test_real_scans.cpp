@@ -61,6 +61,13 @@ std::string name_of(const ::testing::TestParamInfo<ScanEdit>& info) {
   return info.param.name;
 }
 
+// gtest prints a parameter in its test list ("# GetParam() = ..."), which CMake's test discovery
+// makes part of the ctest name: by default the struct's bytes, pointers included, so the names
+// changed with every build.
+void PrintTo(const ScanEdit& e, std::ostream* os) {
+  *os << e.name;
+}
+
 }  // namespace
 
 // Volumes keep the region's prisms to the acceptance bounds, add no intersecting pair to the
@@ -170,6 +177,10 @@ struct CageScanEdit {
   int cage_faces;
   bool vectors_fold;  // displacement vectors are expected to add intersecting pairs
 };
+
+void PrintTo(const CageScanEdit& e, std::ostream* os) {
+  *os << e.name;
+}  // as ScanEdit's
 
 class RealScanCageBend : public ::testing::TestWithParam<CageScanEdit> {};
 
