@@ -13,6 +13,12 @@ for sub in reconstruct stats generate demo; do
   grep -q "Usage: strata $sub" <<<"$sub_out" || fail "strata $sub --help prints no usage line"
 done
 
+# --version prints the SDK's version (CMakeLists.txt's project VERSION) and exits 0.
+want=$(sed -n 's/^project(Strata VERSION \([0-9.]*\).*/\1/p' "$(dirname "$0")/../../CMakeLists.txt")
+[ -n "$want" ] || fail "no project VERSION in CMakeLists.txt"
+ver=$("$STRATA" --version) || fail "strata --version exited non-zero"
+[ "$ver" = "strata $want" ] || fail "strata --version printed '$ver', expected 'strata $want'"
+
 grep -q "cage" <<<"$out" || fail "strata --help does not list 'cage'"
 sub_out=$("$STRATA" cage fit --help) || fail "strata cage fit --help exited non-zero"
 grep -q "Usage: strata cage fit" <<<"$sub_out" || fail "strata cage fit --help prints no usage line"

@@ -8,6 +8,7 @@
 
 #include "common.h"
 #include "strata/exceptions.h"
+#include "strata/version.h"
 
 int main(int argc, char** argv) {
   using namespace strata::cli;
@@ -16,6 +17,8 @@ int main(int argc, char** argv) {
       "Encodes a detail mesh over a base mesh and rebuilds it over an edited base,\n"
       "by displacement volumes (prism volumes preserved) or by displacement vectors.",
       "strata"};
+  app.set_version_flag("--version", std::string("strata ") + strata::version(),
+                       "Print the version of the strata tool and its SDK and exit");
   app.require_subcommand(1);
   app.get_formatter()->column_width(34);
 
@@ -31,7 +34,7 @@ int main(int argc, char** argv) {
     std::cerr << "strata: error: no subcommand given" << std::endl;
     return 2;
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     const auto selected = app.get_subcommands();
     std::cerr << "strata: error: " << e.what() << "\n"
               << "Run 'strata" << (selected.empty() ? "" : " " + selected.front()->get_name())
