@@ -590,6 +590,7 @@ TEST(MultigridBend, LocalEndsStayWithinTheirLimitAndAreUndoneWhenTheyFail) {
   // factorizations in all): undone, and the factorized whole-level steps finish.
   ReconstructOptions one_round = base;
   one_round.max_final_steps = 1;
+  one_round.max_factorized_steps = 1;  // as measured, before the two were apart
   const ReconstructStats st1 = run(one_round, b14);
   EXPECT_GE(st1.local_ends_undone, 1);
   EXPECT_GE(st1.local_factorizations, 1);
@@ -646,6 +647,20 @@ TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
   const VolumeMetrics m = volume_metrics(e, evaluate_base_frames(e, c.edited_base.vertices), r.positions);
   EXPECT_LE(m.max_relative_error, ro.tolerance * (1 + 1e-9));
   EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u);
+  // The factorized steps are at most max_factorized_steps: one fewer than this solve took, and
+  // without the retries, it ends unconverged after exactly that many.
+  const int taken = r.stats.factorizations;
+  ASSERT_GE(taken, 2);
+  ReconstructOptions capped = ro;
+  capped.max_factorized_steps = taken - 1;
+  capped.retry_volume_iterations = 0;
+  capped.retry_other_regularization = false;
+  capped.fallback_schedule = false;
+  capped.multigrid.retry_iterations = 0;
+  const ReconstructResult short_of = VolumeReconstructor(e, capped).reconstruct(c.edited_base.vertices);
+  EXPECT_FALSE(short_of.stats.converged);
+  EXPECT_EQ(short_of.stats.factorizations - short_of.stats.local_factorizations, taken - 1);
+  EXPECT_EQ(short_of.stats.retries, 0);
 }
 
 // ReconstructOptions::retry_other_regularization: a preset solve that folds is retried with the

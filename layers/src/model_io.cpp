@@ -100,6 +100,7 @@ json options_json(const ModelOptions& o) {
             {"level_tolerance", r.level_tolerance},
             {"tolerance", r.tolerance},
             {"max_final_steps", r.max_final_steps},
+            {"max_factorized_steps", r.max_factorized_steps},
             {"local_polish_max_fraction", r.local_polish_max_fraction},
             {"local_polish_rings", r.local_polish_rings},
             {"local_polish_max_motion", r.local_polish_max_motion},
@@ -265,6 +266,8 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.level_tolerance = h.number(r, "level_tolerance", wr);
   ro.tolerance = h.number(r, "tolerance", wr);
   ro.max_final_steps = static_cast<int>(h.integer(r, "max_final_steps", wr, 0, 100000));
+  // Files written before 2026-11-29 capped a stalled polish's factorized steps by max_final_steps.
+  ro.max_factorized_steps = optional_count("max_factorized_steps", ro.max_final_steps);
   // The local end's options were not written before 2026-11-27 (ninth session): such files read
   // as they did then, with the defaults (no local end).
   if (r.contains("local_polish_max_fraction"))

@@ -57,6 +57,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"level_tolerance", &o.level_tolerance},
           {"tolerance", &o.tolerance},
           {"max_final_steps", &o.max_final_steps},
+          {"max_factorized_steps", &o.max_factorized_steps},
           {"local_polish_max_fraction", &o.local_polish_max_fraction},
           {"local_polish_rings", &o.local_polish_rings},
           {"local_polish_max_motion", &o.local_polish_max_motion},

@@ -1688,7 +1688,8 @@ class VolumeReconstructor::Impl {
     release_step_scratch(s.gn);
     ensure_factorizable(L);
     s.gn.damping = kMinDamping;
-    st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Factorized, st, V);
+    st.final_sweeps +=
+        project(L, s, s.amplitude, tol, opt_.max_factorized_steps, StepSolve::Factorized, st, V);
   }
 
   // The finest level's prisms whose volume is more than \p tol (relative to the mean target
@@ -2307,6 +2308,7 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(o.level_tolerance > 0, "level_tolerance", o.level_tolerance, "above 0");
   check(o.tolerance > 0, "tolerance", o.tolerance, "above 0");
   count(o.max_final_steps, "max_final_steps", 0, 100000);
+  count(o.max_factorized_steps, "max_factorized_steps", 0, 100000);
   check(o.min_length_fraction >= 0, "min_length_fraction", o.min_length_fraction, "at least 0");
   check(o.fixed_point_tolerance >= 0, "fixed_point_tolerance", o.fixed_point_tolerance, "at least 0");
   check(o.regularization_decay >= 0 && o.regularization_decay <= 1000, "regularization_decay",

@@ -551,6 +551,7 @@ int main(int argc, char** argv) {
             {"max_cycles", ro.max_cycles},
             {"final_max_cycles", ro.final_max_cycles},
             {"max_final_steps", ro.max_final_steps},
+            {"max_factorized_steps", ro.max_factorized_steps},
             {"cg_max_iterations", ro.cg_max_iterations},
             {"threads", ro.threads},
             {"cg_tolerance", ro.cg_tolerance},

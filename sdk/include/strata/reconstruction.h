@@ -304,9 +304,18 @@ struct ReconstructOptions {
   //! Whole-level exact Gauss-Newton steps (the polish) at most on the finest level at full scale
   //! after the cycles, to reach `tolerance`: a sparse Cholesky factorization each with the Direct
   //! polish solver, a multigrid solve with the Multigrid one (which, if that stalls, then takes up
-  //! to this many factorized steps). Also the rounds of each local end at most
+  //! to max_factorized_steps factorized steps). Also the rounds of each local end at most
   //! (local_polish_max_fraction) and the steps of each fold-repair round's local polish.
   int max_final_steps = 10;
+  //! Factorized steps at most that finish a multigrid polish (polish_solver Multigrid) that
+  //! stalls, as on regular grids, whose checkerboard volume patterns the multigrid does not
+  //! represent (see MultigridStepOptions). Each is a sparse Cholesky factorization over the whole
+  //! finest level. On large regular grids they converge slowly at first, each step cut to an
+  //! eighth by the line search, before the fast end: measured (2026-11-29, `strata_bench --jitter
+  //! 0 --sizes 1000000 --solver multigrid`), the regular 1M rings bend converged after 23
+  //! factorizations in 78.9 s, where with 10 it ended unconverged after three retries (330 s, max
+  //! error 2.0e-2). Layered models' files written before this option read it as max_final_steps.
+  int max_factorized_steps = 30;
   //! The polish's local end. Once the prisms above the tolerance and local_polish_rings rings of
   //! vertices around them make a system of at most this fraction of the finest level's prisms
   //! (the prisms with a moving vertex), the polish ends in rounds of one factorized step that
