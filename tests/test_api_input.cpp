@@ -178,6 +178,12 @@ TEST(ApiInput, JsonStructureLimits) {
   EXPECT_EQ(json_structure_problem(R"({"a":{"b":1},"c":[{"b":2,"b":3}]})"),
             "the key \"b\" appears twice in one object");
   EXPECT_EQ(json_structure_problem(R"({"a":{"b":1},"c":[{"b":2,"b":3}]})", JsonLimits{256, 1024, false}), "");
+  // A key is shown printable and short: a terminal would act on its control characters.
+  EXPECT_EQ(json_structure_problem("{\"a\\u001b[2Jb\":1,\"a\\u001b[2Jb\":2}"),
+            "the key \"a?[2Jb\" appears twice in one object");
+  const std::string long_key = "\"" + std::string(100000, 'k') + "\"";
+  EXPECT_EQ(json_structure_problem("{" + long_key + ":1," + long_key + ":2}"),
+            "the key \"" + std::string(64, 'k') + "...\" appears twice in one object");
   // A syntax error is the parse's to report; so is an empty text.
   EXPECT_EQ(json_structure_problem("{\"a\": }"), "");
   EXPECT_EQ(json_structure_problem(""), "");
