@@ -184,6 +184,11 @@ TEST(ApiInput, JsonStructureLimits) {
   const std::string long_key = "\"" + std::string(100000, 'k') + "\"";
   EXPECT_EQ(json_structure_problem("{" + long_key + ":1," + long_key + ":2}"),
             "the key \"" + std::string(64, 'k') + "...\" appears twice in one object");
+  EXPECT_EQ(printable_key("caf\xc3\xa9\t"), "caf???");
+  EXPECT_EQ(printable_key(""), "");
+  // An unknown key too, in an edit script (cage files and .strata headers print theirs alike).
+  EXPECT_TRUE(throws_with<InvalidInput>([] { parse_edit_script("{\"regi\\u001b[2Jon\": 1}", "k.json"); },
+                                        {"unknown key \"regi?[2Jon\""}));
   // A syntax error is the parse's to report; so is an empty text.
   EXPECT_EQ(json_structure_problem("{\"a\": }"), "");
   EXPECT_EQ(json_structure_problem(""), "");

@@ -180,7 +180,7 @@ class Reader {
     for (const std::string& key : kKeys)
       if (!header.contains(key)) malformed("missing key '" + key + "'");
     for (const auto& item : header.items())
-      if (kKeys.count(item.key()) == 0) malformed("unknown key '" + item.key() + "'");
+      if (kKeys.count(item.key()) == 0) malformed("unknown key '" + printable_key(item.key()) + "'");
     if (!header["format"].is_string() || header["format"].get<std::string>() != "strata")
       malformed("'format' is not \"strata\"");
     const std::uint64_t version = unsigned_value(header["version"], "'version'");

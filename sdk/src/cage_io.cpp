@@ -5,6 +5,7 @@
 
 #include "internal/read_file.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 #include "strata/mesh_io.h"
 
 namespace strata {
@@ -22,7 +23,7 @@ void only_keys(const std::string& name, const std::string& where, const json& j,
   for (const auto& [k, v] : j.items()) {
     bool known = false;
     for (const char* a : keys) known = known || k == a;
-    if (!known) fail(name, where, "unknown key \"" + k + "\"");
+    if (!known) fail(name, where, "unknown key \"" + printable_key(k) + "\"");
   }
 }
 

@@ -26,7 +26,7 @@ struct Ctx {
 void check_keys(const Ctx& c, const std::string& where, const json& j, const std::set<std::string>& allowed) {
   if (!j.is_object()) c.fail(where, "expected an object");
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (!allowed.count(it.key())) c.fail(where, "unknown key \"" + it.key() + "\"");
+    if (!allowed.count(it.key())) c.fail(where, "unknown key \"" + printable_key(it.key()) + "\"");
 }
 
 const json& required(const Ctx& c, const std::string& where, const json& j, const char* key) {

@@ -9,19 +9,6 @@ namespace {
 
 using J = nlohmann::json;
 
-// \p key as a message shows it: at most 64 bytes, each outside printable ASCII as '?' (a key is
-// any JSON string: a megabyte, or control characters that a terminal would act on).
-std::string printable(const std::string& key) {
-  constexpr std::size_t kMaxShown = 64;
-  std::string out;
-  for (std::size_t i = 0; i < key.size() && i < kMaxShown; ++i) {
-    const auto c = static_cast<unsigned char>(key[i]);
-    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
-  }
-  if (key.size() > kMaxShown) out += "...";
-  return out;
-}
-
 // The SAX handler: per open object its keys so far; stops (returns false) at the first problem.
 class StructureCheck {
  public:
@@ -45,7 +32,7 @@ class StructureCheck {
     if (limits_.max_keys > 0 && keys.count > limits_.max_keys)
       return fail("an object has more than " + std::to_string(limits_.max_keys) + " keys");
     if (limits_.reject_duplicate_keys && !keys.seen.insert(k).second)
-      return fail("the key \"" + printable(k) + "\" appears twice in one object");
+      return fail("the key \"" + printable_key(k) + "\" appears twice in one object");
     return true;
   }
   bool end_object() {
@@ -81,6 +68,17 @@ class StructureCheck {
 };
 
 }  // namespace
+
+std::string printable_key(std::string_view key) {
+  constexpr std::size_t kMaxShown = 64;
+  std::string out;
+  for (std::size_t i = 0; i < key.size() && i < kMaxShown; ++i) {
+    const auto c = static_cast<unsigned char>(key[i]);
+    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+  }
+  if (key.size() > kMaxShown) out += "...";
+  return out;
+}
 
 std::string json_structure_problem(std::string_view text, const JsonLimits& limits) {
   StructureCheck check(limits);

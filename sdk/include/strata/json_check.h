@@ -32,4 +32,9 @@ struct JsonLimits {
 //! \throw nothing but std::bad_alloc.
 std::string json_structure_problem(std::string_view text, const JsonLimits& limits = {});
 
+//! A key of a JSON file as Strata's messages show it: its first 64 bytes, any byte outside
+//! printable ASCII as '?', and "..." if it was longer. A key is any JSON string: a megabyte, or
+//! control characters that a terminal would act on.
+std::string printable_key(std::string_view key);
+
 }  // namespace strata
