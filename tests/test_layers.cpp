@@ -19,6 +19,7 @@
 #include "strata/layers/strata_file.h"
 #include "strata/mesh_io.h"
 #include "strata/metrics.h"
+#include "strata/version.h"
 #include "test_files.h"
 #include "test_meshes.h"
 
@@ -147,6 +148,10 @@ TEST(Layers, AmplitudeScalesTheBandsPrismVolumes) {
     LayeredModel m = model;
     const layers::CascadeReport r = m.set_amplitude(2, a);
     ASSERT_EQ(r.rebuilt.size(), 1u);
+    const nlohmann::json last = nlohmann::json::parse(m.history().back());
+    EXPECT_EQ(last.at("op"), "amplitude");
+    EXPECT_EQ(last.at("scale"), a);
+    EXPECT_EQ(last.at("strata"), STRATA_VERSION_STRING);
     const DetailEncoding& e = m.band(2).encoding;
     const BaseFrames f = evaluate_base_frames(e, m.band(1).mesh.vertices);
     const VolumeMetrics v = volume_metrics(e, f, m.band(2).mesh.vertices, a);
@@ -359,9 +364,9 @@ TEST(Layers, AnIdentityEditOfATriangleBandChangesNothing) {
   for (const layers::BandRebuild& b : r.rebuilt) EXPECT_EQ(b.solved_vertices, 0) << "band " << b.band;
 }
 
-// An edit's provenance that is JSON is kept in the history as JSON, unless it exceeds the file
-// format's limits (an object of 1,025 keys or more, 257 levels, a key twice): then as text, so that the model
-// still writes (a caller's JSON of 2,000 keys made every later write_model() fail).
+// An edit's provenance that is JSON is kept in the history as JSON (with the SDK's version), unless it
+// exceeds the file format's limits (an object of 1,025 keys or more, 257 levels, a key twice): then as text,
+// so that the model still writes (a caller's JSON of 2,000 keys made every later write_model() fail).
 TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   LayeredModel model = model_of("camel");
   EditStep step = camel_neck_bend();
@@ -384,6 +389,10 @@ TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   EXPECT_EQ(edit_of(h[h.size() - 3]), nlohmann::json(deep));
   EXPECT_EQ(edit_of(h[h.size() - 2]), nlohmann::json(twice));
   EXPECT_EQ(edit_of(h[h.size() - 1]), nlohmann::json::parse("{\"script\":\"bend.json\"}"));
+  // Every operation, the build too, names the SDK version that ran it.
+  EXPECT_EQ(nlohmann::json::parse(h.front()).at("op"), "build");
+  for (const std::string& entry : h)
+    EXPECT_EQ(nlohmann::json::parse(entry).at("strata"), STRATA_VERSION_STRING) << entry;
 }
 
 // A program's misuse of the model's API, found by an AddressSanitizer run (2026-11-28): each is

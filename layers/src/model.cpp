@@ -18,6 +18,7 @@
 #include "strata/json_check.h"
 #include "strata/mesh_io.h"
 #include "strata/mesh_processing.h"
+#include "strata/version.h"
 
 namespace strata::layers {
 namespace {
@@ -514,6 +515,7 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   }
   progress("done", 1.0);
   json h = {{"op", "build"},
+            {"strata", version()},
             {"bands", nb},
             {"scan_vertices", scan.num_vertices()},
             {"scan_faces", scan_faces},
@@ -711,7 +713,7 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   }
   report.edit_seconds = seconds_since(t0);
   if (k + 1 < work.n()) work.cascade(k + 1, std::move(change), report);
-  json h = {{"op", "edit"}, {"band", k}};
+  json h = {{"op", "edit"}, {"strata", version()}, {"band", k}};
   // Provenance that is JSON is kept as JSON, within the file format's limits; otherwise as text
   // (a caller's JSON of 2,000 keys would have made every later write of the model fail).
   try {
@@ -742,7 +744,8 @@ CascadeReport LayeredModel::set_amplitude(int k, double amplitude) {
   work.bands[k].amplitude = amplitude;
   std::optional<Impl::BaseChange> change = work.rebuild(k, nullptr, report);
   if (change && k + 1 < work.n()) work.cascade(k + 1, std::move(*change), report);
-  work.history.push_back(json({{"op", "amplitude"}, {"band", k}, {"scale", amplitude}}).dump());
+  work.history.push_back(
+      json({{"op", "amplitude"}, {"strata", version()}, {"band", k}, {"scale", amplitude}}).dump());
   report.total_seconds = seconds_since(t0);
   std::swap(impl_->bands, work.bands);
   std::swap(impl_->history, work.history);

@@ -166,7 +166,9 @@ class LayeredModel {
   //! Replaces the options used by later edits and rebuilds (e.g. the method, for a comparison).
   //! \throw InvalidInput during a drag, or as check_model_options().
   void set_options(const ModelOptions& options);
-  //! JSON objects, one per operation (build, edit, amplitude), oldest first: provenance.
+  //! JSON objects, one per operation (build, edit, amplitude), oldest first: provenance. Each
+  //! has "op" and "strata", the version of the SDK that ran it (strata::version(); entries of
+  //! files written before 2026-11-29 have none).
   const std::vector<std::string>& history() const;
 
   //! Edits band k with one edit step (selections on band_points(k)). Band 0: the transform is
