@@ -159,6 +159,9 @@ TEST(ApiInput, AnEditScriptWithAKeyTwiceIsRefused) {
   EXPECT_TRUE(
       throws_with<InvalidInput>([&] { parse_edit_script("{" + R + ", " + H + ", " + T2 + "}", "d.json"); },
                                 {"d.json: the key \"degrees\" appears twice"}));
+  // A file that is not JSON is called that, even with a key twice before its syntax error.
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { parse_edit_script("{" + R + ", " + R, "cut.json"); },
+                                        {"cut.json: not valid JSON"}));
   // The same key in two objects is no repetition.
   EXPECT_NO_THROW(parse_edit_script(
       R"({"edits": [{)" + R + ", " + H + ", " + T + "}, {" + R + ", " + H + ", " + T + "}]}", "two.json"));

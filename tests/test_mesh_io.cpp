@@ -1377,7 +1377,13 @@ TEST(MeshIoValidate, ExactMessages) {
   t.faces = {{0, 1, 2}, {1, 3, 2}};
   EXPECT_EQ(message(t, "far"),
             "far: face 0 has zero area for the mesh's size (area 0.5, bounding-box diagonal 1e+300)");
+  // Where the unscaled area would overflow (inf, or NaN from inf - inf), only the reason is given.
   t.faces = {{0, 1, 2}};
+  for (const std::vector<Vec3>& v : {std::vector<Vec3>{{0, 0, 0}, {1e300, 1e300, 0}, {2e300, 2e300, 0}},
+                                     std::vector<Vec3>{{0, 0, 0}, {1e300, 0, 0}, {5e299, 1e284, 0}}}) {
+    t.vertices = v;
+    EXPECT_EQ(message(t, "big"), "big: face 0 has zero area for the mesh's size");
+  }
   t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-12, 0}};
   EXPECT_EQ(message(t, "s"), "(no error)");
 

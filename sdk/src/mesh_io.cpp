@@ -1142,10 +1142,13 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
               ? std::ldexp(0.5 * double_area, -2 * scale_exponent)
               : 0.5 * triangle_area_normal(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]])
                           .norm();
+      const double diagonal = std::ldexp(diag, -scale_exponent);
       if (area == 0.0) return what;
+      // Near DBL_MAX the unscaled area or diagonal can overflow: then only the reason is given.
+      if (!std::isfinite(area) || !std::isfinite(diagonal)) return what + " for the mesh's size";
       char sizes[96];
       std::snprintf(sizes, sizeof sizes, " for the mesh's size (area %.3g, bounding-box diagonal %.3g)", area,
-                    std::ldexp(diag, -scale_exponent));
+                    diagonal);
       return what + sizes;
     }
   }

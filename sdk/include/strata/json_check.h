@@ -23,8 +23,9 @@ struct JsonLimits {
 
 //! "" if \p text, as far as it is valid JSON, is within \p limits; otherwise its first problem,
 //! e.g. `nested deeper than 256 levels`, `an object has more than 1024 keys` or `the key "a"
-//! appears twice in one object` (the key's first 64 bytes, any outside printable ASCII as '?'). A syntax
-//! error is not a problem here: it is left to the parse that follows, which names it.
+//! appears twice in one object` (the key's first 64 bytes, any outside printable ASCII as '?'). The
+//! pass stops at a syntax error, which it leaves to the parse that follows to name: problems
+//! before it are reported, those after it are not.
 //!
 //! One SAX pass that builds no value and stops at the first problem, in time linear in the text
 //! (nlohmann's callback parser, used before, rescans a container after each object in it ends:
