@@ -195,12 +195,18 @@ TEST(ApiInput, JsonStructureLimits) {
   // A syntax error is the parse's to report; so is an empty text.
   EXPECT_EQ(json_structure_problem("{\"a\": }"), "");
   EXPECT_EQ(json_structure_problem(""), "");
-  // An edit script too deep is refused before it is parsed.
+  // An edit script too deep is refused (and a million levels are no crash).
   EXPECT_TRUE(throws_with<InvalidInput>(
       [] {
         parse_edit_script(R"({"edits": )" + std::string(300, '[') + std::string(300, ']') + "}", "deep.json");
       },
       {"deep.json: nested deeper than 256 levels"}));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [] {
+        parse_edit_script(R"({"edits": )" + std::string(1000000, '[') + std::string(1000000, ']') + "}",
+                          "deeper.json");
+      },
+      {"deeper.json: nested deeper than 256 levels"}));
 }
 
 TEST(ApiInput, DisplacementVectorsCheckTheAmplitudeFramesAndOffsets) {

@@ -178,9 +178,10 @@ struct CageScanEdit {
   bool vectors_fold;  // displacement vectors are expected to add intersecting pairs
 };
 
+// As ScanEdit's.
 void PrintTo(const CageScanEdit& e, std::ostream* os) {
   *os << e.name;
-}  // as ScanEdit's
+}
 
 class RealScanCageBend : public ::testing::TestWithParam<CageScanEdit> {};
 

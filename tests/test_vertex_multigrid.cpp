@@ -661,6 +661,15 @@ TEST(MultigridBend, AStalledPolishIsFinishedByFactorizedSteps) {
   EXPECT_FALSE(short_of.stats.converged);
   EXPECT_EQ(short_of.stats.factorizations - short_of.stats.local_factorizations, taken - 1);
   EXPECT_EQ(short_of.stats.retries, 0);
+  // And they are not capped by max_final_steps (as they were before 2026-11-29): with 1 polish
+  // step and no retries, the factorized steps still finish the solve, taking more than 1.
+  ReconstructOptions one_step = capped;
+  one_step.max_factorized_steps = ReconstructOptions{}.max_factorized_steps;
+  one_step.max_final_steps = 1;
+  const ReconstructResult past = VolumeReconstructor(e, one_step).reconstruct(c.edited_base.vertices);
+  EXPECT_TRUE(past.stats.converged);
+  EXPECT_GT(past.stats.factorizations - past.stats.local_factorizations, one_step.max_final_steps);
+  EXPECT_EQ(past.stats.retries, 0);
 }
 
 // ReconstructOptions::retry_other_regularization: a preset solve that folds is retried with the

@@ -147,18 +147,14 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
   if (text.find('\0') != std::string::npos)
     throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
   json j;
-  // JSON too deep or too wide is refused before the parse would build it.
-  JsonLimits size_only;
-  size_only.reject_duplicate_keys = false;
-  if (const std::string problem = json_structure_problem(text, size_only); !problem.empty())
-    throw InvalidInput(name + ": " + problem);
   try {
     j = json::parse(text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InvalidInput(name + ": not valid JSON: " + e.what());
   }
   // A key given twice in one object: JSON keeps the later value silently (a second "region"
-  // won). Checked after the parse, so that a file that is not JSON at all is called that.
+  // won); and the depth and width limits of Strata's JSON. Checked after the parse, so that a
+  // file that is not JSON at all is called that (the parse builds a deep value without recursion).
   if (const std::string problem = json_structure_problem(text); !problem.empty())
     throw InvalidInput(name + ": " + problem);
   EditScript script;
