@@ -781,6 +781,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.local_polish_rings = 3;
   o.reconstruct.local_polish_max_motion = 6e-3;
   o.reconstruct.max_factorized_steps = 17;
+  o.reconstruct.max_constraint_motion = 35.0;
   model.set_options(o);
   test::ScratchDir tmp("strata_layers");
   const std::string path = tmp.file("mg.strata");
@@ -806,6 +807,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_FALSE(back.finest_intermediate_solves);  // the preset's
   EXPECT_EQ(back.local_polish_max_motion, 6e-3);
   EXPECT_EQ(back.max_factorized_steps, 17);
+  EXPECT_EQ(back.max_constraint_motion, 35.0);
   EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
   EXPECT_GT(back.multigrid.retry_iterations, 0);
   EXPECT_FALSE(back.multigrid.single_precision_cycles);
@@ -865,7 +867,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     layers::StrataContainer old = c;
     nlohmann::json j = nlohmann::json::parse(old.model_json);
     for (const char* key : {"local_polish_max_fraction", "local_polish_rings", "local_polish_max_motion",
-                            "finest_intermediate_solves", "max_factorized_steps"}) {
+                            "finest_intermediate_solves", "max_factorized_steps", "max_constraint_motion"}) {
       ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
       j["options"]["reconstruct"].erase(key);
     }
@@ -881,7 +883,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     EXPECT_TRUE(read.finest_intermediate_solves);
     EXPECT_EQ(read.local_polish_rings, defaults.local_polish_rings);
     EXPECT_EQ(read.local_polish_max_motion, defaults.local_polish_max_motion);
-    EXPECT_EQ(read.max_factorized_steps, read.max_final_steps);  // as the polish was then
+    EXPECT_EQ(read.max_factorized_steps, read.max_final_steps);             // as the polish was then
+    EXPECT_EQ(read.max_constraint_motion, defaults.max_constraint_motion);  // the bound on
     EXPECT_EQ(read.multigrid.retry_iterations, defaults.multigrid.retry_iterations);
     EXPECT_EQ(read.multigrid.single_precision_cycles, defaults.multigrid.single_precision_cycles);
   }

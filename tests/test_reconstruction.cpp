@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "paper_cases.h"
 #include "strata/encoding.h"
@@ -614,6 +615,13 @@ TEST(Reconstruction, EnumAndBoundOptionsOutOfRangeAreRejected) {
   o = {};
   o.direct_max_prisms = -1;
   refused(o, "direct_max_prisms");
+  o = {};
+  o.max_constraint_motion = std::nan("");
+  refused(o, "max_constraint_motion");
+  o.max_constraint_motion = -1.0;
+  refused(o, "max_constraint_motion");
+  o.max_constraint_motion = std::numeric_limits<double>::infinity();
+  refused(o, "max_constraint_motion");
   EXPECT_NO_THROW(check_reconstruct_options(ReconstructOptions{}));
   EXPECT_NO_THROW(check_reconstruct_options(multigrid_reconstruct_options()));
 }

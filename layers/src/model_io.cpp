@@ -101,6 +101,7 @@ json options_json(const ModelOptions& o) {
             {"tolerance", r.tolerance},
             {"max_final_steps", r.max_final_steps},
             {"max_factorized_steps", r.max_factorized_steps},
+            {"max_constraint_motion", r.max_constraint_motion},
             {"local_polish_max_fraction", r.local_polish_max_fraction},
             {"local_polish_rings", r.local_polish_rings},
             {"local_polish_max_motion", r.local_polish_max_motion},
@@ -268,6 +269,10 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
   ro.max_final_steps = static_cast<int>(h.integer(r, "max_final_steps", wr, 0, 100000));
   // Files written before 2026-11-29 capped a stalled polish's factorized steps by max_final_steps.
   ro.max_factorized_steps = optional_count("max_factorized_steps", ro.max_final_steps);
+  // Files written before 2026-11-29 (twenty-fifth session) read the default, the bound on: it
+  // changes only solves that would otherwise follow a degenerate prism's step.
+  if (r.contains("max_constraint_motion"))
+    ro.max_constraint_motion = h.number(r, "max_constraint_motion", wr);
   // The local end's options were not written before 2026-11-27 (ninth session): such files read
   // as they did then, with the defaults (no local end).
   if (r.contains("local_polish_max_fraction"))

@@ -58,6 +58,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"tolerance", &o.tolerance},
           {"max_final_steps", &o.max_final_steps},
           {"max_factorized_steps", &o.max_factorized_steps},
+          {"max_constraint_motion", &o.max_constraint_motion},
           {"local_polish_max_fraction", &o.local_polish_max_fraction},
           {"local_polish_rings", &o.local_polish_rings},
           {"local_polish_max_motion", &o.local_polish_max_motion},

@@ -66,6 +66,9 @@ struct Level {
   // vertex sums in the same order as a scatter over the faces would, so threads change nothing.
   std::vector<int> vf_offsets, vf;
   std::vector<double> targets;
+  // Per prism: its size, the longest of its rest edges and guarded displacement lengths
+  // (ReconstructOptions::max_constraint_motion). Single precision: a bound, not a measure.
+  std::vector<float> sizes;
   double mean_abs_target = 0.0;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
   std::vector<double> weights;
@@ -726,6 +729,17 @@ class VolumeReconstructor::Impl {
         for (int c = 0; c < 3; ++c) L.vf[fill[lf[j][c]]++] = static_cast<int>(3 * j) + c;
     }
     L.boundary = internal::boundary_vertices(nv, lf);
+    if (opt_.max_constraint_motion > 0) {
+      L.sizes.resize(L.faces.size());
+      for (std::size_t j = 0; j < L.faces.size(); ++j) {
+        const Face& f = L.faces[j];
+        double size = 0.0;
+        for (int c = 0; c < 3; ++c)
+          size = std::max({size, std::abs(guarded_f_[f[c]]),
+                           (enc_.detail_rest[f[c]] - enc_.detail_rest[f[(c + 1) % 3]]).norm()});
+        L.sizes[j] = static_cast<float>(size);
+      }
+    }
     // J J^T's pattern and symbolic factorization only where exact steps are taken: the finest
     // level (the polish), and the levels the options solve directly.
     if ((finest && opt_.polish_solver == VolumeStepSolver::Direct) ||
@@ -1880,9 +1894,14 @@ class VolumeReconstructor::Impl {
       w.diag[j] = norm2;
     });
     if (!use_mg) vertex_gradients(L, w);
-    double rr = 0.0;
-    for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
-    const double rr0 = rr;
+    // rr0: the residual's squared norm (the line search's); rr: the right-hand side's, which the
+    // conjugate gradients start from (the same unless constraints are left out).
+    double rr0 = 0.0;
+    double rr = L.sizes.empty() ? 0.0 : defer_ill_posed(L, s, w, use_mg, st, rr0);
+    if (L.sizes.empty()) {
+      for (std::size_t j = 0; j < m; ++j) rr0 += w.r[j] * w.r[j];
+      rr = rr0;
+    }
     if (use_mg) {
       solve_multigrid(L, w, how == StepSolve::Exact, st);
       check_cancel();  // the solve stops early on a cancel; its step is not taken
@@ -1949,6 +1968,36 @@ class VolumeReconstructor::Impl {
     else if (direct && halvings == 0)
       w.damping = std::max(0.1 * w.damping, kMinDamping);
     st.constraint_updates += static_cast<long long>(m);
+  }
+
+  // ReconstructOptions::max_constraint_motion: zeroes the step's right-hand side w.r[j] of the
+  // prisms whose own minimum-norm motion |r_j| / |grad_j| exceeds the bound times their size
+  // (w.diag holds the gradients' squared norms in a multigrid step; otherwise they come from
+  // w.grad). \p rr0 gets the residual's squared norm (the line search's, which keeps them);
+  // returns the right-hand side's.
+  double defer_ill_posed(const Level& L, const State& s, GnScratch& w, bool use_mg, ReconstructStats& st,
+                         double& rr0) const {
+    const double k2 = opt_.max_constraint_motion * opt_.max_constraint_motion;
+    double rr = 0.0;
+    rr0 = 0.0;
+    for (std::size_t j = 0; j < w.r.size(); ++j) {
+      const double r2 = w.r[j] * w.r[j];
+      rr0 += r2;
+      const double n2 =
+          use_mg ? w.diag[j]
+                 : w.grad[j][0].squaredNorm() + w.grad[j][1].squaredNorm() + w.grad[j][2].squaredNorm();
+      const double size = L.sizes[j];
+      // A prism whose three vertices are pinned has no gradient but no step either: its row stays
+      // as it was (its residual is the same in every step).
+      const Face& f = L.faces[j];
+      if (r2 > k2 * size * size * n2 && !(s.pinned(f[0]) && s.pinned(f[1]) && s.pinned(f[2]))) {
+        w.r[j] = 0.0;
+        ++st.deferred_constraints;
+      } else {
+        rr += r2;
+      }
+    }
+    return rr;
   }
 
   // sum_j (h V*_j - V_j)^2.
@@ -2309,6 +2358,8 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(o.tolerance > 0, "tolerance", o.tolerance, "above 0");
   count(o.max_final_steps, "max_final_steps", 0, 100000);
   count(o.max_factorized_steps, "max_factorized_steps", 0, 100000);
+  check(o.max_constraint_motion >= 0 && o.max_constraint_motion <= 1e12, "max_constraint_motion",
+        o.max_constraint_motion, "0 to 1e12; 0 keeps every constraint");
   check(o.min_length_fraction >= 0, "min_length_fraction", o.min_length_fraction, "at least 0");
   check(o.fixed_point_tolerance >= 0, "fixed_point_tolerance", o.fixed_point_tolerance, "at least 0");
   check(o.regularization_decay >= 0 && o.regularization_decay <= 1000, "regularization_decay",

@@ -552,6 +552,7 @@ int main(int argc, char** argv) {
             {"final_max_cycles", ro.final_max_cycles},
             {"max_final_steps", ro.max_final_steps},
             {"max_factorized_steps", ro.max_factorized_steps},
+            {"max_constraint_motion", ro.max_constraint_motion},
             {"cg_max_iterations", ro.cg_max_iterations},
             {"threads", ro.threads},
             {"cg_tolerance", ro.cg_tolerance},

@@ -26,6 +26,7 @@ nlohmann::json stats_json(const ReconstructStats& s) {
                         {"solver_contact_pairs", s.contact_pairs},
                         {"solver_base_crossing_pairs", s.base_crossing_pairs},
                         {"final_sweeps", s.final_sweeps},
+                        {"deferred_constraints", s.deferred_constraints},
                         {"constraint_updates", s.constraint_updates},
                         {"solver_max_relative_error", s.max_relative_error},
                         {"solver_rms_relative_error", s.rms_relative_error},
