@@ -489,6 +489,73 @@ TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   EXPECT_LE(n.stats.max_relative_error, 1e-4);
 }
 
+// VolumeReconstructor::set_intersection_context(): fixed triangles that the detail must not newly
+// intersect. A small triangle set across the bent bumps' result, far from where the detail lay at
+// rest: the pairs it makes with the result are counted as new, and as contacts the edit made (so
+// no retry or repair runs and the result is the same); pairs that a context triangle has with
+// the rest detail are not new.
+TEST(Reconstruction, AnIntersectionContextCountsTheDetailsNewPairsWithIt) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  VolumeReconstructor rec(e);
+  const ReconstructResult plain = rec.reconstruct(c.edited_base.vertices);
+  ASSERT_TRUE(plain.stats.converged);
+  ASSERT_GE(plain.stats.new_intersecting_pairs, 0);
+  const auto n = static_cast<int>(e.detail_rest.size());
+  // The face that the bend moved farthest, and a triangle across it (in a plane through its
+  // normal), two of its edge lengths in size.
+  int far = 0;
+  double moved = 0.0;
+  auto centroid = [](const std::vector<Vec3>& p, const Face& f) {
+    return (p[f[0]] + p[f[1]] + p[f[2]]) / 3.0;
+  };
+  for (int j = 0; j < static_cast<int>(e.detail_faces.size()); ++j) {
+    const double d =
+        (centroid(plain.positions, e.detail_faces[j]) - centroid(e.detail_rest, e.detail_faces[j])).norm();
+    if (d > moved) moved = d, far = j;
+  }
+  const Face& f = e.detail_faces[far];
+  const Vec3 a = plain.positions[f[0]], b = plain.positions[f[1]], cc = plain.positions[f[2]];
+  const Vec3 normal = (b - a).cross(cc - a).normalized();
+  const double edge = (b - a).norm();
+  const Vec3 mid = (a + b + cc) / 3.0, along = (b - a).normalized();
+  const std::array<Vec3, 3> ctx{mid + 2 * edge * normal, mid - 2 * edge * normal + edge * along,
+                                mid - 2 * edge * normal - edge * along};
+  int expected = 0;
+  for (const Face& g : e.detail_faces) {
+    ASSERT_FALSE(triangles_intersect({e.detail_rest[g[0]], e.detail_rest[g[1]], e.detail_rest[g[2]]}, ctx));
+    expected +=
+        triangles_intersect({plain.positions[g[0]], plain.positions[g[1]], plain.positions[g[2]]}, ctx);
+  }
+  ASSERT_GT(expected, 0);
+  // A second context triangle that crosses the rest detail (its pairs are there at rest, not new).
+  const Face& h = e.detail_faces[0];
+  const Vec3 r0 = e.detail_rest[h[0]], r1 = e.detail_rest[h[1]], r2 = e.detail_rest[h[2]];
+  const Vec3 rn = (r1 - r0).cross(r2 - r0).normalized(), rm = (r0 + r1 + r2) / 3.0;
+  const double re = (r1 - r0).norm();
+  std::vector<Vec3> points{ctx[0],
+                           ctx[1],
+                           ctx[2],
+                           rm + 2 * re * rn,
+                           rm - 2 * re * rn + re * (r1 - r0).normalized(),
+                           rm - 2 * re * rn - re * (r1 - r0).normalized()};
+  rec.set_intersection_context(points, {Face{n, n + 1, n + 2}, Face{n + 3, n + 4, n + 5}});
+  const ReconstructResult with = rec.reconstruct(c.edited_base.vertices);
+  EXPECT_EQ(with.positions, plain.positions);
+  EXPECT_EQ(with.stats.new_intersecting_pairs, plain.stats.new_intersecting_pairs + expected);
+  EXPECT_EQ(with.stats.contact_pairs, plain.stats.contact_pairs + expected);
+  EXPECT_EQ(with.stats.retries, plain.stats.retries);
+  // Removed again: as without.
+  rec.set_intersection_context({}, {});
+  EXPECT_EQ(rec.reconstruct(c.edited_base.vertices).stats.new_intersecting_pairs,
+            plain.stats.new_intersecting_pairs);
+  // Bad contexts.
+  EXPECT_THROW(rec.set_intersection_context(points, {Face{n, n + 1, n + 6}}), InvalidInput);
+  EXPECT_THROW(rec.set_intersection_context(points, {Face{-1, n, n + 1}}), InvalidInput);
+  points[2].x() = std::nan("");
+  EXPECT_THROW(rec.set_intersection_context(points, {Face{n, n + 1, n + 2}}), InvalidInput);
+}
+
 TEST(Reconstruction, RejectsBadInput) {
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
   const DetailEncoding e = encode_detail(c.detail, c.base);

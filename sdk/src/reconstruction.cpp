@@ -20,6 +20,7 @@
 #include <optional>
 #include <sstream>
 #include <type_traits>
+#include <unordered_map>
 
 #include "internal/contact.h"
 #include "internal/hierarchy.h"
@@ -558,6 +559,37 @@ class VolumeReconstructor::Impl {
 
   // The caller's encoding (the solver's own is renumbered if renum_ is not empty): restored on
   // first use rather than kept, which would cost its memory through every solve.
+  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
+    const auto n = static_cast<long long>(enc_.num_detail_vertices());
+    const long long total = n + static_cast<long long>(points.size());
+    for (std::size_t k = 0; k < points.size(); ++k)
+      if (!points[k].allFinite() || points[k].cwiseAbs().maxCoeff() > kMaxCoordinate)
+        throw InvalidInput("intersection context: point " + std::to_string(k) +
+                           " is not finite or beyond the engine's range");
+    for (std::size_t j = 0; j < faces.size(); ++j)
+      for (int c = 0; c < 3; ++c)
+        if (faces[j][c] < 0 || faces[j][c] >= total)
+          throw InvalidInput("intersection context: face " + std::to_string(j) + " has vertex index " +
+                             std::to_string(faces[j][c]) + ", not in [0, " + std::to_string(total) + ")");
+    // Into the solver's numbering of the detail's vertices.
+    if (!renum_.empty())
+      for (Face& f : faces)
+        for (int& i : f)
+          if (i < n) i = renum_.new_of_old[i];
+    context_points_ = std::move(points);
+    context_faces_ = std::move(faces);
+    rest_context_.reset();
+    near_context_.reset();
+    if (fallback_) fallback_->set_solver_context(context_points_, context_faces_);
+  }
+  // The same in the solver's numbering (the fallback schedule's solver shares it).
+  void set_solver_context(const std::vector<Vec3>& points, const std::vector<Face>& faces) {
+    context_points_ = points;
+    context_faces_ = faces;
+    rest_context_.reset();
+    near_context_.reset();
+  }
+
   const DetailEncoding& encoding() const {
     if (renum_.empty()) return enc_;
     // Once, even from two threads (a getter that looks read-only).
@@ -1151,11 +1183,234 @@ class VolumeReconstructor::Impl {
         o.new_pair_faces.push_back(fresh[k].first);
         o.new_pair_faces.push_back(fresh[k].second);
       }
+      if (!context_faces_.empty()) add_context_pairs(s, o);
       std::sort(o.new_pair_faces.begin(), o.new_pair_faces.end());
       o.new_pair_faces.erase(std::unique(o.new_pair_faces.begin(), o.new_pair_faces.end()),
                              o.new_pair_faces.end());
     }
     return o;
+  }
+
+  // A uniform grid of boxes: the cells each box covers list it.
+  struct BoxGrid {
+    double cell = 1.0;
+    std::unordered_map<std::uint64_t, std::vector<int>> cells;
+    static std::int64_t coord(double x, double cell) {
+      return static_cast<std::int64_t>(std::floor(x / cell));
+    }
+    static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
+      const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffff; };
+      return u(x) | (u(y) << 21) | (u(z) << 42);
+    }
+    // The cells a box covers, as a double (a huge box's count overflows no integer).
+    double span(const Eigen::AlignedBox3d& b) const {
+      double c = 1.0;
+      for (int a = 0; a < 3; ++a) c *= std::floor(b.max()[a] / cell) - std::floor(b.min()[a] / cell) + 1.0;
+      return c;
+    }
+    template <class F>
+    void visit(const Eigen::AlignedBox3d& b, F&& f) const {
+      if (!oversized.empty()) f(oversized);
+      const std::int64_t x0 = coord(b.min().x(), cell), x1 = coord(b.max().x(), cell);
+      const std::int64_t y0 = coord(b.min().y(), cell), y1 = coord(b.max().y(), cell);
+      const std::int64_t z0 = coord(b.min().z(), cell), z1 = coord(b.max().z(), cell);
+      for (std::int64_t x = x0; x <= x1; ++x)
+        for (std::int64_t y = y0; y <= y1; ++y)
+          for (std::int64_t z = z0; z <= z1; ++z) {
+            const auto it = cells.find(key(x, y, z));
+            if (it != cells.end()) f(it->second);
+          }
+    }
+    // Boxes over more than kMaxCells cells (a triangle far larger than the others) are kept
+    // apart, and every lookup lists them.
+    static constexpr double kMaxCells = 4096;
+    std::vector<int> oversized;
+    void insert(const Eigen::AlignedBox3d& b, int id) {
+      if (span(b) > kMaxCells) {
+        oversized.push_back(id);
+        return;
+      }
+      const std::int64_t x0 = coord(b.min().x(), cell), x1 = coord(b.max().x(), cell);
+      const std::int64_t y0 = coord(b.min().y(), cell), y1 = coord(b.max().y(), cell);
+      const std::int64_t z0 = coord(b.min().z(), cell), z1 = coord(b.max().z(), cell);
+      for (std::int64_t x = x0; x <= x1; ++x)
+        for (std::int64_t y = y0; y <= y1; ++y)
+          for (std::int64_t z = z0; z <= z1; ++z) cells[key(x, y, z)].push_back(id);
+    }
+  };
+
+  // The context faces that can make a pair that is no contact (contact_ratio): those whose rest
+  // centroid lies within contact_ratio times their and a detail face's longest edges of that
+  // detail face's rest centroid. A farther one can only make contacts, which decide nothing, so
+  // the fold checks search the region's surroundings only. All of them without contact_ratio.
+  const std::vector<int>& near_context() const {
+    if (near_context_) return *near_context_;
+    near_context_ = std::make_unique<std::vector<int>>();
+    std::vector<int>& near = *near_context_;
+    const auto n = static_cast<int>(enc_.detail_rest.size());
+    auto at = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : context_points_[i - n]; };
+    auto longest = [&](const Face& f) {
+      double e = 0.0;
+      for (int k = 0; k < 3; ++k) e = std::max(e, (at(f[k]) - at(f[(k + 1) % 3])).norm());
+      return e;
+    };
+    auto centroid = [&](const Face& f) -> Vec3 { return (at(f[0]) + at(f[1]) + at(f[2])) / 3.0; };
+    if (!(opt_.contact_ratio > 0)) {
+      near.resize(context_faces_.size());
+      std::iota(near.begin(), near.end(), 0);
+      return near;
+    }
+    double dmax = 0.0;
+    for (const Face& f : enc_.detail_faces) dmax = std::max(dmax, longest(f));
+    BoxGrid grid;
+    grid.cell = std::max(opt_.contact_ratio * 2.0 * dmax, 1e-300);
+    std::vector<Vec3> dc(enc_.detail_faces.size());
+    std::vector<double> de(enc_.detail_faces.size());
+    std::vector<int> all_detail(enc_.detail_faces.size());
+    std::iota(all_detail.begin(), all_detail.end(), 0);
+    for (std::size_t j = 0; j < enc_.detail_faces.size(); ++j) {
+      dc[j] = centroid(enc_.detail_faces[j]);
+      de[j] = longest(enc_.detail_faces[j]);
+      grid.insert(Eigen::AlignedBox3d(dc[j], dc[j]), static_cast<int>(j));
+    }
+    Eigen::AlignedBox3d detail_box;
+    for (const Vec3& c : dc) detail_box.extend(c);
+    for (std::size_t k = 0; k < context_faces_.size(); ++k) {
+      const Face& g = context_faces_[k];
+      const Vec3 c = centroid(g);
+      const double eg = longest(g);
+      const double reach = opt_.contact_ratio * (eg + dmax);
+      if (detail_box.exteriorDistance(c) > reach) continue;  // most of a large mesh's rest
+      bool found = false;
+      auto any_within = [&](const std::vector<int>& ids) {
+        for (int j : ids) {
+          if (found) return;
+          found = (c - dc[j]).norm() <= opt_.contact_ratio * (eg + de[j]);
+        }
+      };
+      const Eigen::AlignedBox3d reach_box(c - Vec3::Constant(reach), c + Vec3::Constant(reach));
+      if (grid.span(reach_box) > static_cast<double>(dc.size()))
+        any_within(all_detail);
+      else
+        grid.visit(reach_box, any_within);
+      if (found) near.push_back(static_cast<int>(k));
+    }
+    return near;
+  }
+
+  // The pairs (detail face, context face) whose triangles share no vertex and intersect with the
+  // detail at \p p, sorted, among the context faces near_context() keeps: a grid of those faces'
+  // boxes (cell: their mean box size), each detail face's box looked up in it, then the exact
+  // test of find_self_intersections(). *cut: more pairs or tests than the fold checks' bounds.
+  std::vector<std::pair<int, int>> context_pairs(const std::vector<Vec3>& p, bool& cut) const {
+    cut = false;
+    std::vector<std::pair<int, int>> out;
+    const std::vector<int>& near = near_context();
+    if (near.empty()) return out;
+    const auto n = static_cast<int>(p.size());
+    auto at = [&](int i) -> const Vec3& { return i < n ? p[i] : context_points_[i - n]; };
+    auto box_of = [&](const Face& f) {
+      Eigen::AlignedBox3d b;
+      for (int i : f) b.extend(at(i));
+      return b;
+    };
+    BoxGrid grid;
+    double size = 0.0;
+    for (int k : near) size += box_of(context_faces_[k]).sizes().maxCoeff();
+    grid.cell = std::max(size / static_cast<double>(near.size()), 1e-300);
+    for (int k : near) grid.insert(box_of(context_faces_[k]), k);
+    const IntersectionOptions io = search_options();
+    long long tests = 0;
+    std::vector<int> candidates;
+    for (std::size_t j = 0; j < enc_.detail_faces.size() && !cut; ++j) {
+      const Face& f = enc_.detail_faces[j];
+      const Eigen::AlignedBox3d b = box_of(f);
+      candidates.clear();
+      // A box over more cells than there are faces (a triangle thrown far) is tested against all.
+      if (grid.span(b) > static_cast<double>(near.size()))
+        candidates = near;
+      else
+        grid.visit(b, [&](const std::vector<int>& ids) {
+          candidates.insert(candidates.end(), ids.begin(), ids.end());
+        });
+      std::sort(candidates.begin(), candidates.end());
+      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      const std::array<Vec3, 3> tf{at(f[0]), at(f[1]), at(f[2])};
+      for (int k : candidates) {
+        const Face& g = context_faces_[k];
+        if (!b.intersects(box_of(g))) continue;
+        bool shared = false;
+        for (int a : f)
+          for (int c : g) shared = shared || a == c;
+        if (shared) continue;
+        if (io.max_tests > 0 && ++tests > static_cast<long long>(io.max_tests)) {
+          cut = true;
+          break;
+        }
+        if (triangles_intersect(tf, {at(g[0]), at(g[1]), at(g[2])})) {
+          out.emplace_back(static_cast<int>(j), k);
+          if (io.max_pairs > 0 && out.size() > io.max_pairs) {
+            cut = true;
+            break;
+          }
+        }
+      }
+    }
+    check_cancel();
+    return out;
+  }
+
+  // set_intersection_context(): the new pairs of a detail triangle and a context triangle, added to
+  // \p o as the detail's own. As the detail's own pairs are told apart (contact_ratio,
+  // base_crossing_rings): a pair whose triangles lay farther apart at rest than contact_ratio times
+  // their longest edges together (centroid to centroid) is a contact the edit made (a limb bent
+  // into the body); one that the displacement vectors' placement of the detail triangle makes too
+  // is the base's (crossing_pairs); the others are folds, whose detail faces go to the repair (and
+  // the base's too, as for the detail's own). A search cut short counts as max_pairs new pairs,
+  // none listed; a rest cut short leaves the context unchecked, as the detail's own pairs are then.
+  void add_context_pairs(const State& s, Outcome& o) const {
+    if (!rest_context_) {
+      rest_context_ = std::make_unique<ContextPairs>();
+      rest_context_->pairs = context_pairs(enc_.detail_rest, rest_context_->cut);
+    }
+    if (rest_context_->cut) return;
+    bool cut = false;
+    const std::vector<std::pair<int, int>> now = context_pairs(s.P, cut);
+    if (cut) {
+      o.new_pairs += search_options().max_pairs;
+      o.listed = false;
+      return;
+    }
+    std::vector<std::pair<int, int>> fresh;
+    std::set_difference(now.begin(), now.end(), rest_context_->pairs.begin(), rest_context_->pairs.end(),
+                        std::back_inserter(fresh));
+    const auto n = static_cast<int>(s.P.size());
+    auto at = [&](int i) -> const Vec3& { return i < n ? s.P[i] : context_points_[i - n]; };
+    auto at_rest = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : context_points_[i - n]; };
+    auto longest_edge = [&](const Face& f) {
+      double e = 0.0;
+      for (int k = 0; k < 3; ++k) e = std::max(e, (at_rest(f[k]) - at_rest(f[(k + 1) % 3])).norm());
+      return e;
+    };
+    auto centroid = [&](const Face& f) { return (at_rest(f[0]) + at_rest(f[1]) + at_rest(f[2])) / 3.0; };
+    for (const auto& [d, c] : fresh) {
+      ++o.new_pairs;
+      const Face& f = enc_.detail_faces[d];
+      const Face& g = context_faces_[c];
+      if (opt_.contact_ratio > 0 &&
+          (centroid(f) - centroid(g)).norm() > opt_.contact_ratio * (longest_edge(f) + longest_edge(g))) {
+        ++o.contact_pairs;
+        continue;
+      }
+      o.new_pair_faces.push_back(d);
+      std::array<Vec3, 3> vectors, ctx;
+      for (int k = 0; k < 3; ++k) {
+        const int i = f[k];
+        vectors[k] = s.Q[i] + s.amplitude * enc_.normal_offsets[i] * s.N[i] + s.R[i];
+        ctx[k] = at(g[k]);
+      }
+      if (triangles_intersect(vectors, ctx)) ++o.crossing_pairs;
+    }
   }
 
   // The result kept in the end, if it ended above the tolerance (both schedules did, or a drag's
@@ -1215,6 +1470,8 @@ class VolumeReconstructor::Impl {
       fallback_->rest_pairs_ = std::make_unique<IntersectionResult>(*rest_pairs_);
     if (!fallback_->rest_base_pairs_ && rest_base_pairs_)
       fallback_->rest_base_pairs_ = std::make_unique<IntersectionResult>(*rest_base_pairs_);
+    if (fallback_->context_faces_.size() != context_faces_.size())
+      fallback_->set_solver_context(context_points_, context_faces_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;
@@ -2258,6 +2515,16 @@ class VolumeReconstructor::Impl {
   // The rest detail's own intersecting pairs (found at the first retry check), so that a result's
   // new pairs can be told. Mutable like the levels' factorizations.
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
+  // set_intersection_context(): the fixed triangles (detail vertices in the solver's numbering,
+  // then context_points_), and the pairs (detail face, context face) that intersect at rest.
+  std::vector<Vec3> context_points_;
+  std::vector<Face> context_faces_;
+  struct ContextPairs {
+    std::vector<std::pair<int, int>> pairs;
+    bool cut = false;  // the search was cut short
+  };
+  mutable std::unique_ptr<ContextPairs> rest_context_;
+  mutable std::unique_ptr<std::vector<int>> near_context_;  // near_context(), made on first use
   // The rest base points' crossings (near_base_crossings()), searched on first use.
   mutable std::unique_ptr<IntersectionResult> rest_base_pairs_;
   const std::vector<char> no_crossings_;
@@ -2466,6 +2733,9 @@ ReconstructResult VolumeReconstructor::drag_step(const std::vector<Vec3>& edited
 }
 BaseFrames VolumeReconstructor::base_frames(const std::vector<Vec3>& edited_base) const {
   return impl_->caller_frames(impl_->frames_for(edited_base));
+}
+void VolumeReconstructor::set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
+  impl_->set_intersection_context(std::move(points), std::move(faces));
 }
 const DetailEncoding& VolumeReconstructor::encoding() const {
   return impl_->encoding();

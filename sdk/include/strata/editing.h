@@ -159,6 +159,11 @@ struct EditResult {
 //! region minus the handle, 0 on the rest and 1 on the handle. The detail of the prisms touching
 //! the region is encoded over that base; vertices outside the region are pinned, so only the
 //! region is solved, and so are handle vertices away from the blended part (they move rigidly).
+//! The rest of the mesh is the solver's intersection context
+//! (VolumeReconstructor::set_intersection_context()): its fold check, retries and repair count the
+//! region's new pairs with the fixed triangles around it too, so ReconstructStats::
+//! new_intersecting_pairs is the whole mesh's count, but for contacts with triangles that lay far
+//! from the region at rest.
 //!
 //! Every apply() starts from the editor's own decomposition of the mesh it was given. A new
 //! editor on an edited mesh decomposes that anew (its base and blend field follow the bent

@@ -670,6 +670,24 @@ class VolumeReconstructor {
   //! the reconstruction evaluates them (keeping the subdivision surface's patch table).
   BaseFrames base_frames(const std::vector<Vec3>& edited_base) const;
 
+  //! Fixed triangles around the detail that its reconstructions must not newly intersect: the
+  //! rest of a mesh whose region is being edited (RegionEditor sets them). The fold check
+  //! (ReconstructOptions::retry_on_new_intersections) counts the pairs of a detail triangle and
+  //! one of these that intersect where they did not at rest as new pairs of the detail, so that
+  //! the retries, the fold repair and the fallback schedule take them on, and
+  //! ReconstructStats::new_intersecting_pairs includes them. As the detail's own pairs are told
+  //! apart: a pair whose triangles lay farther apart at rest than contact_ratio times their
+  //! longest edges together (centroid to centroid) is a contact the edit made (a limb bent into the
+  //! body: contact_pairs, no retry, no repair), and one that the displacement vectors' placement of
+  //! the detail triangle makes too is the base's (base_crossing_pairs, no retry). Context triangles
+  //! that lay that far from every detail triangle can only make contacts and are not searched (nor
+  //! counted). \p faces index the detail's vertices (0 .. n-1, at their positions in each solve:
+  //! the pinned ones where the request puts them) and then \p points (n, n+1, ..). Replaces any
+  //! earlier context; empty arrays remove it.
+  //! \throw InvalidInput if an index is out of range or a point not finite or beyond the engine's
+  //! range.
+  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces);
+
   const DetailEncoding& encoding() const;
   const ReconstructOptions& options() const;
   //! Seconds spent building the hierarchy in the constructor.

@@ -30,6 +30,7 @@ double DetailSolve::ensure_reconstructor() const {
   if (rec_) return 0.0;
   const auto t0 = Clock::now();
   rec_ = std::make_unique<VolumeReconstructor>(enc_, reconstruct_);
+  if (!context_faces_.empty()) rec_->set_intersection_context(context_points_, context_faces_);
   return seconds_since(t0);
 }
 

@@ -31,6 +31,12 @@ class DetailSolve {
 
   //! Set once by the editor before the first solve (the reconstructor is built from it lazily).
   DetailEncoding& encoding() { return enc_; }
+  //! VolumeReconstructor::set_intersection_context() of the reconstructor, once it is built.
+  //! Set by the editor before the first solve, with the encoding.
+  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
+    context_points_ = std::move(points);
+    context_faces_ = std::move(faces);
+  }
   const DetailEncoding& encoding() const { return enc_; }
 
   //! The exact solve over \p base (the encoding's base vertices, or a cage's control points):
@@ -57,6 +63,8 @@ class DetailSolve {
   EditOptions::DragEnd drag_end_;
   int drag_end_cycles_;
   DetailEncoding enc_;
+  std::vector<Vec3> context_points_;
+  std::vector<Face> context_faces_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
   std::vector<Vec3> drag_sub_;
   DragState drag_state_;  // every multigrid level's last drag solution (volumes)
