@@ -556,6 +556,25 @@ TEST(Reconstruction, AnIntersectionContextCountsTheDetailsNewPairsWithIt) {
   EXPECT_THROW(rec.set_intersection_context(points, {Face{n, n + 1, n + 2}}), InvalidInput);
 }
 
+// ReconstructOptions::max_constraint_motion scales a prism's displacement length by the amplitude
+// (a layered band's, up to 1000): the bumps bend exaggerated 20 times leaves no prism out, as at
+// 1. With the unscaled length it left 19 out (legacy) and changed the result.
+TEST(Reconstruction, AnAmplifiedBendLeavesNoConstraintOut) {
+  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  ReconstructRequest q;
+  q.amplitude = 20.0;
+  const ReconstructResult r = VolumeReconstructor(e).reconstruct(c.edited_base.vertices, q);
+  EXPECT_EQ(r.stats.deferred_constraints, 0);
+  ReconstructOptions none;
+  none.max_constraint_motion = 0.0;
+  EXPECT_EQ(VolumeReconstructor(e, none).reconstruct(c.edited_base.vertices, q).positions, r.positions);
+  EXPECT_EQ(VolumeReconstructor(e, multigrid_reconstruct_options())
+                .reconstruct(c.edited_base.vertices, q)
+                .stats.deferred_constraints,
+            0);
+}
+
 TEST(Reconstruction, RejectsBadInput) {
   const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 1000);
   const DetailEncoding e = encode_detail(c.detail, c.base);

@@ -67,9 +67,10 @@ struct Level {
   // vertex sums in the same order as a scatter over the faces would, so threads change nothing.
   std::vector<int> vf_offsets, vf;
   std::vector<double> targets;
-  // Per prism: its size, the longest of its rest edges and guarded displacement lengths
-  // (ReconstructOptions::max_constraint_motion). Single precision: a bound, not a measure.
-  std::vector<float> sizes;
+  // Per prism, for ReconstructOptions::max_constraint_motion: its longest rest edge and its longest
+  // guarded displacement length (scaled by the amplitude in each solve). Single precision: a
+  // bound, not a measure.
+  std::vector<float> edge_sizes, length_sizes;
   double mean_abs_target = 0.0;
   std::vector<int> nb_offsets, nb;  // level-local neighbour ids
   std::vector<double> weights;
@@ -576,20 +577,32 @@ class VolumeReconstructor::Impl {
       for (Face& f : faces)
         for (int& i : f)
           if (i < n) i = renum_.new_of_old[i];
-    context_points_ = std::move(points);
-    context_faces_ = std::move(faces);
+    // Only the faces that can make a pair that is no contact are kept (near_context()), with the
+    // points they use.
+    const std::vector<int> near = near_context(points, faces);
+    std::vector<int> point_id(points.size(), -1);
+    std::vector<Vec3> kept_points;
+    std::vector<Face> kept_faces;
+    kept_faces.reserve(near.size());
+    for (int k : near) {
+      Face g = faces[k];
+      for (int& i : g) {
+        if (i < n) continue;
+        int& id = point_id[i - n];
+        if (id < 0) {
+          id = static_cast<int>(n + static_cast<long long>(kept_points.size()));
+          kept_points.push_back(points[i - n]);
+        }
+        i = id;
+      }
+      kept_faces.push_back(g);
+    }
+    context_points_ = std::move(kept_points);
+    context_faces_ = std::move(kept_faces);
     rest_context_.reset();
-    near_context_.reset();
-    if (fallback_) fallback_->set_solver_context(context_points_, context_faces_);
+    // The fallback schedule's solver is built from this one's encoding, without renumbering.
+    if (fallback_) fallback_->set_intersection_context(context_points_, context_faces_);
   }
-  // The same in the solver's numbering (the fallback schedule's solver shares it).
-  void set_solver_context(const std::vector<Vec3>& points, const std::vector<Face>& faces) {
-    context_points_ = points;
-    context_faces_ = faces;
-    rest_context_.reset();
-    near_context_.reset();
-  }
-
   const DetailEncoding& encoding() const {
     if (renum_.empty()) return enc_;
     // Once, even from two threads (a getter that looks read-only).
@@ -762,14 +775,17 @@ class VolumeReconstructor::Impl {
     }
     L.boundary = internal::boundary_vertices(nv, lf);
     if (opt_.max_constraint_motion > 0) {
-      L.sizes.resize(L.faces.size());
+      L.edge_sizes.resize(L.faces.size());
+      L.length_sizes.resize(L.faces.size());
       for (std::size_t j = 0; j < L.faces.size(); ++j) {
         const Face& f = L.faces[j];
-        double size = 0.0;
-        for (int c = 0; c < 3; ++c)
-          size = std::max({size, std::abs(guarded_f_[f[c]]),
-                           (enc_.detail_rest[f[c]] - enc_.detail_rest[f[(c + 1) % 3]]).norm()});
-        L.sizes[j] = static_cast<float>(size);
+        double edge = 0.0, length = 0.0;
+        for (int c = 0; c < 3; ++c) {
+          edge = std::max(edge, (enc_.detail_rest[f[c]] - enc_.detail_rest[f[(c + 1) % 3]]).norm());
+          length = std::max(length, std::abs(guarded_f_[f[c]]));
+        }
+        L.edge_sizes[j] = static_cast<float>(edge);
+        L.length_sizes[j] = static_cast<float>(length);
       }
     }
     // J J^T's pattern and symbolic factorization only where exact steps are taken: the finest
@@ -1191,12 +1207,16 @@ class VolumeReconstructor::Impl {
     return o;
   }
 
-  // A uniform grid of boxes: the cells each box covers list it.
+  // A uniform grid of boxes: the cells each box covers list it. Boxes over more than kMaxCells
+  // cells (a triangle far larger than the cell) are kept apart, and every lookup lists them.
   struct BoxGrid {
+    static constexpr double kMaxCells = 4096;
     double cell = 1.0;
     std::unordered_map<std::uint64_t, std::vector<int>> cells;
-    static std::int64_t coord(double x, double cell) {
-      return static_cast<std::int64_t>(std::floor(x / cell));
+    std::vector<int> oversized;
+    // Cell coordinates, clamped so that any finite box (a point far away, a tiny cell) converts.
+    std::int64_t coord(double x) const {
+      return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -1e15, 1e15));
     }
     static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
       const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffff; };
@@ -1205,108 +1225,103 @@ class VolumeReconstructor::Impl {
     // The cells a box covers, as a double (a huge box's count overflows no integer).
     double span(const Eigen::AlignedBox3d& b) const {
       double c = 1.0;
-      for (int a = 0; a < 3; ++a) c *= std::floor(b.max()[a] / cell) - std::floor(b.min()[a] / cell) + 1.0;
+      for (int a = 0; a < 3; ++a) c *= static_cast<double>(coord(b.max()[a]) - coord(b.min()[a])) + 1.0;
       return c;
     }
-    template <class F>
-    void visit(const Eigen::AlignedBox3d& b, F&& f) const {
-      if (!oversized.empty()) f(oversized);
-      const std::int64_t x0 = coord(b.min().x(), cell), x1 = coord(b.max().x(), cell);
-      const std::int64_t y0 = coord(b.min().y(), cell), y1 = coord(b.max().y(), cell);
-      const std::int64_t z0 = coord(b.min().z(), cell), z1 = coord(b.max().z(), cell);
-      for (std::int64_t x = x0; x <= x1; ++x)
-        for (std::int64_t y = y0; y <= y1; ++y)
-          for (std::int64_t z = z0; z <= z1; ++z) {
-            const auto it = cells.find(key(x, y, z));
-            if (it != cells.end()) f(it->second);
-          }
-    }
-    // Boxes over more than kMaxCells cells (a triangle far larger than the others) are kept
-    // apart, and every lookup lists them.
-    static constexpr double kMaxCells = 4096;
-    std::vector<int> oversized;
     void insert(const Eigen::AlignedBox3d& b, int id) {
       if (span(b) > kMaxCells) {
         oversized.push_back(id);
         return;
       }
-      const std::int64_t x0 = coord(b.min().x(), cell), x1 = coord(b.max().x(), cell);
-      const std::int64_t y0 = coord(b.min().y(), cell), y1 = coord(b.max().y(), cell);
-      const std::int64_t z0 = coord(b.min().z(), cell), z1 = coord(b.max().z(), cell);
-      for (std::int64_t x = x0; x <= x1; ++x)
-        for (std::int64_t y = y0; y <= y1; ++y)
-          for (std::int64_t z = z0; z <= z1; ++z) cells[key(x, y, z)].push_back(id);
+      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
+        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
+          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z)
+            cells[key(x, y, z)].push_back(id);
+    }
+    // f(ids) for the lists of the cells \p b covers (\pre span(b) <= kMaxCells), and the oversized.
+    template <class F>
+    void visit(const Eigen::AlignedBox3d& b, F&& f) const {
+      if (!oversized.empty()) f(oversized);
+      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
+        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
+          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) {
+            const auto it = cells.find(key(x, y, z));
+            if (it != cells.end()) f(it->second);
+          }
     }
   };
+  static double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  }
 
-  // The context faces that can make a pair that is no contact (contact_ratio): those whose rest
-  // centroid lies within contact_ratio times their and a detail face's longest edges of that
-  // detail face's rest centroid. A farther one can only make contacts, which decide nothing, so
-  // the fold checks search the region's surroundings only. All of them without contact_ratio.
-  const std::vector<int>& near_context() const {
-    if (near_context_) return *near_context_;
-    near_context_ = std::make_unique<std::vector<int>>();
-    std::vector<int>& near = *near_context_;
+  // The context faces (indices into \p faces, whose points past the detail's are \p points) that
+  // can make a pair that is no contact (contact_ratio): those whose rest centroid lies within
+  // contact_ratio times their and a detail face's longest edges of that detail face's rest
+  // centroid. A farther one can only make contacts, which decide nothing. All of them without
+  // contact_ratio. A grid of the detail faces' centroids (cell: contact_ratio times twice their
+  // median longest edge); a face whose reach covers more cells than there are detail faces checks
+  // them all.
+  std::vector<int> near_context(const std::vector<Vec3>& points, const std::vector<Face>& faces) const {
+    std::vector<int> near;
     const auto n = static_cast<int>(enc_.detail_rest.size());
-    auto at = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : context_points_[i - n]; };
+    if (!(opt_.contact_ratio > 0)) {
+      near.resize(faces.size());
+      std::iota(near.begin(), near.end(), 0);
+      return near;
+    }
+    auto at = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : points[i - n]; };
     auto longest = [&](const Face& f) {
       double e = 0.0;
       for (int k = 0; k < 3; ++k) e = std::max(e, (at(f[k]) - at(f[(k + 1) % 3])).norm());
       return e;
     };
     auto centroid = [&](const Face& f) -> Vec3 { return (at(f[0]) + at(f[1]) + at(f[2])) / 3.0; };
-    if (!(opt_.contact_ratio > 0)) {
-      near.resize(context_faces_.size());
-      std::iota(near.begin(), near.end(), 0);
-      return near;
-    }
-    double dmax = 0.0;
-    for (const Face& f : enc_.detail_faces) dmax = std::max(dmax, longest(f));
-    BoxGrid grid;
-    grid.cell = std::max(opt_.contact_ratio * 2.0 * dmax, 1e-300);
-    std::vector<Vec3> dc(enc_.detail_faces.size());
-    std::vector<double> de(enc_.detail_faces.size());
-    std::vector<int> all_detail(enc_.detail_faces.size());
-    std::iota(all_detail.begin(), all_detail.end(), 0);
-    for (std::size_t j = 0; j < enc_.detail_faces.size(); ++j) {
+    const std::size_t nd = enc_.detail_faces.size();
+    std::vector<Vec3> dc(nd);
+    std::vector<double> de(nd);
+    Eigen::AlignedBox3d detail_box;
+    for (std::size_t j = 0; j < nd; ++j) {
       dc[j] = centroid(enc_.detail_faces[j]);
       de[j] = longest(enc_.detail_faces[j]);
-      grid.insert(Eigen::AlignedBox3d(dc[j], dc[j]), static_cast<int>(j));
+      detail_box.extend(dc[j]);
     }
-    Eigen::AlignedBox3d detail_box;
-    for (const Vec3& c : dc) detail_box.extend(c);
-    for (std::size_t k = 0; k < context_faces_.size(); ++k) {
-      const Face& g = context_faces_[k];
+    const double dmax = de.empty() ? 0.0 : *std::max_element(de.begin(), de.end());
+    BoxGrid grid;
+    grid.cell = std::max(opt_.contact_ratio * 2.0 * median(de), 1e-300);
+    for (std::size_t j = 0; j < nd; ++j) grid.insert(Eigen::AlignedBox3d(dc[j], dc[j]), static_cast<int>(j));
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+      const Face& g = faces[k];
       const Vec3 c = centroid(g);
       const double eg = longest(g);
       const double reach = opt_.contact_ratio * (eg + dmax);
       if (detail_box.exteriorDistance(c) > reach) continue;  // most of a large mesh's rest
       bool found = false;
-      auto any_within = [&](const std::vector<int>& ids) {
-        for (int j : ids) {
-          if (found) return;
-          found = (c - dc[j]).norm() <= opt_.contact_ratio * (eg + de[j]);
-        }
-      };
-      const Eigen::AlignedBox3d reach_box(c - Vec3::Constant(reach), c + Vec3::Constant(reach));
-      if (grid.span(reach_box) > static_cast<double>(dc.size()))
-        any_within(all_detail);
-      else
-        grid.visit(reach_box, any_within);
+      auto within = [&](int j) { return (c - dc[j]).norm() <= opt_.contact_ratio * (eg + de[j]); };
+      const Eigen::AlignedBox3d box(c - Vec3::Constant(reach), c + Vec3::Constant(reach));
+      if (grid.span(box) > std::min(BoxGrid::kMaxCells, static_cast<double>(nd))) {
+        for (std::size_t j = 0; j < nd && !found; ++j) found = within(static_cast<int>(j));
+      } else {
+        grid.visit(box, [&](const std::vector<int>& ids) {
+          for (std::size_t t = 0; t < ids.size() && !found; ++t) found = within(ids[t]);
+        });
+      }
       if (found) near.push_back(static_cast<int>(k));
     }
     return near;
   }
 
   // The pairs (detail face, context face) whose triangles share no vertex and intersect with the
-  // detail at \p p, sorted, among the context faces near_context() keeps: a grid of those faces'
-  // boxes (cell: their mean box size), each detail face's box looked up in it, then the exact
-  // test of find_self_intersections(). *cut: more pairs or tests than the fold checks' bounds.
+  // detail at \p p, sorted: a grid of the context faces' boxes (cell: their median box size), each
+  // detail face's box looked up in it (one that covers more cells than there are context faces
+  // checks them all), then the exact test of find_self_intersections(). The box tests count
+  // against the fold checks' test budget. *cut: more pairs or tests than its bounds.
   std::vector<std::pair<int, int>> context_pairs(const std::vector<Vec3>& p, bool& cut) const {
     cut = false;
     std::vector<std::pair<int, int>> out;
-    const std::vector<int>& near = near_context();
-    if (near.empty()) return out;
+    const auto nc = static_cast<int>(context_faces_.size());
+    if (nc == 0) return out;
     const auto n = static_cast<int>(p.size());
     auto at = [&](int i) -> const Vec3& { return i < n ? p[i] : context_points_[i - n]; };
     auto box_of = [&](const Face& f) {
@@ -1314,64 +1329,67 @@ class VolumeReconstructor::Impl {
       for (int i : f) b.extend(at(i));
       return b;
     };
+    std::vector<Eigen::AlignedBox3d> cbox(nc);
+    std::vector<double> sizes(nc);
+    for (int k = 0; k < nc; ++k) {
+      cbox[k] = box_of(context_faces_[k]);
+      sizes[k] = cbox[k].sizes().maxCoeff();
+    }
     BoxGrid grid;
-    double size = 0.0;
-    for (int k : near) size += box_of(context_faces_[k]).sizes().maxCoeff();
-    grid.cell = std::max(size / static_cast<double>(near.size()), 1e-300);
-    for (int k : near) grid.insert(box_of(context_faces_[k]), k);
+    grid.cell = std::max(median(sizes), 1e-300);
+    for (int k = 0; k < nc; ++k) grid.insert(cbox[k], k);
     const IntersectionOptions io = search_options();
-    long long tests = 0;
-    std::vector<int> candidates;
+    std::size_t tests = 0;
+    std::vector<int> stamp(nc, -1);  // the detail face that last looked at a context face
     for (std::size_t j = 0; j < enc_.detail_faces.size() && !cut; ++j) {
+      if (j % 4096 == 0) check_cancel();
       const Face& f = enc_.detail_faces[j];
       const Eigen::AlignedBox3d b = box_of(f);
-      candidates.clear();
-      // A box over more cells than there are faces (a triangle thrown far) is tested against all.
-      if (grid.span(b) > static_cast<double>(near.size()))
-        candidates = near;
-      else
-        grid.visit(b, [&](const std::vector<int>& ids) {
-          candidates.insert(candidates.end(), ids.begin(), ids.end());
-        });
-      std::sort(candidates.begin(), candidates.end());
-      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
       const std::array<Vec3, 3> tf{at(f[0]), at(f[1]), at(f[2])};
-      for (int k : candidates) {
-        const Face& g = context_faces_[k];
-        if (!b.intersects(box_of(g))) continue;
-        bool shared = false;
-        for (int a : f)
-          for (int c : g) shared = shared || a == c;
-        if (shared) continue;
-        if (io.max_tests > 0 && ++tests > static_cast<long long>(io.max_tests)) {
+      auto test = [&](int k) {
+        if (cut || stamp[k] == static_cast<int>(j)) return;
+        stamp[k] = static_cast<int>(j);
+        if (io.max_tests > 0 && ++tests > io.max_tests) {
           cut = true;
-          break;
+          return;
         }
-        if (triangles_intersect(tf, {at(g[0]), at(g[1]), at(g[2])})) {
-          out.emplace_back(static_cast<int>(j), k);
-          if (io.max_pairs > 0 && out.size() > io.max_pairs) {
-            cut = true;
-            break;
-          }
-        }
+        if (!b.intersects(cbox[k])) return;
+        const Face& g = context_faces_[k];
+        for (int x : f)
+          for (int y : g)
+            if (x == y) return;  // adjacent: sharing a vertex is no intersection
+        if (!triangles_intersect(tf, {at(g[0]), at(g[1]), at(g[2])})) return;
+        out.emplace_back(static_cast<int>(j), k);
+        if (io.max_pairs > 0 && out.size() > io.max_pairs) cut = true;
+      };
+      if (grid.span(b) > std::min(BoxGrid::kMaxCells, static_cast<double>(nc))) {
+        for (int k = 0; k < nc && !cut; ++k) test(k);
+      } else {
+        grid.visit(b, [&](const std::vector<int>& ids) {
+          for (int k : ids) test(k);
+        });
       }
     }
-    check_cancel();
+    std::sort(out.begin(), out.end());
     return out;
   }
 
   // set_intersection_context(): the new pairs of a detail triangle and a context triangle, added to
-  // \p o as the detail's own. As the detail's own pairs are told apart (contact_ratio,
-  // base_crossing_rings): a pair whose triangles lay farther apart at rest than contact_ratio times
-  // their longest edges together (centroid to centroid) is a contact the edit made (a limb bent
-  // into the body); one that the displacement vectors' placement of the detail triangle makes too
-  // is the base's (crossing_pairs); the others are folds, whose detail faces go to the repair (and
-  // the base's too, as for the detail's own). A search cut short counts as max_pairs new pairs,
-  // none listed; a rest cut short leaves the context unchecked, as the detail's own pairs are then.
+  // \p o as the detail's own. Not by the detail pairs' contact test (a path along the base, which
+  // a context triangle has no place in) but by the distance at rest: a pair whose triangles' rest
+  // centroids lay farther apart than contact_ratio times their longest edges together is a
+  // contact the edit made (a limb bent into the body); one that the displacement vectors'
+  // placement of the detail triangle makes too is the base's (crossing_pairs; none with
+  // base_crossing_rings < 0); the others are folds. The detail faces of all but the contacts go
+  // to the repair, as the detail's own pairs next to a crossing do. A search cut short counts as
+  // max_pairs new pairs, none listed; a rest search cut short leaves the context unchecked, as the
+  // detail's own pairs are then.
   void add_context_pairs(const State& s, Outcome& o) const {
     if (!rest_context_) {
-      rest_context_ = std::make_unique<ContextPairs>();
-      rest_context_->pairs = context_pairs(enc_.detail_rest, rest_context_->cut);
+      // Filled before it is kept: a cancel during the search leaves no half-made cache behind.
+      auto rest = std::make_unique<ContextPairs>();
+      rest->pairs = context_pairs(enc_.detail_rest, rest->cut);
+      rest_context_ = std::move(rest);
     }
     if (rest_context_->cut) return;
     bool cut = false;
@@ -1409,7 +1427,7 @@ class VolumeReconstructor::Impl {
         vectors[k] = s.Q[i] + s.amplitude * enc_.normal_offsets[i] * s.N[i] + s.R[i];
         ctx[k] = at(g[k]);
       }
-      if (triangles_intersect(vectors, ctx)) ++o.crossing_pairs;
+      if (opt_.base_crossing_rings >= 0 && triangles_intersect(vectors, ctx)) ++o.crossing_pairs;
     }
   }
 
@@ -1441,7 +1459,8 @@ class VolumeReconstructor::Impl {
       o.fold_repair_local_first = opt_.fold_repair_local_first;  // a .strata file's, as it repaired
       o.fold_repair_local_rings = opt_.fold_repair_local_rings;
       o.fold_repair_local_rounds = opt_.fold_repair_local_rounds;
-      o.renumber_for_locality = false;  // enc_ is in the solver's numbering already
+      o.renumber_for_locality = false;                       // enc_ is in the solver's numbering already
+      o.max_constraint_motion = opt_.max_constraint_motion;  // the caller's bound (0: none)
       // The caller's, as the fold repair's: a .strata file written before solves as then, and the
       // default options (0) fall back to the preset with every coarse level solved, as before the
       // preset took 1 (with 1 the camel's top bend kept 781 new pairs on band 2 against 567).
@@ -1471,7 +1490,7 @@ class VolumeReconstructor::Impl {
     if (!fallback_->rest_base_pairs_ && rest_base_pairs_)
       fallback_->rest_base_pairs_ = std::make_unique<IntersectionResult>(*rest_base_pairs_);
     if (fallback_->context_faces_.size() != context_faces_.size())
-      fallback_->set_solver_context(context_points_, context_faces_);
+      fallback_->set_intersection_context(context_points_, context_faces_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;
@@ -2151,13 +2170,12 @@ class VolumeReconstructor::Impl {
       w.diag[j] = norm2;
     });
     if (!use_mg) vertex_gradients(L, w);
-    // rr0: the residual's squared norm (the line search's); rr: the right-hand side's, which the
-    // conjugate gradients start from (the same unless constraints are left out).
-    double rr0 = 0.0;
-    double rr = L.sizes.empty() ? 0.0 : defer_ill_posed(L, s, w, use_mg, st, rr0);
-    if (L.sizes.empty()) {
-      for (std::size_t j = 0; j < m; ++j) rr0 += w.r[j] * w.r[j];
-      rr = rr0;
+    double rr = 0.0;
+    for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
+    const double rr0 = rr;  // the line search's; rr becomes the right-hand side's if it changes
+    if (!L.edge_sizes.empty() && defer_ill_posed(L, s, h, w, use_mg, st) > 0) {
+      rr = 0.0;
+      for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     }
     if (use_mg) {
       solve_multigrid(L, w, how == StepSolve::Exact, st);
@@ -2228,33 +2246,32 @@ class VolumeReconstructor::Impl {
   }
 
   // ReconstructOptions::max_constraint_motion: zeroes the step's right-hand side w.r[j] of the
-  // prisms whose own minimum-norm motion |r_j| / |grad_j| exceeds the bound times their size
-  // (w.diag holds the gradients' squared norms in a multigrid step; otherwise they come from
-  // w.grad). \p rr0 gets the residual's squared norm (the line search's, which keeps them);
-  // returns the right-hand side's.
-  double defer_ill_posed(const Level& L, const State& s, GnScratch& w, bool use_mg, ReconstructStats& st,
-                         double& rr0) const {
+  // prisms whose own minimum-norm motion |r_j| / |grad_j| exceeds the bound times their size, the
+  // longer of their longest rest edge and their longest displacement length at amplitude \p h
+  // times the request's amplitude (w.diag holds the gradients' squared norms in a multigrid step;
+  // otherwise they come from w.grad). Returns how many prisms were left out. A pass of its own
+  // after the residual's norm, whose loop stays as it was (a fused multiply-add there would change
+  // its rounding, and with it every result).
+  int defer_ill_posed(const Level& L, const State& s, double h, GnScratch& w, bool use_mg,
+                      ReconstructStats& st) const {
     const double k2 = opt_.max_constraint_motion * opt_.max_constraint_motion;
-    double rr = 0.0;
-    rr0 = 0.0;
+    const double a = std::abs(h);
+    int deferred = 0;
     for (std::size_t j = 0; j < w.r.size(); ++j) {
-      const double r2 = w.r[j] * w.r[j];
-      rr0 += r2;
       const double n2 =
           use_mg ? w.diag[j]
                  : w.grad[j][0].squaredNorm() + w.grad[j][1].squaredNorm() + w.grad[j][2].squaredNorm();
-      const double size = L.sizes[j];
+      const double size = std::max<double>(L.edge_sizes[j], a * L.length_sizes[j]);
+      if (!(w.r[j] * w.r[j] > k2 * size * size * n2)) continue;
       // A prism whose three vertices are pinned has no gradient but no step either: its row stays
       // as it was (its residual is the same in every step).
       const Face& f = L.faces[j];
-      if (r2 > k2 * size * size * n2 && !(s.pinned(f[0]) && s.pinned(f[1]) && s.pinned(f[2]))) {
-        w.r[j] = 0.0;
-        ++st.deferred_constraints;
-      } else {
-        rr += r2;
-      }
+      if (s.pinned(f[0]) && s.pinned(f[1]) && s.pinned(f[2])) continue;
+      w.r[j] = 0.0;
+      ++deferred;
     }
-    return rr;
+    st.deferred_constraints += deferred;
+    return deferred;
   }
 
   // sum_j (h V*_j - V_j)^2.
@@ -2524,7 +2541,6 @@ class VolumeReconstructor::Impl {
     bool cut = false;  // the search was cut short
   };
   mutable std::unique_ptr<ContextPairs> rest_context_;
-  mutable std::unique_ptr<std::vector<int>> near_context_;  // near_context(), made on first use
   // The rest base points' crossings (near_base_crossings()), searched on first use.
   mutable std::unique_ptr<IntersectionResult> rest_base_pairs_;
   const std::vector<char> no_crossings_;

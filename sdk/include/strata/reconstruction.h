@@ -316,10 +316,12 @@ struct ReconstructOptions {
   //! factorizations in 78.9 s, where with 10 it ended unconverged after three retries (330 s, max
   //! error 2.0e-2). Layered models' files written before this option read it as max_final_steps.
   int max_factorized_steps = 30;
-  //! A prism constraint is left out of a Gauss-Newton step when the motion that would satisfy it
-  //! alone, |r_j| / |grad V_j| (its residual over its gradient's norm), exceeds this many times
-  //! the prism's size (its longest rest edge or displacement length): its linearization cannot be
-  //! trusted there. Where the detail is no height field over the base (a limb longer than its
+  //! A prism constraint is left out of a whole-level Gauss-Newton step (the cycles', the polish's;
+  //! not the local end's or the fold repair's local steps, which are undone when they do not help)
+  //! when the motion that would satisfy it alone, |r_j| / |grad V_j| (its residual over its
+  //! gradient's norm), exceeds this many times the prism's size (its longest rest edge, or its
+  //! longest displacement length times the step's volume scale and amplitude): its linearization
+  //! cannot be trusted there. Where the detail is no height field over the base (a limb longer than its
   //! faired base, whose tip's vertices fall back to the same closest point), prisms sit on
   //! degenerate base triangles, whose gradients vanish at the clean start; their minimum-norm
   //! steps moved the camel's tail by 3e3 times its size (region editing at smoothing 1.0,
@@ -675,15 +677,16 @@ class VolumeReconstructor {
   //! (ReconstructOptions::retry_on_new_intersections) counts the pairs of a detail triangle and
   //! one of these that intersect where they did not at rest as new pairs of the detail, so that
   //! the retries, the fold repair and the fallback schedule take them on, and
-  //! ReconstructStats::new_intersecting_pairs includes them. As the detail's own pairs are told
-  //! apart: a pair whose triangles lay farther apart at rest than contact_ratio times their
-  //! longest edges together (centroid to centroid) is a contact the edit made (a limb bent into the
-  //! body: contact_pairs, no retry, no repair), and one that the displacement vectors' placement of
-  //! the detail triangle makes too is the base's (base_crossing_pairs, no retry). Context triangles
-  //! that lay that far from every detail triangle can only make contacts and are not searched (nor
-  //! counted). \p faces index the detail's vertices (0 .. n-1, at their positions in each solve:
-  //! the pinned ones where the request puts them) and then \p points (n, n+1, ..). Replaces any
-  //! earlier context; empty arrays remove it.
+  //! ReconstructStats::new_intersecting_pairs includes them. Told apart by the distance at rest
+  //! (not by the detail pairs' path along the base): a pair whose triangles' rest centroids lay
+  //! farther apart than contact_ratio times their longest edges together is a contact the edit
+  //! made (a limb bent into the body: contact_pairs, no retry, no repair); one that the
+  //! displacement vectors' placement of the detail triangle makes too is the base's
+  //! (base_crossing_pairs, no retry; none with base_crossing_rings < 0). Only the context
+  //! triangles that lie within that distance of some detail triangle at rest are kept: the others
+  //! can only make contacts, which are then not counted. \p faces index the detail's vertices
+  //! (0 .. n-1, at their positions in each solve: the pinned ones where the request puts them) and
+  //! then \p points (n, n+1, ..). Replaces any earlier context; empty arrays remove it.
   //! \throw InvalidInput if an index is out of range or a point not finite or beyond the engine's
   //! range.
   void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces);

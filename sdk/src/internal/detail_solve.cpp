@@ -1,5 +1,6 @@
 #include "internal/detail_solve.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "strata/mesh.h"
@@ -29,8 +30,9 @@ bool base_at_rest(const DetailEncoding& e, const BaseFrames& f) {
 double DetailSolve::ensure_reconstructor() const {
   if (rec_) return 0.0;
   const auto t0 = Clock::now();
-  rec_ = std::make_unique<VolumeReconstructor>(enc_, reconstruct_);
-  if (!context_faces_.empty()) rec_->set_intersection_context(context_points_, context_faces_);
+  auto rec = std::make_unique<VolumeReconstructor>(enc_, reconstruct_);
+  if (!context_faces_.empty()) rec->set_intersection_context(context_points_, context_faces_);
+  rec_ = std::move(rec);  // only once it is whole
   return seconds_since(t0);
 }
 
@@ -86,7 +88,12 @@ std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResul
   exact.max_cycles = drag_end_cycles_;
   ReconstructResult r = rec_->drag_step(frames, drag_state_, exact);
   const double warm_seconds = seconds_since(t0);
-  if (!r.stats.converged || r.stats.new_intersecting_pairs != 0) {
+  // Contacts the edit made (a limb bent into the body, ReconstructStats::contact_pairs) are no
+  // fold: a clean start meets them again.
+  const long long folds = r.stats.new_intersecting_pairs < 0
+                              ? -1
+                              : r.stats.new_intersecting_pairs - std::max(r.stats.contact_pairs, 0LL);
+  if (!r.stats.converged || folds != 0) {
     // Not converged, folded, or not checked (the options count no pairs): the clean start. If
     // neither converges, the smaller error is kept, as the reconstructor's own retry does, but
     // not at the price of more new pairs (both results are counted when the options count).
