@@ -617,6 +617,154 @@ TEST(IntersectNew, RejectsIncomparableResults) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// find_intersections_between(): the pairs between two face lists over one vertex array
+
+// The O(n m) reference: every pair (a, b) sharing no vertex index, through the same exact predicate.
+std::vector<Pair> brute_force_between(const std::vector<Vec3>& v, const std::vector<Face>& a,
+                                      const std::vector<Face>& b) {
+  std::vector<Pair> pairs;
+  auto tri = [&](const Face& f) { return Tri{v[f[0]], v[f[1]], v[f[2]]}; };
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      bool adjacent = false;
+      for (int x : a[i]) adjacent = adjacent || x == b[j][0] || x == b[j][1] || x == b[j][2];
+      if (!adjacent && triangles_intersect(tri(a[i]), tri(b[j])))
+        pairs.emplace_back(static_cast<int>(i), static_cast<int>(j));
+    }
+  return pairs;
+}
+
+IntersectionResult between(const std::vector<Vec3>& v, const std::vector<Face>& a, const std::vector<Face>& b,
+                           bool parallel = true, std::size_t max_pairs = 0) {
+  IntersectionOptions o;
+  o.collect_pairs = true;
+  o.parallel = parallel;
+  o.max_pairs = max_pairs;
+  return find_intersections_between(v, a, b, o);
+}
+
+// A soup's faces dealt at random into two lists, a few of them into both.
+void split_faces(const TriMesh& m, std::mt19937& rng, std::vector<Face>& a, std::vector<Face>& b) {
+  std::uniform_int_distribution<int> deal(0, 9);
+  for (const Face& f : m.faces) {
+    const int d = deal(rng);
+    if (d < 5 || d == 9) a.push_back(f);
+    if (d >= 5) b.push_back(f);
+  }
+}
+
+// Against the brute force on soups (shared vertices, exact touching, coplanar and degenerate
+// faces), with one thread and with several, and with the lists swapped (the pairs swap too).
+TEST(IntersectBetween, RandomSoupsMatchBruteForce) {
+  std::mt19937 rng(11);
+  const TriMesh soups[] = {small_triangle_soup(600, rng), shared_vertex_soup(300, 120, rng),
+                           lattice_soup(400, 3, 3, rng), lattice_soup(800, 12, 2, rng)};
+  for (const TriMesh& m : soups) {
+    std::vector<Face> a, b;
+    split_faces(m, rng, a, b);
+    const std::vector<Pair> expected = brute_force_between(m.vertices, a, b);
+    ASSERT_FALSE(expected.empty());
+    for (bool parallel : {false, true}) {
+      const IntersectionResult r = between(m.vertices, a, b, parallel);
+      EXPECT_EQ(r.pairs, expected) << "parallel=" << parallel;
+      EXPECT_EQ(r.num_pairs, expected.size());
+      EXPECT_FALSE(r.truncated);
+      EXPECT_EQ(r.num_faces, a.size() + b.size());
+      std::vector<int> faces;
+      for (const Pair& p : expected) faces.push_back(p.first);
+      std::sort(faces.begin(), faces.end());
+      faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+      EXPECT_EQ(r.faces, faces);
+      std::vector<Pair> swapped;
+      for (const Pair& p : between(m.vertices, b, a, parallel).pairs) swapped.emplace_back(p.second, p.first);
+      std::sort(swapped.begin(), swapped.end());
+      EXPECT_EQ(swapped, expected);
+    }
+  }
+}
+
+// A mesh's pairs are those within each part and those between the parts: the self search of two
+// overlapping spheres split into its two spheres' faces.
+TEST(IntersectBetween, SelfPairsAreThePartsPairsAndThoseBetween) {
+  const TriMesh s = icosphere(3);
+  const TriMesh m = concatenate(s, translated(s, Vec3(0.6, 0.1, 0.0)));
+  const std::vector<Face> a(m.faces.begin(), m.faces.begin() + s.num_faces());
+  const std::vector<Face> b(m.faces.begin() + s.num_faces(), m.faces.end());
+  const IntersectionResult whole = find(m);
+  const IntersectionResult cross = between(m.vertices, a, b);
+  ASSERT_GT(cross.num_pairs, 100u);
+  EXPECT_EQ(find_self_intersections(m.vertices, a).num_pairs, 0u);
+  std::vector<Pair> mapped;
+  for (const Pair& p : cross.pairs) mapped.emplace_back(p.first, p.second + s.num_faces());
+  EXPECT_EQ(mapped, whole.pairs);
+  // Far apart: nothing between them, and no test made.
+  const TriMesh apart = concatenate(s, translated(s, Vec3(5.0, 0.0, 0.0)));
+  const std::vector<Face> c(apart.faces.begin() + s.num_faces(), apart.faces.end());
+  const IntersectionResult none = between(apart.vertices, a, c);
+  EXPECT_EQ(none.num_pairs, 0u);
+  EXPECT_EQ(none.num_tests, 0u);
+}
+
+TEST(IntersectBetween, LimitsCancelAndBadInput) {
+  const TriMesh s = icosphere(2);
+  const TriMesh m = concatenate(s, translated(s, Vec3(0.5, 0.0, 0.0)));
+  const std::vector<Face> a(m.faces.begin(), m.faces.begin() + s.num_faces());
+  const std::vector<Face> b(m.faces.begin() + s.num_faces(), m.faces.end());
+  const std::vector<Pair> all = brute_force_between(m.vertices, a, b);
+  ASSERT_GT(all.size(), 10u);
+  for (bool parallel : {false, true}) {
+    const IntersectionResult cut = between(m.vertices, a, b, parallel, 10);
+    EXPECT_TRUE(cut.truncated);
+    ASSERT_EQ(cut.pairs.size(), 10u);
+    for (const Pair& p : cut.pairs) EXPECT_TRUE(std::binary_search(all.begin(), all.end(), p));
+    EXPECT_FALSE(between(m.vertices, a, b, parallel, all.size()).truncated);
+
+    // Two halves of a sheared strip: nearly every pair of boxes overlaps, no triangle meets another.
+    const TriMesh strip = sheared_strip(2000);
+    const std::vector<Face> lo(strip.faces.begin(), strip.faces.begin() + 2000);
+    const std::vector<Face> hi(strip.faces.begin() + 2000, strip.faces.end());
+    IntersectionOptions o;
+    o.parallel = parallel;
+    o.max_tests = 100000;
+    const IntersectionResult r = find_intersections_between(strip.vertices, lo, hi, o);
+    EXPECT_TRUE(r.truncated && r.out_of_tests);
+    EXPECT_GE(r.num_tests, o.max_tests);
+
+    std::atomic<bool> stop{true};
+    o = IntersectionOptions();
+    o.parallel = parallel;
+    o.cancel = &stop;
+    EXPECT_THROW(find_intersections_between(m.vertices, a, b, o), Cancelled);
+    stop = false;
+    EXPECT_EQ(find_intersections_between(m.vertices, a, b, o).num_pairs, all.size());
+  }
+  // Empty lists: nothing to pair.
+  EXPECT_EQ(between(m.vertices, {}, b).num_pairs, 0u);
+  EXPECT_EQ(between(m.vertices, a, {}).num_pairs, 0u);
+  // Out of range indices and non-finite coordinates, in either list, name the list.
+  std::vector<Face> bad = b;
+  bad.back()[2] = m.num_vertices();
+  try {
+    between(m.vertices, a, bad);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("second face list"), std::string::npos) << e.what();
+  }
+  std::vector<Vec3> nan = m.vertices;
+  nan[a[0][0]].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(between(nan, a, b), InvalidInput);
+  // Results between the same lists compare; one within a list does not.
+  TriMesh moved = m;
+  for (int i = s.num_vertices(); i < moved.num_vertices(); ++i) moved.vertices[i].x() += 0.4;
+  const IntersectionResult before = between(m.vertices, a, b);
+  const IntersectionResult after = between(moved.vertices, a, b);
+  std::size_t fresh = 0;
+  for (const Pair& p : after.pairs) fresh += !std::binary_search(before.pairs.begin(), before.pairs.end(), p);
+  EXPECT_EQ(count_new_intersections(before, after), fresh);
+  EXPECT_THROW(count_new_intersections(before, find(m)), InvalidInput);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Measurements (printed, never asserted on time)
 
 double seconds_for(const TriMesh& m, bool parallel, std::size_t& pairs) {

@@ -41,8 +41,10 @@ struct IntersectionResult {
   //! Number of intersecting pairs of non-adjacent triangles (at most max_pairs if that was set).
   std::size_t num_pairs = 0;
   //! The pairs (i, j) of face indices, i < j, sorted; only if collect_pairs (then pairs.size() == num_pairs).
+  //! From find_intersections_between(): (index in the first list, index in the second), sorted.
   std::vector<std::pair<int, int>> pairs;
-  //! The sorted distinct faces occurring in `pairs`; only if collect_pairs.
+  //! The sorted distinct faces occurring in `pairs` (find_intersections_between(): those of the
+  //! first list); only if collect_pairs.
   std::vector<int> faces;
   //! True iff the search was cut short: the mesh has more than max_pairs intersecting pairs, or
   //! its search needs more than max_tests tests (out_of_tests). num_pairs is then only a lower
@@ -80,6 +82,26 @@ struct IntersectionResult {
 //!        or there are more faces than fit in an int; Cancelled once options.cancel reads true.
 IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                                            const IntersectionOptions& options = {});
+
+//! Counts the pairs (a, b) of a face a of \p faces_a and a face b of \p faces_b, both over \p vertices,
+//! whose triangles share no vertex and intersect: the pairs between two parts of a mesh (a region
+//! and the rest of its mesh), without those within either part. The same rules, exact test,
+//! hierarchy, limits, threads and cancel as find_self_intersections(): adjacency by vertex index
+//! (the two lists may share vertices, and a pair sharing one is never counted), degenerate faces
+//! skipped, a face listed in both lists tested against itself never (it shares its vertices).
+//!
+//! The result's pairs are (index in faces_a, index in faces_b), sorted; its `faces` are the
+//! distinct faces of \p faces_a occurring in them; num_faces is the two lists' sizes together, and
+//! connectivity_hash a fingerprint of both lists, so count_new_intersections() compares two
+//! results between the same lists.
+//!
+//! \pre Every face index is in [0, vertices.size()); every vertex used by a face has finite coordinates.
+//! \throw InvalidInput if a face index is out of range, a used vertex has a non-finite coordinate,
+//!        or a list has more faces than fit in an int; Cancelled once options.cancel reads true.
+IntersectionResult find_intersections_between(const std::vector<Vec3>& vertices,
+                                              const std::vector<Face>& faces_a,
+                                              const std::vector<Face>& faces_b,
+                                              const IntersectionOptions& options = {});
 
 //! Search limits for callers that must finish on any mesh: at most 10 million pairs (80 MB when
 //! collected) and 50 million + 200 per face exact tests (a few seconds on one core, where the
