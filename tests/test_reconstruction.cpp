@@ -489,71 +489,172 @@ TEST(Reconstruction, WarmStartFromTheSolutionStaysClose) {
   EXPECT_LE(n.stats.max_relative_error, 1e-4);
 }
 
+// The bumps bent (8k prisms) and reconstructed without a context, with the face the bend moved
+// farthest, for the intersection context's tests.
+struct BentBumps {
+  cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
+  DetailEncoding e = encode_detail(c.detail, c.base);
+  VolumeReconstructor rec{e};
+  ReconstructResult plain = rec.reconstruct(c.edited_base.vertices);
+  int far = farthest();
+
+  int farthest() const {
+    auto centroid = [](const std::vector<Vec3>& p, const Face& f) {
+      return (p[f[0]] + p[f[1]] + p[f[2]]) / 3.0;
+    };
+    int best = 0;
+    double moved = 0.0;
+    for (int j = 0; j < static_cast<int>(e.detail_faces.size()); ++j) {
+      const double d =
+          (centroid(plain.positions, e.detail_faces[j]) - centroid(e.detail_rest, e.detail_faces[j])).norm();
+      if (d > moved) moved = d, best = j;
+    }
+    return best;
+  }
+  // A triangle across face \p j of the detail at \p p (in a plane through its normal, two of its
+  // edge lengths in size), shifted by \p lift edge lengths along that normal.
+  std::vector<Vec3> across(const std::vector<Vec3>& p, int j, double lift = 0.0) const {
+    const Face& f = e.detail_faces[j];
+    const Vec3 a = p[f[0]], b = p[f[1]], cc = p[f[2]];
+    const Vec3 normal = (b - a).cross(cc - a).normalized(), along = (b - a).normalized();
+    const double edge = (b - a).norm();
+    const Vec3 mid = (a + b + cc) / 3.0 + lift * edge * normal;
+    return {mid + 2 * edge * normal, mid - 2 * edge * normal + edge * along,
+            mid - 2 * edge * normal - edge * along};
+  }
+  // How many detail triangles at \p p the triangle \p t crosses.
+  int crossings(const std::vector<Vec3>& p, const std::vector<Vec3>& t) const {
+    int k = 0;
+    for (const Face& g : e.detail_faces)
+      k += triangles_intersect({p[g[0]], p[g[1]], p[g[2]]}, {t[0], t[1], t[2]});
+    return k;
+  }
+};
+
 // VolumeReconstructor::set_intersection_context(): fixed triangles that the detail must not newly
 // intersect. A small triangle set across the bent bumps' result, far from where the detail lay at
 // rest: the pairs it makes with the result are counted as new, and as contacts the edit made (so
 // no retry or repair runs and the result is the same); pairs that a context triangle has with
 // the rest detail are not new.
 TEST(Reconstruction, AnIntersectionContextCountsTheDetailsNewPairsWithIt) {
-  const cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 8000);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  VolumeReconstructor rec(e);
-  const ReconstructResult plain = rec.reconstruct(c.edited_base.vertices);
+  BentBumps t;
+  const cases::CylinderCase& c = t.c;
+  const DetailEncoding& e = t.e;
+  VolumeReconstructor& rec = t.rec;
+  const ReconstructResult& plain = t.plain;
   ASSERT_TRUE(plain.stats.converged);
   ASSERT_GE(plain.stats.new_intersecting_pairs, 0);
   const auto n = static_cast<int>(e.detail_rest.size());
-  // The face that the bend moved farthest, and a triangle across it (in a plane through its
-  // normal), two of its edge lengths in size.
-  int far = 0;
-  double moved = 0.0;
-  auto centroid = [](const std::vector<Vec3>& p, const Face& f) {
-    return (p[f[0]] + p[f[1]] + p[f[2]]) / 3.0;
-  };
-  for (int j = 0; j < static_cast<int>(e.detail_faces.size()); ++j) {
-    const double d =
-        (centroid(plain.positions, e.detail_faces[j]) - centroid(e.detail_rest, e.detail_faces[j])).norm();
-    if (d > moved) moved = d, far = j;
-  }
-  const Face& f = e.detail_faces[far];
-  const Vec3 a = plain.positions[f[0]], b = plain.positions[f[1]], cc = plain.positions[f[2]];
-  const Vec3 normal = (b - a).cross(cc - a).normalized();
-  const double edge = (b - a).norm();
-  const Vec3 mid = (a + b + cc) / 3.0, along = (b - a).normalized();
-  const std::array<Vec3, 3> ctx{mid + 2 * edge * normal, mid - 2 * edge * normal + edge * along,
-                                mid - 2 * edge * normal - edge * along};
-  int expected = 0;
-  for (const Face& g : e.detail_faces) {
-    ASSERT_FALSE(triangles_intersect({e.detail_rest[g[0]], e.detail_rest[g[1]], e.detail_rest[g[2]]}, ctx));
-    expected +=
-        triangles_intersect({plain.positions[g[0]], plain.positions[g[1]], plain.positions[g[2]]}, ctx);
-  }
+  const std::vector<Vec3> ctx = t.across(plain.positions, t.far);
+  ASSERT_EQ(t.crossings(e.detail_rest, ctx), 0);
+  const int expected = t.crossings(plain.positions, ctx);
   ASSERT_GT(expected, 0);
   // A second context triangle that crosses the rest detail (its pairs are there at rest, not new).
-  const Face& h = e.detail_faces[0];
-  const Vec3 r0 = e.detail_rest[h[0]], r1 = e.detail_rest[h[1]], r2 = e.detail_rest[h[2]];
-  const Vec3 rn = (r1 - r0).cross(r2 - r0).normalized(), rm = (r0 + r1 + r2) / 3.0;
-  const double re = (r1 - r0).norm();
-  std::vector<Vec3> points{ctx[0],
-                           ctx[1],
-                           ctx[2],
-                           rm + 2 * re * rn,
-                           rm - 2 * re * rn + re * (r1 - r0).normalized(),
-                           rm - 2 * re * rn - re * (r1 - r0).normalized()};
-  rec.set_intersection_context(points, {Face{n, n + 1, n + 2}, Face{n + 3, n + 4, n + 5}});
+  const std::vector<Vec3> second = t.across(e.detail_rest, 0);
+  ASSERT_GT(t.crossings(e.detail_rest, second), 0);
+  std::vector<Vec3> points{ctx[0], ctx[1], ctx[2], second[0], second[1], second[2]};
+  rec.set_intersection_context({{Face{n, n + 1, n + 2}, Face{n + 3, n + 4, n + 5}}, points, {}});
   const ReconstructResult with = rec.reconstruct(c.edited_base.vertices);
   EXPECT_EQ(with.positions, plain.positions);
   EXPECT_EQ(with.stats.new_intersecting_pairs, plain.stats.new_intersecting_pairs + expected);
   EXPECT_EQ(with.stats.contact_pairs, plain.stats.contact_pairs + expected);
   EXPECT_EQ(with.stats.retries, plain.stats.retries);
+  // The same, with rest points equal to the points: as without them.
+  rec.set_intersection_context({{Face{n, n + 1, n + 2}, Face{n + 3, n + 4, n + 5}}, points, points});
+  EXPECT_EQ(rec.reconstruct(c.edited_base.vertices).stats.contact_pairs, with.stats.contact_pairs);
   // Removed again: as without.
-  rec.set_intersection_context({}, {});
+  rec.set_intersection_context({});
   EXPECT_EQ(rec.reconstruct(c.edited_base.vertices).stats.new_intersecting_pairs,
             plain.stats.new_intersecting_pairs);
   // Bad contexts.
-  EXPECT_THROW(rec.set_intersection_context(points, {Face{n, n + 1, n + 6}}), InvalidInput);
-  EXPECT_THROW(rec.set_intersection_context(points, {Face{-1, n, n + 1}}), InvalidInput);
+  EXPECT_THROW(rec.set_intersection_context({{Face{n, n + 1, n + 6}}, points, {}}), InvalidInput);
+  EXPECT_THROW(rec.set_intersection_context({{Face{-1, n, n + 1}}, points, {}}), InvalidInput);
+  EXPECT_THROW(rec.set_intersection_context({{Face{n, n + 1, n + 2}}, points, {points[0]}}), InvalidInput);
+  std::vector<Vec3> nan_rest = points;
+  nan_rest[4].y() = std::nan("");
+  EXPECT_THROW(rec.set_intersection_context({{Face{n, n + 1, n + 2}}, points, nan_rest}), InvalidInput);
   points[2].x() = std::nan("");
-  EXPECT_THROW(rec.set_intersection_context(points, {Face{n, n + 1, n + 2}}), InvalidInput);
+  EXPECT_THROW(rec.set_intersection_context({{Face{n, n + 1, n + 2}}, points, {}}), InvalidInput);
+}
+
+// context_around(): a strip of four triangles over vertices 0-5, the detail the faces with a
+// solved vertex (vertex 1): faces 0 and 1, over detail vertices (mesh 0, 1, 2, 3) -> (0, 1, 2, 3).
+// The rest are faces 2 and 3, their detail vertices numbered as the detail's and the others
+// after them, once each, at the given positions and rest positions.
+TEST(Reconstruction, ContextAroundCutsTheRestOfAMesh) {
+  const std::vector<Face> faces{{0, 1, 2}, {1, 3, 2}, {2, 3, 4}, {3, 5, 4}};
+  std::vector<Vec3> pos, rest;
+  for (int i = 0; i < 6; ++i) {
+    pos.emplace_back(i / 2, i % 2, 0.0);
+    rest.emplace_back(i / 2, i % 2, 1.0);
+  }
+  std::vector<char> solved(6, 0);
+  solved[1] = 1;
+  const std::vector<int> detail{0, 1, 2, 3};
+  const IntersectionContext c = context_around(faces, solved, detail, pos, &rest);
+  EXPECT_EQ(c.faces, (std::vector<Face>{{2, 3, 4}, {3, 5, 4}}));
+  EXPECT_EQ(c.points, (std::vector<Vec3>{pos[4], pos[5]}));
+  EXPECT_EQ(c.rest_points, (std::vector<Vec3>{rest[4], rest[5]}));
+  // A detail numbered otherwise: the rest's faces follow it.
+  const IntersectionContext d = context_around(faces, solved, {3, 2, 1, 0}, pos);
+  EXPECT_EQ(d.faces, (std::vector<Face>{{1, 0, 4}, {0, 5, 4}}));
+  EXPECT_TRUE(d.rest_points.empty());
+  // Nothing solved: the whole mesh; everything solved: nothing.
+  EXPECT_EQ(context_around(faces, std::vector<char>(6, 0), {}, pos).faces.size(), 4u);
+  EXPECT_TRUE(context_around(faces, std::vector<char>(6, 1), {0, 1, 2, 3, 4, 5}, pos).faces.empty());
+  // Bad input.
+  EXPECT_THROW(context_around(faces, std::vector<char>(5, 0), detail, pos), InvalidInput);
+  const std::vector<Vec3> short_rest(5, Vec3::Zero());
+  EXPECT_THROW(context_around(faces, solved, detail, pos, &short_rest), InvalidInput);
+  EXPECT_THROW(context_around(faces, solved, {0, 6}, pos), InvalidInput);
+  EXPECT_THROW(context_around({{0, 1, 6}}, solved, detail, pos), InvalidInput);
+}
+
+// IntersectionContext::rest_points: a context that moved with the detail (a layered band's part
+// that followed its base) is judged where it lay at rest. The triangle across the bent bumps'
+// result of the test above, at rest beside the same face's rest position (not crossing the rest
+// detail): its new pairs are then no contacts but folds, which the solver takes on (it retries
+// or repairs). At rest far away: it is no context at all (only the triangles within contact
+// distance at rest are kept).
+TEST(Reconstruction, AContextIsJudgedWhereItLayAtRest) {
+  BentBumps t;
+  const DetailEncoding& e = t.e;
+  VolumeReconstructor& rec = t.rec;
+  const ReconstructResult& plain = t.plain;
+  ASSERT_TRUE(plain.stats.converged);
+  const auto n = static_cast<int>(e.detail_rest.size());
+  auto across = [&](const std::vector<Vec3>& p, double lift) { return t.across(p, t.far, lift); };
+  auto crossings = [&](const std::vector<Vec3>& p, const std::vector<Vec3>& tri) {
+    return t.crossings(p, tri);
+  };
+  const std::vector<Vec3> now = across(plain.positions, 0.0);
+  const int expected = crossings(plain.positions, now);
+  ASSERT_GT(expected, 0);
+  // Beside the rest face: the side where it crosses no rest triangle.
+  std::vector<Vec3> rest = across(e.detail_rest, 2.5);
+  if (crossings(e.detail_rest, rest) > 0) rest = across(e.detail_rest, -2.5);
+  ASSERT_EQ(crossings(e.detail_rest, rest), 0);
+  const std::vector<Face> tri{Face{n, n + 1, n + 2}};
+
+  rec.set_intersection_context({tri, now, rest});
+  const ReconstructResult near = rec.reconstruct(t.c.edited_base.vertices);
+  EXPECT_EQ(near.stats.contact_pairs, plain.stats.contact_pairs);  // none of its pairs is a contact
+  EXPECT_GT(near.stats.retries + near.stats.fold_repairs + near.stats.fallbacks,
+            plain.stats.retries + plain.stats.fold_repairs + plain.stats.fallbacks);
+  // Its final count is the whole set's: the detail's own new pairs and those with the triangle.
+  IntersectionOptions io;
+  io.collect_pairs = true;
+  const std::size_t own =
+      count_new_intersections(find_self_intersections(e.detail_rest, e.detail_faces, io),
+                              find_self_intersections(near.positions, e.detail_faces, io));
+  EXPECT_EQ(near.stats.new_intersecting_pairs, static_cast<long long>(own) + crossings(near.positions, now));
+
+  std::vector<Vec3> away = rest;
+  for (Vec3& p : away) p += Vec3(100.0, 0.0, 0.0) * bbox_diagonal(e.detail_rest);
+  rec.set_intersection_context({tri, now, away});
+  const ReconstructResult gone = rec.reconstruct(t.c.edited_base.vertices);
+  EXPECT_EQ(gone.positions, plain.positions);
+  EXPECT_EQ(gone.stats.new_intersecting_pairs, plain.stats.new_intersecting_pairs);
 }
 
 // ReconstructOptions::max_constraint_motion scales a prism's displacement length by the amplitude

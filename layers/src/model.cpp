@@ -128,8 +128,13 @@ struct PartSolve {
       part.pinned[v] = !solve[vertices[v]];
       current[v] = band.mesh.vertices[vertices[v]];
     }
-    if (o.method == EditOptions::Method::Volumes)
+    if (o.method == EditOptions::Method::Volumes) {
       reconstructor = std::make_unique<VolumeReconstructor>(part, o.reconstruct);
+      // The rest of the band, for the fold check: where it stands now (at rest, following its
+      // base rigidly, or where earlier edits left it) and where it lay at rest, as the part.
+      reconstructor->set_intersection_context(
+          context_around(band.mesh.faces, solve, vertices, band.mesh.vertices, &band.encoding.detail_rest));
+    }
   }
 
   // The exact solve from the clean start (volumes) or the vectors' placement.

@@ -230,6 +230,8 @@ class CageEditor::Impl {
     for (int v : sub_vertices_) detail.vertices.push_back(mesh_.vertices[v]);
     DetailEncoding& enc = detail_.encoding();
     enc = encode_detail(detail, base_, opt_.projection);
+    // The rest of the mesh, fixed, for the solver's fold check (as RegionEditor's).
+    detail_.set_intersection_context(context_around(mesh_.faces, moves, sub_vertices_, mesh_.vertices));
     moves_.swap(moves);
     enc.pinned.resize(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {

@@ -464,30 +464,7 @@ class RegionEditor::Impl {
     // pairs that the detail's own triangles do not show. Its vertices shared with the detail are
     // the detail's (indices below sub_vertices_.size()), so that triangles sharing one count as
     // adjacent.
-    {
-      const int nd = static_cast<int>(sub_vertices_.size());
-      std::vector<int> ctx_id(n, -1);
-      std::vector<Vec3> points;
-      std::vector<Face> faces;
-      for (const Face& f : mesh_.faces) {
-        if (in_region_[f[0]] || in_region_[f[1]] || in_region_[f[2]]) continue;
-        Face g;
-        for (int c = 0; c < 3; ++c) {
-          const int v = f[c];
-          if (sub_id[v] >= 0) {
-            g[c] = sub_id[v];
-            continue;
-          }
-          if (ctx_id[v] < 0) {
-            ctx_id[v] = nd + static_cast<int>(points.size());
-            points.push_back(mesh_.vertices[v]);
-          }
-          g[c] = ctx_id[v];
-        }
-        faces.push_back(g);
-      }
-      detail_.set_intersection_context(std::move(points), std::move(faces));
-    }
+    detail_.set_intersection_context(context_around(mesh_.faces, in_region_, sub_vertices_, mesh_.vertices));
     // The handle moves rigidly, and so does its detail: its vertices farther than a few rings
     // from the blended part are placed by the (then exact) vector rule, not solved. Exact only if
     // the base frame moves rigidly too: the vertex's base point must lie on a base face whose

@@ -560,48 +560,57 @@ class VolumeReconstructor::Impl {
 
   // The caller's encoding (the solver's own is renumbered if renum_ is not empty): restored on
   // first use rather than kept, which would cost its memory through every solve.
-  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
+  void set_intersection_context(IntersectionContext c) {
     const auto n = static_cast<long long>(enc_.num_detail_vertices());
-    const long long total = n + static_cast<long long>(points.size());
-    for (std::size_t k = 0; k < points.size(); ++k)
-      if (!points[k].allFinite() || points[k].cwiseAbs().maxCoeff() > kMaxCoordinate)
-        throw InvalidInput("intersection context: point " + std::to_string(k) +
-                           " is not finite or beyond the engine's range");
-    for (std::size_t j = 0; j < faces.size(); ++j)
-      for (int c = 0; c < 3; ++c)
-        if (faces[j][c] < 0 || faces[j][c] >= total)
+    const long long total = n + static_cast<long long>(c.points.size());
+    if (!c.rest_points.empty() && c.rest_points.size() != c.points.size())
+      throw InvalidInput("intersection context: " + std::to_string(c.rest_points.size()) +
+                         " rest points for " + std::to_string(c.points.size()) + " points");
+    for (const std::vector<Vec3>* pts : {&c.points, &c.rest_points})
+      for (std::size_t k = 0; k < pts->size(); ++k)
+        if (!(*pts)[k].allFinite() || (*pts)[k].cwiseAbs().maxCoeff() > kMaxCoordinate)
+          throw InvalidInput(
+              "intersection context: " + std::string(pts == &c.points ? "point " : "rest point ") +
+              std::to_string(k) + " is not finite or beyond the engine's range");
+    for (std::size_t j = 0; j < c.faces.size(); ++j)
+      for (int k = 0; k < 3; ++k)
+        if (c.faces[j][k] < 0 || c.faces[j][k] >= total)
           throw InvalidInput("intersection context: face " + std::to_string(j) + " has vertex index " +
-                             std::to_string(faces[j][c]) + ", not in [0, " + std::to_string(total) + ")");
+                             std::to_string(c.faces[j][k]) + ", not in [0, " + std::to_string(total) + ")");
     // Into the solver's numbering of the detail's vertices.
     if (!renum_.empty())
-      for (Face& f : faces)
+      for (Face& f : c.faces)
         for (int& i : f)
           if (i < n) i = renum_.new_of_old[i];
-    // Only the faces that can make a pair that is no contact are kept (near_context()), with the
-    // points they use.
-    const std::vector<int> near = near_context(points, faces);
-    std::vector<int> point_id(points.size(), -1);
-    std::vector<Vec3> kept_points;
-    std::vector<Face> kept_faces;
-    kept_faces.reserve(near.size());
+    // Only the faces that can make a pair that is no contact are kept (near_context(), at rest),
+    // with the points they use.
+    const std::vector<Vec3>& rest = c.rest_points.empty() ? c.points : c.rest_points;
+    const std::vector<int> near = near_context(rest, c.faces);
+    std::vector<int> point_id(c.points.size(), -1);
+    IntersectionContext kept;
+    kept.faces.reserve(near.size());
     for (int k : near) {
-      Face g = faces[k];
+      Face g = c.faces[k];
       for (int& i : g) {
         if (i < n) continue;
         int& id = point_id[i - n];
         if (id < 0) {
-          id = static_cast<int>(n + static_cast<long long>(kept_points.size()));
-          kept_points.push_back(points[i - n]);
+          id = static_cast<int>(n + static_cast<long long>(kept.points.size()));
+          kept.points.push_back(c.points[i - n]);
+          if (!c.rest_points.empty()) kept.rest_points.push_back(c.rest_points[i - n]);
         }
         i = id;
       }
-      kept_faces.push_back(g);
+      kept.faces.push_back(g);
     }
-    context_points_ = std::move(kept_points);
-    context_faces_ = std::move(kept_faces);
+    context_ = std::move(kept);
     rest_context_.reset();
     // The fallback schedule's solver is built from this one's encoding, without renumbering.
-    if (fallback_) fallback_->set_intersection_context(context_points_, context_faces_);
+    if (fallback_) fallback_->set_intersection_context(context_);
+  }
+  // The context's points at rest (IntersectionContext::rest_points).
+  const std::vector<Vec3>& context_rest_points() const {
+    return context_.rest_points.empty() ? context_.points : context_.rest_points;
   }
   const DetailEncoding& encoding() const {
     if (renum_.empty()) return enc_;
@@ -1199,7 +1208,7 @@ class VolumeReconstructor::Impl {
         o.new_pair_faces.push_back(fresh[k].first);
         o.new_pair_faces.push_back(fresh[k].second);
       }
-      if (!context_faces_.empty()) add_context_pairs(s, o);
+      if (!context_.faces.empty()) add_context_pairs(s, o);
       std::sort(o.new_pair_faces.begin(), o.new_pair_faces.end());
       o.new_pair_faces.erase(std::unique(o.new_pair_faces.begin(), o.new_pair_faces.end()),
                              o.new_pair_faces.end());
@@ -1208,13 +1217,13 @@ class VolumeReconstructor::Impl {
   }
 
   // A uniform grid of boxes: the cells each box covers list it. Boxes over more than kMaxCells
-  // cells (a triangle far larger than the cell) are kept apart, and every lookup lists them.
+  // cells (far larger than a cell) are kept apart, and every lookup lists them.
   struct BoxGrid {
     static constexpr double kMaxCells = 4096;
     double cell = 1.0;
     std::unordered_map<std::uint64_t, std::vector<int>> cells;
     std::vector<int> oversized;
-    // Cell coordinates, clamped so that any finite box (a point far away, a tiny cell) converts.
+    // Cell coordinates, clamped so that any finite box (one far away, a tiny cell) converts.
     std::int64_t coord(double x) const {
       return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -1e15, 1e15));
     }
@@ -1228,26 +1237,27 @@ class VolumeReconstructor::Impl {
       for (int a = 0; a < 3; ++a) c *= static_cast<double>(coord(b.max()[a]) - coord(b.min()[a])) + 1.0;
       return c;
     }
-    void insert(const Eigen::AlignedBox3d& b, int id) {
-      if (span(b) > kMaxCells) {
-        oversized.push_back(id);
-        return;
-      }
+    template <class F>
+    void cells_of(const Eigen::AlignedBox3d& b, F&& f) const {
       for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
         for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
-          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z)
-            cells[key(x, y, z)].push_back(id);
+          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) f(key(x, y, z));
     }
-    // f(ids) for the lists of the cells \p b covers (\pre span(b) <= kMaxCells), and the oversized.
+    void insert(const Eigen::AlignedBox3d& b, int id) {
+      if (span(b) > kMaxCells)
+        oversized.push_back(id);
+      else
+        cells_of(b, [&](std::uint64_t k) { cells[k].push_back(id); });
+    }
+    // f(ids) for the oversized boxes and the lists of the cells \p b covers (which may hold boxes
+    // that miss \p b: cell coordinates wrap). \pre span(b) <= kMaxCells.
     template <class F>
     void visit(const Eigen::AlignedBox3d& b, F&& f) const {
       if (!oversized.empty()) f(oversized);
-      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
-        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
-          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) {
-            const auto it = cells.find(key(x, y, z));
-            if (it != cells.end()) f(it->second);
-          }
+      cells_of(b, [&](std::uint64_t k) {
+        const auto it = cells.find(k);
+        if (it != cells.end()) f(it->second);
+      });
     }
   };
   static double median(std::vector<double> v) {
@@ -1260,9 +1270,9 @@ class VolumeReconstructor::Impl {
   // can make a pair that is no contact (contact_ratio): those whose rest centroid lies within
   // contact_ratio times their and a detail face's longest edges of that detail face's rest
   // centroid. A farther one can only make contacts, which decide nothing. All of them without
-  // contact_ratio. A grid of the detail faces' centroids (cell: contact_ratio times twice their
-  // median longest edge); a face whose reach covers more cells than there are detail faces checks
-  // them all.
+  // contact_ratio. A grid of the detail faces' reaches (the boxes of contact_ratio times their
+  // longest edge around their centroids; cell: the median box's side); a context face whose reach
+  // covers more than BoxGrid::kMaxCells cells checks them all.
   std::vector<int> near_context(const std::vector<Vec3>& points, const std::vector<Face>& faces) const {
     std::vector<int> near;
     const auto n = static_cast<int>(enc_.detail_rest.size());
@@ -1287,20 +1297,27 @@ class VolumeReconstructor::Impl {
       de[j] = longest(enc_.detail_faces[j]);
       detail_box.extend(dc[j]);
     }
+    // Each face reaches contact_ratio times its longest edge from its centroid; two faces are near
+    // if their reaches overlap, and then so do the reaches' boxes, which share a cell of the grid.
     const double dmax = de.empty() ? 0.0 : *std::max_element(de.begin(), de.end());
     BoxGrid grid;
     grid.cell = std::max(opt_.contact_ratio * 2.0 * median(de), 1e-300);
-    for (std::size_t j = 0; j < nd; ++j) grid.insert(Eigen::AlignedBox3d(dc[j], dc[j]), static_cast<int>(j));
+    grid.cells.reserve(nd);
+    auto reach_box = [&](const Vec3& c, double e) {
+      const double r = opt_.contact_ratio * e;
+      return Eigen::AlignedBox3d(c - Vec3::Constant(r), c + Vec3::Constant(r));
+    };
+    for (std::size_t j = 0; j < nd; ++j) grid.insert(reach_box(dc[j], de[j]), static_cast<int>(j));
     for (std::size_t k = 0; k < faces.size(); ++k) {
       const Face& g = faces[k];
       const Vec3 c = centroid(g);
       const double eg = longest(g);
-      const double reach = opt_.contact_ratio * (eg + dmax);
-      if (detail_box.exteriorDistance(c) > reach) continue;  // most of a large mesh's rest
+      if (detail_box.exteriorDistance(c) > opt_.contact_ratio * (eg + dmax))
+        continue;  // most of a large mesh's rest
       bool found = false;
       auto within = [&](int j) { return (c - dc[j]).norm() <= opt_.contact_ratio * (eg + de[j]); };
-      const Eigen::AlignedBox3d box(c - Vec3::Constant(reach), c + Vec3::Constant(reach));
-      if (grid.span(box) > std::min(BoxGrid::kMaxCells, static_cast<double>(nd))) {
+      const Eigen::AlignedBox3d box = reach_box(c, eg);
+      if (grid.span(box) > BoxGrid::kMaxCells) {
         for (std::size_t j = 0; j < nd && !found; ++j) found = within(static_cast<int>(j));
       } else {
         grid.visit(box, [&](const std::vector<int>& ids) {
@@ -1313,65 +1330,19 @@ class VolumeReconstructor::Impl {
   }
 
   // The pairs (detail face, context face) whose triangles share no vertex and intersect with the
-  // detail at \p p, sorted: a grid of the context faces' boxes (cell: their median box size), each
-  // detail face's box looked up in it (one that covers more cells than there are context faces
-  // checks them all), then the exact test of find_self_intersections(). The box tests count
-  // against the fold checks' test budget. *cut: more pairs or tests than its bounds.
-  std::vector<std::pair<int, int>> context_pairs(const std::vector<Vec3>& p, bool& cut) const {
-    cut = false;
-    std::vector<std::pair<int, int>> out;
-    const auto nc = static_cast<int>(context_faces_.size());
-    if (nc == 0) return out;
-    const auto n = static_cast<int>(p.size());
-    auto at = [&](int i) -> const Vec3& { return i < n ? p[i] : context_points_[i - n]; };
-    auto box_of = [&](const Face& f) {
-      Eigen::AlignedBox3d b;
-      for (int i : f) b.extend(at(i));
-      return b;
-    };
-    std::vector<Eigen::AlignedBox3d> cbox(nc);
-    std::vector<double> sizes(nc);
-    for (int k = 0; k < nc; ++k) {
-      cbox[k] = box_of(context_faces_[k]);
-      sizes[k] = cbox[k].sizes().maxCoeff();
-    }
-    BoxGrid grid;
-    grid.cell = std::max(median(sizes), 1e-300);
-    for (int k = 0; k < nc; ++k) grid.insert(cbox[k], k);
+  // detail at \p p and the context at \p points, sorted (find_intersections_between(), within the
+  // fold checks' limits). *cut: more pairs or tests than those limits.
+  std::vector<std::pair<int, int>> context_pairs(const std::vector<Vec3>& p, const std::vector<Vec3>& points,
+                                                 bool& cut) const {
+    std::vector<Vec3> all;
+    all.reserve(p.size() + points.size());
+    all.insert(all.end(), p.begin(), p.end());
+    all.insert(all.end(), points.begin(), points.end());
     const IntersectionOptions io = search_options();
-    std::size_t tests = 0;
-    std::vector<int> stamp(nc, -1);  // the detail face that last looked at a context face
-    for (std::size_t j = 0; j < enc_.detail_faces.size() && !cut; ++j) {
-      if (j % 4096 == 0) check_cancel();
-      const Face& f = enc_.detail_faces[j];
-      const Eigen::AlignedBox3d b = box_of(f);
-      const std::array<Vec3, 3> tf{at(f[0]), at(f[1]), at(f[2])};
-      auto test = [&](int k) {
-        if (cut || stamp[k] == static_cast<int>(j)) return;
-        stamp[k] = static_cast<int>(j);
-        if (io.max_tests > 0 && ++tests > io.max_tests) {
-          cut = true;
-          return;
-        }
-        if (!b.intersects(cbox[k])) return;
-        const Face& g = context_faces_[k];
-        for (int x : f)
-          for (int y : g)
-            if (x == y) return;  // adjacent: sharing a vertex is no intersection
-        if (!triangles_intersect(tf, {at(g[0]), at(g[1]), at(g[2])})) return;
-        out.emplace_back(static_cast<int>(j), k);
-        if (io.max_pairs > 0 && out.size() > io.max_pairs) cut = true;
-      };
-      if (grid.span(b) > std::min(BoxGrid::kMaxCells, static_cast<double>(nc))) {
-        for (int k = 0; k < nc && !cut; ++k) test(k);
-      } else {
-        grid.visit(b, [&](const std::vector<int>& ids) {
-          for (int k : ids) test(k);
-        });
-      }
-    }
-    std::sort(out.begin(), out.end());
-    return out;
+    auto run = [&] { return find_intersections_between(all, enc_.detail_faces, context_.faces, io); };
+    IntersectionResult r = arena_ ? arena_->execute(run) : run();
+    cut = r.truncated;
+    return std::move(r.pairs);
   }
 
   // set_intersection_context(): the new pairs of a detail triangle and a context triangle, added to
@@ -1388,12 +1359,12 @@ class VolumeReconstructor::Impl {
     if (!rest_context_) {
       // Filled before it is kept: a cancel during the search leaves no half-made cache behind.
       auto rest = std::make_unique<ContextPairs>();
-      rest->pairs = context_pairs(enc_.detail_rest, rest->cut);
+      rest->pairs = context_pairs(enc_.detail_rest, context_rest_points(), rest->cut);
       rest_context_ = std::move(rest);
     }
     if (rest_context_->cut) return;
     bool cut = false;
-    const std::vector<std::pair<int, int>> now = context_pairs(s.P, cut);
+    const std::vector<std::pair<int, int>> now = context_pairs(s.P, context_.points, cut);
     if (cut) {
       o.new_pairs += search_options().max_pairs;
       o.listed = false;
@@ -1403,8 +1374,9 @@ class VolumeReconstructor::Impl {
     std::set_difference(now.begin(), now.end(), rest_context_->pairs.begin(), rest_context_->pairs.end(),
                         std::back_inserter(fresh));
     const auto n = static_cast<int>(s.P.size());
-    auto at = [&](int i) -> const Vec3& { return i < n ? s.P[i] : context_points_[i - n]; };
-    auto at_rest = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : context_points_[i - n]; };
+    const std::vector<Vec3>& rest = context_rest_points();
+    auto at = [&](int i) -> const Vec3& { return i < n ? s.P[i] : context_.points[i - n]; };
+    auto at_rest = [&](int i) -> const Vec3& { return i < n ? enc_.detail_rest[i] : rest[i - n]; };
     auto longest_edge = [&](const Face& f) {
       double e = 0.0;
       for (int k = 0; k < 3; ++k) e = std::max(e, (at_rest(f[k]) - at_rest(f[(k + 1) % 3])).norm());
@@ -1414,7 +1386,7 @@ class VolumeReconstructor::Impl {
     for (const auto& [d, c] : fresh) {
       ++o.new_pairs;
       const Face& f = enc_.detail_faces[d];
-      const Face& g = context_faces_[c];
+      const Face& g = context_.faces[c];
       if (opt_.contact_ratio > 0 &&
           (centroid(f) - centroid(g)).norm() > opt_.contact_ratio * (longest_edge(f) + longest_edge(g))) {
         ++o.contact_pairs;
@@ -1489,8 +1461,8 @@ class VolumeReconstructor::Impl {
       fallback_->rest_pairs_ = std::make_unique<IntersectionResult>(*rest_pairs_);
     if (!fallback_->rest_base_pairs_ && rest_base_pairs_)
       fallback_->rest_base_pairs_ = std::make_unique<IntersectionResult>(*rest_base_pairs_);
-    if (fallback_->context_faces_.size() != context_faces_.size())
-      fallback_->set_intersection_context(context_points_, context_faces_);
+    if (fallback_->context_.faces.size() != context_.faces.size())
+      fallback_->set_intersection_context(context_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;
@@ -2533,9 +2505,8 @@ class VolumeReconstructor::Impl {
   // new pairs can be told. Mutable like the levels' factorizations.
   mutable std::unique_ptr<IntersectionResult> rest_pairs_;
   // set_intersection_context(): the fixed triangles (detail vertices in the solver's numbering,
-  // then context_points_), and the pairs (detail face, context face) that intersect at rest.
-  std::vector<Vec3> context_points_;
-  std::vector<Face> context_faces_;
+  // then the context's points), and the pairs (detail face, context face) that intersect at rest.
+  IntersectionContext context_;
   struct ContextPairs {
     std::vector<std::pair<int, int>> pairs;
     bool cut = false;  // the search was cut short
@@ -2750,8 +2721,8 @@ ReconstructResult VolumeReconstructor::drag_step(const std::vector<Vec3>& edited
 BaseFrames VolumeReconstructor::base_frames(const std::vector<Vec3>& edited_base) const {
   return impl_->caller_frames(impl_->frames_for(edited_base));
 }
-void VolumeReconstructor::set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
-  impl_->set_intersection_context(std::move(points), std::move(faces));
+void VolumeReconstructor::set_intersection_context(IntersectionContext context) {
+  impl_->set_intersection_context(std::move(context));
 }
 const DetailEncoding& VolumeReconstructor::encoding() const {
   return impl_->encoding();
@@ -2764,6 +2735,49 @@ double VolumeReconstructor::setup_seconds() const {
 }
 std::vector<int> VolumeReconstructor::level_vertex_counts() const {
   return impl_->level_vertex_counts();
+}
+
+IntersectionContext context_around(const std::vector<Face>& mesh_faces, const std::vector<char>& solved,
+                                   const std::vector<int>& detail_vertices,
+                                   const std::vector<Vec3>& positions,
+                                   const std::vector<Vec3>* rest_positions) {
+  if (solved.size() != positions.size())
+    throw InvalidInput("context_around: " + std::to_string(solved.size()) + " vertex flags for " +
+                       std::to_string(positions.size()) + " vertices");
+  if (rest_positions && rest_positions->size() != positions.size())
+    throw InvalidInput("context_around: " + std::to_string(rest_positions->size()) + " rest positions for " +
+                       std::to_string(positions.size()) + " vertices");
+  const auto nv = static_cast<long long>(positions.size());
+  std::vector<int> id(positions.size(), -1);
+  for (std::size_t k = 0; k < detail_vertices.size(); ++k) {
+    const int v = detail_vertices[k];
+    if (v < 0 || v >= nv)
+      throw InvalidInput("context_around: detail vertex " + std::to_string(k) + " is mesh vertex " +
+                         std::to_string(v) + ", not in [0, " + std::to_string(nv) + ")");
+    id[v] = static_cast<int>(k);
+  }
+  const auto nd = static_cast<int>(detail_vertices.size());
+  IntersectionContext c;
+  for (std::size_t j = 0; j < mesh_faces.size(); ++j) {
+    const Face& f = mesh_faces[j];
+    for (int v : f)
+      if (v < 0 || v >= nv)
+        throw InvalidInput("context_around: face " + std::to_string(j) + " has vertex index " +
+                           std::to_string(v) + ", not in [0, " + std::to_string(nv) + ")");
+    if (solved[f[0]] || solved[f[1]] || solved[f[2]]) continue;  // the detail's
+    Face g;
+    for (int k = 0; k < 3; ++k) {
+      const int v = f[k];
+      if (id[v] < 0) {
+        id[v] = nd + static_cast<int>(c.points.size());
+        c.points.push_back(positions[v]);
+        if (rest_positions) c.rest_points.push_back((*rest_positions)[v]);
+      }
+      g[k] = id[v];
+    }
+    c.faces.push_back(g);
+  }
+  return c;
 }
 
 }  // namespace strata

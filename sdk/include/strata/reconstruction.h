@@ -572,6 +572,32 @@ struct ReconstructRequest {
   const std::vector<Vec3>* pinned_positions = nullptr;
 };
 
+//! Fixed triangles around a detail that its reconstructions must not newly intersect
+//! (VolumeReconstructor::set_intersection_context()): the rest of the mesh a detail was cut from.
+struct IntersectionContext {
+  //! Triangles indexing the detail's vertices (0 .. n-1, at their positions in each solve: the
+  //! pinned ones where the request puts them) and then `points` (n, n+1, ..).
+  std::vector<Face> faces;
+  //! The context's own vertices, where they stand in every solve.
+  std::vector<Vec3> points;
+  //! Where they stood when the detail was at rest (the encoding's detail_rest): the pairs at rest
+  //! and the contact rule are taken there. Empty: at `points` (a context that never moved, as
+  //! the rest of a mesh whose region is edited). Else one per point.
+  std::vector<Vec3> rest_points;
+};
+
+//! The rest of a mesh around a detail cut from it, as the editors cut it (the faces with a vertex
+//! to solve): the faces of \p mesh_faces none of whose vertices \p solved flags, their vertices
+//! that are detail vertices (\p detail_vertices: detail vertex -> mesh vertex) numbered as the
+//! detail's, the others as points at \p positions and, if \p rest_positions is not null, at rest
+//! there (IntersectionContext::rest_points).
+//! \throw InvalidInput if the sizes do not match (a flag, a position and, if given, a rest
+//! position per mesh vertex) or an index is out of range.
+IntersectionContext context_around(const std::vector<Face>& mesh_faces, const std::vector<char>& solved,
+                                   const std::vector<int>& detail_vertices,
+                                   const std::vector<Vec3>& positions,
+                                   const std::vector<Vec3>* rest_positions = nullptr);
+
 class VolumeReconstructor;
 
 //! What an interactive drag carries from one step to the next (paper, section 5): every multigrid
@@ -673,7 +699,8 @@ class VolumeReconstructor {
   BaseFrames base_frames(const std::vector<Vec3>& edited_base) const;
 
   //! Fixed triangles around the detail that its reconstructions must not newly intersect: the
-  //! rest of a mesh whose region is being edited (RegionEditor sets them). The fold check
+  //! rest of a mesh whose region is being edited (RegionEditor, CageEditor and a layered model's
+  //! partial rebuilds set them; context_around() cuts them from a mesh). The fold check
   //! (ReconstructOptions::retry_on_new_intersections) counts the pairs of a detail triangle and
   //! one of these that intersect where they did not at rest as new pairs of the detail, so that
   //! the retries, the fold repair and the fallback schedule take them on, and
@@ -684,12 +711,11 @@ class VolumeReconstructor {
   //! displacement vectors' placement of the detail triangle makes too is the base's
   //! (base_crossing_pairs, no retry; none with base_crossing_rings < 0). Only the context
   //! triangles that lie within that distance of some detail triangle at rest are kept: the others
-  //! can only make contacts, which are then not counted. \p faces index the detail's vertices
-  //! (0 .. n-1, at their positions in each solve: the pinned ones where the request puts them) and
-  //! then \p points (n, n+1, ..). Replaces any earlier context; empty arrays remove it.
-  //! \throw InvalidInput if an index is out of range or a point not finite or beyond the engine's
-  //! range.
-  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces);
+  //! can only make contacts, which are then not counted. Replaces any earlier context; an empty
+  //! one removes it.
+  //! \throw InvalidInput if an index is out of range, a point not finite or beyond the engine's
+  //! range, or rest_points is neither empty nor one per point.
+  void set_intersection_context(IntersectionContext context);
 
   const DetailEncoding& encoding() const;
   const ReconstructOptions& options() const;

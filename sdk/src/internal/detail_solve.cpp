@@ -31,7 +31,7 @@ double DetailSolve::ensure_reconstructor() const {
   if (rec_) return 0.0;
   const auto t0 = Clock::now();
   auto rec = std::make_unique<VolumeReconstructor>(enc_, reconstruct_);
-  if (!context_faces_.empty()) rec->set_intersection_context(context_points_, context_faces_);
+  if (!context_.faces.empty()) rec->set_intersection_context(context_);
   rec_ = std::move(rec);  // only once it is whole
   return seconds_since(t0);
 }

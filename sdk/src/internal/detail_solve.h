@@ -33,10 +33,7 @@ class DetailSolve {
   DetailEncoding& encoding() { return enc_; }
   //! VolumeReconstructor::set_intersection_context() of the reconstructor, once it is built.
   //! Set by the editor before the first solve, with the encoding.
-  void set_intersection_context(std::vector<Vec3> points, std::vector<Face> faces) {
-    context_points_ = std::move(points);
-    context_faces_ = std::move(faces);
-  }
+  void set_intersection_context(IntersectionContext context) { context_ = std::move(context); }
   const DetailEncoding& encoding() const { return enc_; }
 
   //! The exact solve over \p base (the encoding's base vertices, or a cage's control points):
@@ -63,8 +60,7 @@ class DetailSolve {
   EditOptions::DragEnd drag_end_;
   int drag_end_cycles_;
   DetailEncoding enc_;
-  std::vector<Vec3> context_points_;
-  std::vector<Face> context_faces_;
+  IntersectionContext context_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
   std::vector<Vec3> drag_sub_;
   DragState drag_state_;  // every multigrid level's last drag solution (volumes)
