@@ -608,6 +608,8 @@ TEST(Reconstruction, ContextAroundCutsTheRestOfAMesh) {
   EXPECT_THROW(context_around(faces, solved, detail, pos, &short_rest), InvalidInput);
   EXPECT_THROW(context_around(faces, solved, {0, 6}, pos), InvalidInput);
   EXPECT_THROW(context_around({{0, 1, 6}}, solved, detail, pos), InvalidInput);
+  EXPECT_THROW(context_around(faces, solved, {0, 1, 2, 1}, pos), InvalidInput);  // listed twice
+  EXPECT_THROW(context_around(faces, solved, {0, 2, 3}, pos), InvalidInput);     // solved, not listed
 }
 
 // IntersectionContext::rest_points: a context that moved with the detail (a layered band's part

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <numeric>
@@ -1216,14 +1217,12 @@ class VolumeReconstructor::Impl {
     return o;
   }
 
-  // A uniform grid of boxes: the cells each box covers list it. Boxes over more than kMaxCells
-  // cells (far larger than a cell) are kept apart, and every lookup lists them.
-  struct BoxGrid {
+  // A uniform grid of points: each cell lists the points in it.
+  struct PointGrid {
     static constexpr double kMaxCells = 4096;
     double cell = 1.0;
     std::unordered_map<std::uint64_t, std::vector<int>> cells;
-    std::vector<int> oversized;
-    // Cell coordinates, clamped so that any finite box (one far away, a tiny cell) converts.
+    // Cell coordinates, clamped so that any finite point (one far away, a tiny cell) converts.
     std::int64_t coord(double x) const {
       return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -1e15, 1e15));
     }
@@ -1237,46 +1236,33 @@ class VolumeReconstructor::Impl {
       for (int a = 0; a < 3; ++a) c *= static_cast<double>(coord(b.max()[a]) - coord(b.min()[a])) + 1.0;
       return c;
     }
-    template <class F>
-    void cells_of(const Eigen::AlignedBox3d& b, F&& f) const {
-      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
-        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
-          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) f(key(x, y, z));
-    }
-    void insert(const Eigen::AlignedBox3d& b, int id) {
-      if (span(b) > kMaxCells)
-        oversized.push_back(id);
-      else
-        cells_of(b, [&](std::uint64_t k) { cells[k].push_back(id); });
-    }
-    // f(ids) for the oversized boxes and the lists of the cells \p b covers (which may hold boxes
-    // that miss \p b: cell coordinates wrap). \pre span(b) <= kMaxCells.
+    void insert(const Vec3& p, int id) { cells[key(coord(p.x()), coord(p.y()), coord(p.z()))].push_back(id); }
+    // f(ids) for the lists of the cells \p b covers (which may hold points outside \p b: cell
+    // coordinates wrap). \pre span(b) is small (the cells are enumerated).
     template <class F>
     void visit(const Eigen::AlignedBox3d& b, F&& f) const {
-      if (!oversized.empty()) f(oversized);
-      cells_of(b, [&](std::uint64_t k) {
-        const auto it = cells.find(k);
-        if (it != cells.end()) f(it->second);
-      });
+      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
+        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
+          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) {
+            const auto it = cells.find(key(x, y, z));
+            if (it != cells.end()) f(it->second);
+          }
     }
   };
-  static double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  }
 
   // The context faces (indices into \p faces, whose points past the detail's are \p points) that
   // can make a pair that is no contact (contact_ratio): those whose rest centroid lies within
   // contact_ratio times their and a detail face's longest edges of that detail face's rest
   // centroid. A farther one can only make contacts, which decide nothing. All of them without
-  // contact_ratio. A grid of the detail faces' reaches (the boxes of contact_ratio times their
-  // longest edge around their centroids; cell: the median box's side); a context face whose reach
-  // covers more than BoxGrid::kMaxCells cells checks them all.
+  // contact_ratio. The detail faces in classes of longest edge (within a factor of 2), each a grid
+  // of its centroids (cell: twice contact_ratio times its longest edge), so that a class's lookup
+  // covers a few cells around a context face of that size and each detail face is listed once; a
+  // lookup that would cover more cells than the class has faces checks them all.
   std::vector<int> near_context(const std::vector<Vec3>& points, const std::vector<Face>& faces) const {
     std::vector<int> near;
     const auto n = static_cast<int>(enc_.detail_rest.size());
-    if (!(opt_.contact_ratio > 0)) {
+    const double r = opt_.contact_ratio;
+    if (!(r > 0)) {
       near.resize(faces.size());
       std::iota(near.begin(), near.end(), 0);
       return near;
@@ -1291,38 +1277,47 @@ class VolumeReconstructor::Impl {
     const std::size_t nd = enc_.detail_faces.size();
     std::vector<Vec3> dc(nd);
     std::vector<double> de(nd);
-    Eigen::AlignedBox3d detail_box;
+    struct Class {
+      double longest = 0.0;
+      Eigen::AlignedBox3d box;  // of its centroids
+      std::vector<int> faces;
+      PointGrid grid;
+    };
+    std::map<int, Class> classes;  // by the binary exponent of the longest edge
     for (std::size_t j = 0; j < nd; ++j) {
       dc[j] = centroid(enc_.detail_faces[j]);
       de[j] = longest(enc_.detail_faces[j]);
-      detail_box.extend(dc[j]);
+      int exponent = 0;
+      std::frexp(de[j], &exponent);
+      Class& c = classes[exponent];
+      c.longest = std::max(c.longest, de[j]);
+      c.box.extend(dc[j]);
+      c.faces.push_back(static_cast<int>(j));
     }
-    // Each face reaches contact_ratio times its longest edge from its centroid; two faces are near
-    // if their reaches overlap, and then so do the reaches' boxes, which share a cell of the grid.
-    const double dmax = de.empty() ? 0.0 : *std::max_element(de.begin(), de.end());
-    BoxGrid grid;
-    grid.cell = std::max(opt_.contact_ratio * 2.0 * median(de), 1e-300);
-    grid.cells.reserve(nd);
-    auto reach_box = [&](const Vec3& c, double e) {
-      const double r = opt_.contact_ratio * e;
-      return Eigen::AlignedBox3d(c - Vec3::Constant(r), c + Vec3::Constant(r));
-    };
-    for (std::size_t j = 0; j < nd; ++j) grid.insert(reach_box(dc[j], de[j]), static_cast<int>(j));
+    for (auto& [exponent, c] : classes) {
+      c.grid.cell = std::max(2.0 * r * c.longest, 1e-300);
+      c.grid.cells.reserve(c.faces.size());
+      for (int j : c.faces) c.grid.insert(dc[j], j);
+    }
     for (std::size_t k = 0; k < faces.size(); ++k) {
-      const Face& g = faces[k];
-      const Vec3 c = centroid(g);
-      const double eg = longest(g);
-      if (detail_box.exteriorDistance(c) > opt_.contact_ratio * (eg + dmax))
-        continue;  // most of a large mesh's rest
+      const Vec3 cg = centroid(faces[k]);
+      const double eg = longest(faces[k]);
+      auto within = [&](int j) { return (cg - dc[j]).norm() <= r * (eg + de[j]); };
       bool found = false;
-      auto within = [&](int j) { return (c - dc[j]).norm() <= opt_.contact_ratio * (eg + de[j]); };
-      const Eigen::AlignedBox3d box = reach_box(c, eg);
-      if (grid.span(box) > BoxGrid::kMaxCells) {
-        for (std::size_t j = 0; j < nd && !found; ++j) found = within(static_cast<int>(j));
-      } else {
-        grid.visit(box, [&](const std::vector<int>& ids) {
-          for (std::size_t t = 0; t < ids.size() && !found; ++t) found = within(ids[t]);
-        });
+      for (auto it = classes.begin(); it != classes.end() && !found; ++it) {
+        const Class& c = it->second;
+        // A little more than the reach, so that rounding cannot drop a face at exactly that distance.
+        double reach = r * (eg + c.longest);
+        reach += 1e-9 * (reach + cg.cwiseAbs().maxCoeff());
+        if (c.box.exteriorDistance(cg) > reach) continue;  // most of a large mesh's rest
+        const Eigen::AlignedBox3d box(cg - Vec3::Constant(reach), cg + Vec3::Constant(reach));
+        if (c.grid.span(box) > std::min(PointGrid::kMaxCells, static_cast<double>(c.faces.size()))) {
+          for (std::size_t t = 0; t < c.faces.size() && !found; ++t) found = within(c.faces[t]);
+        } else {
+          c.grid.visit(box, [&](const std::vector<int>& ids) {
+            for (std::size_t t = 0; t < ids.size() && !found; ++t) found = within(ids[t]);
+          });
+        }
       }
       if (found) near.push_back(static_cast<int>(k));
     }
@@ -2754,8 +2749,12 @@ IntersectionContext context_around(const std::vector<Face>& mesh_faces, const st
     if (v < 0 || v >= nv)
       throw InvalidInput("context_around: detail vertex " + std::to_string(k) + " is mesh vertex " +
                          std::to_string(v) + ", not in [0, " + std::to_string(nv) + ")");
+    if (id[v] >= 0)
+      throw InvalidInput("context_around: mesh vertex " + std::to_string(v) + " is detail vertex " +
+                         std::to_string(id[v]) + " and " + std::to_string(k));
     id[v] = static_cast<int>(k);
   }
+
   const auto nd = static_cast<int>(detail_vertices.size());
   IntersectionContext c;
   for (std::size_t j = 0; j < mesh_faces.size(); ++j) {
@@ -2764,7 +2763,14 @@ IntersectionContext context_around(const std::vector<Face>& mesh_faces, const st
       if (v < 0 || v >= nv)
         throw InvalidInput("context_around: face " + std::to_string(j) + " has vertex index " +
                            std::to_string(v) + ", not in [0, " + std::to_string(nv) + ")");
-    if (solved[f[0]] || solved[f[1]] || solved[f[2]]) continue;  // the detail's
+    if (solved[f[0]] || solved[f[1]] || solved[f[2]]) {  // the detail's
+      for (int v : f)
+        if (id[v] < 0)
+          throw InvalidInput("context_around: face " + std::to_string(j) +
+                             " has a solved vertex, but its vertex " + std::to_string(v) +
+                             " is no detail vertex");
+      continue;
+    }
     Face g;
     for (int k = 0; k < 3; ++k) {
       const int v = f[k];

@@ -32,7 +32,8 @@ struct IntersectionOptions {
   //! how many tests were made; whether it is cut short does not depend on the threads.
   bool parallel = true;
   //! Optional: a flag another thread may set to stop the search (read at every node of the
-  //! hierarchy the search visits); once it reads true, find_self_intersections() throws Cancelled.
+  //! hierarchy the search visits); once it reads true, find_self_intersections() (or
+  //! find_intersections_between()) throws Cancelled.
   const std::atomic<bool>* cancel = nullptr;
 };
 

@@ -592,7 +592,8 @@ struct IntersectionContext {
 //! detail's, the others as points at \p positions and, if \p rest_positions is not null, at rest
 //! there (IntersectionContext::rest_points).
 //! \throw InvalidInput if the sizes do not match (a flag, a position and, if given, a rest
-//! position per mesh vertex) or an index is out of range.
+//! position per mesh vertex), an index is out of range, a mesh vertex is listed twice in
+//! \p detail_vertices, or a face with a solved vertex has a vertex not listed there.
 IntersectionContext context_around(const std::vector<Face>& mesh_faces, const std::vector<char>& solved,
                                    const std::vector<int>& detail_vertices,
                                    const std::vector<Vec3>& positions,
@@ -698,8 +699,8 @@ class VolumeReconstructor {
   //! the reconstruction evaluates them (keeping the subdivision surface's patch table).
   BaseFrames base_frames(const std::vector<Vec3>& edited_base) const;
 
-  //! Fixed triangles around the detail that its reconstructions must not newly intersect: the
-  //! rest of a mesh whose region is being edited (RegionEditor, CageEditor and a layered model's
+  //! Triangles around the detail, not solved, that its reconstructions must not newly intersect:
+  //! the rest of a mesh whose region is being edited (RegionEditor, CageEditor and a layered model's
   //! partial rebuilds set them; context_around() cuts them from a mesh). The fold check
   //! (ReconstructOptions::retry_on_new_intersections) counts the pairs of a detail triangle and
   //! one of these that intersect where they did not at rest as new pairs of the detail, so that
