@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -57,6 +58,20 @@ std::size_t new_pairs(const TriMesh& m, const std::vector<Vec3>& edited) {
   return count_new_intersections(before, after);
 }
 
+// The vertices outside the editor's region (the selection, its corners filled:
+// EditOptions::fill_region_corners) that moved; the region must hold the whole selection.
+std::size_t moved_outside_region(const RegionEditor& ed, const ScanBend& b,
+                                 const std::vector<Vec3>& positions) {
+  std::vector<char> in(b.mesh.vertices.size(), 0);
+  for (int v : ed.region_vertices()) in[v] = 1;
+  std::size_t moved = 0;
+  for (std::size_t v = 0; v < in.size(); ++v) {
+    EXPECT_TRUE(in[v] || !b.region[v]) << "selected vertex " << v << " is not in the region";
+    moved += !in[v] && positions[v] != b.mesh.vertices[v];
+  }
+  return moved;
+}
+
 std::string name_of(const ::testing::TestParamInfo<ScanEdit>& info) {
   return info.param.name;
 }
@@ -82,10 +97,7 @@ TEST_P(RealScanBend, VolumesKeepPrismsWithoutNewIntersections) {
   EXPECT_LE(r.volume.max_relative_error, 1e-3);
   EXPECT_LE(r.volume.rms_relative_error, 1e-4);
   EXPECT_EQ(0u, new_pairs(m, r.positions));
-  for (int i = 0; i < m.num_vertices(); ++i)
-    if (!b.region[i]) {
-      ASSERT_EQ(r.positions[i], m.vertices[i]);
-    }
+  EXPECT_EQ(moved_outside_region(ed, b, r.positions), 0u);
   // The edit did bend the limb: the handle moved.
   double moved = 0.0;
   for (int i : ed.handle_vertices()) moved = std::max(moved, (r.positions[i] - m.vertices[i]).norm());
@@ -154,10 +166,7 @@ TEST_P(RealScanFold, DragEndsFromItsStateWithoutNewIntersections) {
   EXPECT_EQ(0u, new_pairs(b.mesh, r.positions));
   EXPECT_LE(r.volume.max_relative_error, 1e-3);
   EXPECT_LE(r.volume.rms_relative_error, 1e-4);
-  for (int i = 0; i < b.mesh.num_vertices(); ++i)
-    if (!b.region[i]) {
-      ASSERT_EQ(r.positions[i], b.mesh.vertices[i]);
-    }
+  EXPECT_EQ(moved_outside_region(ed, b, r.positions), 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scans, RealScanFold,
@@ -218,6 +227,40 @@ TEST(RealScanContext, TheSolverCountsAndRepairsFoldsIntoTheRestOfTheMesh) {
   EXPECT_GT(r.stats.fold_repairs, 0);
   EXPECT_TRUE(r.stats.converged);
   EXPECT_LE(r.volume.max_relative_error, 1e-3);
+}
+
+// EditOptions::fill_region_corners: the man's knee bent 90 degrees (a script of the twenty-fifth
+// session's limb-bend survey) at smoothing 0.25, whose selection has a region vertex (15440) that
+// is the only region vertex of four faces: four prism volumes on its three coordinates, which no
+// solve meets (4.4e-3 by either solver and any tolerance). Filled, the region takes in the outside
+// vertices of such faces until no region vertex has three of them, and the edit converges; the
+// selection itself is left exactly as it was.
+TEST(RealScanCorners, FilledRegionCornersLetTheBorderPrismsKeepTheirVolumes) {
+  const ScanBend b = load(ScanEdit{"man_rleg_knee_90", "man", "man_rleg_knee_90.json", 0.25});
+  EditOptions o;
+  o.smoothing_fraction = 0.25;
+  const RegionEditor filled(b.mesh, b.region, b.handle, o);
+  const EditResult r = filled.apply(b.transform);
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(r.volume.max_relative_error, 1e-4);
+  EXPECT_EQ(new_pairs(b.mesh, r.positions), 0u);
+  const auto selected = static_cast<std::size_t>(std::count(b.region.begin(), b.region.end(), 1));
+  const std::vector<int>& region = filled.region_vertices();
+  EXPECT_GT(region.size(), selected);
+  EXPECT_EQ(moved_outside_region(filled, b, r.positions), 0u);
+  std::vector<char> in(b.mesh.vertices.size(), 0);
+  for (int v : region) in[v] = 1;
+  std::vector<int> lone(in.size(), 0);
+  for (const Face& f : b.mesh.faces)
+    if (in[f[0]] + in[f[1]] + in[f[2]] == 1) ++lone[in[f[0]] ? f[0] : in[f[1]] ? f[1] : f[2]];
+  EXPECT_LT(*std::max_element(lone.begin(), lone.end()), 3);
+
+  o.fill_region_corners = false;
+  const RegionEditor exact(b.mesh, b.region, b.handle, o);
+  EXPECT_EQ(exact.region_vertices().size(), selected);
+  const EditResult e = exact.apply(b.transform);
+  EXPECT_FALSE(e.stats.converged);
+  EXPECT_GT(e.volume.max_relative_error, 1e-3);
 }
 
 // Over a subdivision base (issue 4): a Loop cage fitted to the scan (CageFitOptions::faces; 0: the

@@ -182,12 +182,13 @@ class RegionEditor::Impl {
     for (int i = 0; i < n; ++i) {
       if (!region[i]) continue;
       in_region_[i] = 1;
-      region_.push_back(i);
       if (handle[i]) {
         in_handle_[i] = 1;
         handle_.push_back(i);
       }
     }
+    for (int i = 0; i < n; ++i)
+      if (in_region_[i]) region_.push_back(i);
     if (region_.empty()) throw InvalidInput("the region selects no vertex");
     if (handle_.empty()) throw InvalidInput("the handle selects no vertex of the region");
     if (handle_.size() == region_.size())
@@ -196,6 +197,13 @@ class RegionEditor::Impl {
       throw InvalidInput("the region is the whole mesh: nothing is held fixed");
     const internal::Adjacency adj = internal::build_adjacency(n, mesh.faces);
     decompose(adj);
+    // After the decomposition: the vertices that fill the corners are solved, over the base and
+    // blend of the selection (the mesh itself there, s = 0), which they leave as they were.
+    if (opt_.fill_region_corners && fill_corners(in_region_, mesh.faces)) {
+      region_.clear();
+      for (int i = 0; i < n; ++i)
+        if (in_region_[i]) region_.push_back(i);
+    }
     decompose_seconds_ = seconds_since(t0);
     const auto t1 = Clock::now();
     encode(adj);
@@ -400,6 +408,34 @@ class RegionEditor::Impl {
     s_.assign(n, 0.0);
     for (int i : handle_) s_[i] = 1.0;
     for (std::size_t k = 0; k < free.size(); ++k) s_[free[k]] = blend(static_cast<Eigen::Index>(k), 0);
+  }
+
+  // EditOptions::fill_region_corners: the outside vertices of the faces whose only region vertex
+  // has three or more such faces join the region, round after round; the selection as it was if
+  // that would take in the whole mesh. Whether any joined.
+  static bool fill_corners(std::vector<char>& in_region, const std::vector<Face>& faces) {
+    constexpr int kRounds = 16;
+    const std::vector<char> selected = in_region;
+    std::vector<int> lone(in_region.size());  // per vertex: faces where it is the only region vertex
+    auto only = [&](const Face& f) {
+      const int inside = in_region[f[0]] + in_region[f[1]] + in_region[f[2]];
+      if (inside != 1) return -1;
+      return in_region[f[0]] ? f[0] : in_region[f[1]] ? f[1] : f[2];
+    };
+    for (int round = 0; round < kRounds; ++round) {
+      std::fill(lone.begin(), lone.end(), 0);
+      for (const Face& f : faces)
+        if (const int v = only(f); v >= 0) ++lone[v];
+      std::vector<int> join;
+      for (const Face& f : faces)
+        if (const int v = only(f); v >= 0 && lone[v] >= 3)
+          for (int u : f)
+            if (u != v) join.push_back(u);
+      if (join.empty()) break;
+      for (int u : join) in_region[u] = 1;
+    }
+    if (std::all_of(in_region.begin(), in_region.end(), [](char c) { return c != 0; })) in_region = selected;
+    return in_region != selected;
   }
 
   // Every connected part of the free vertices must touch a held vertex (fixed rest or handle);

@@ -128,4 +128,34 @@ for opt in "--report" "--write-base"; do
   expect_exit 1 "same file" "$TMP/err" "$STRATA" deform "$MESH" --edit "$TMP/bend.json" -o "$TMP/same.obj" $opt "$TMP/same.obj" -q
   [ ! -e "$TMP/same.obj" ] || { echo "FAIL: $opt left an output" >&2; exit 1; }
 done
+# A region with a sharp corner: the vertices above z = 2 and the one just below that line whose
+# x is largest, which is then the only region vertex of three faces. By default the outside
+# vertices of those faces are solved too (EditOptions::fill_region_corners: the report's region
+# grows); --exact-region edits the selection as it is.
+python3 - "$MESH" "$TMP/corner.json" <<'PY'
+import json, sys
+verts = [tuple(map(float, l.split()[1:4])) for l in open(sys.argv[1]) if l.startswith("v ")]
+region = [i for i, v in enumerate(verts) if v[2] >= 2.0]
+below = max((v[2] for v in verts if v[2] < 2.0))
+region.append(max((i for i, v in enumerate(verts) if v[2] == below), key=lambda i: verts[i][0]))
+json.dump({"region": {"vertices": region}, "handle": {"halfspace": {"point": [0, 0, 3.5], "normal": [0, 0, 1]}},
+           "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 45, "pivot": [1.2, 0, 2.5]}}},
+          open(sys.argv[2], "w"))
+print(len(region), file=open(sys.argv[2] + ".count", "w"))
+PY
+for x in filled exact; do
+  flag=""
+  [ "$x" = exact ] && flag="--exact-region"
+  "$STRATA" deform "$MESH" --edit "$TMP/corner.json" $flag -o "$TMP/corner_$x.obj" --report "$TMP/corner_$x.json" -q >/dev/null
+done
+python3 - "$TMP" <<'PY'
+import json, sys
+tmp = sys.argv[1]
+selected = int(open(f"{tmp}/corner.json.count").read())
+filled = json.load(open(f"{tmp}/corner_filled.json"))["edits"][0]["region_vertices"]
+exact = json.load(open(f"{tmp}/corner_exact.json"))["edits"][0]["region_vertices"]
+if exact != selected or not filled > selected:
+    print(f"FAIL: corner region: selected {selected}, --exact-region {exact}, filled {filled}", file=sys.stderr)
+    sys.exit(1)
+PY
 echo "deform: ok"

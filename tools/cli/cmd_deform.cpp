@@ -30,6 +30,7 @@ struct DeformCmdOptions {
   std::string cage_tags;        // subdiv: its sharpness tags (optional)
   int cage_faces = 0;           // subdiv, fitted cage: its face count (0: fit_cage's default)
   int handle_rings = 3;         // EditOptions / CageEditOptions::handle_solved_rings
+  bool exact_region = false;    // faired: !EditOptions::fill_region_corners
   int threads = 0;              // ReconstructOptions::threads (0: all cores)
   SolverChoice solver;          // --solver, --set: solver_options()
   bool quiet = false;
@@ -147,6 +148,7 @@ int run_deform(const DeformCmdOptions& o) {
   options.reconstruct = solver_options(o.solver, o.threads);
   options.smoothing_fraction = o.smoothing;
   options.handle_solved_rings = o.handle_rings;
+  options.fill_region_corners = !o.exact_region;
   options.method = method == Method::Volumes ? EditOptions::Method::Volumes : EditOptions::Method::Vectors;
   TriMesh current = input.mesh;
   TriMesh base_out = input.mesh;
@@ -327,6 +329,11 @@ Subcommand register_deform(CLI::App& parent) {
          "for any count")
       ->check(in_range(0, 1024))
       ->capture_default_str();
+  app->add_flag(
+      "--exact-region", o->exact_region,
+      "With --base faired: edit exactly the selected region (by default a region vertex that is the "
+      "only selected vertex of three or more faces gets those faces' other vertices added, so that "
+      "their prisms can keep their volumes)");
   add_solver_option(app, o->solver);
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")
       ->check(at_least(0));
