@@ -2,12 +2,14 @@
 // the handle's transform blended over the cage, the detail rebuilt over the limit surface.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 #include "paper_cases.h"
 #include "strata/cage_editing.h"
 #include "strata/encoding.h"
 #include "strata/exceptions.h"
+#include "strata/intersections.h"
 
 using namespace strata;
 
@@ -78,6 +80,43 @@ TEST(CageEditor, BlendsOverTheCageAndKeepsUnaffectedVerticesExactly) {
                        s.c.detail.vertices.begin());
   const Vec3& top_point = s.c.detail.vertices[far_vertex];
   EXPECT_GE((r.positions[far_vertex] - top_point).norm(), 0.5 * (t.apply(top_point) - top_point).norm());
+}
+
+// The rest of the mesh in the fold check (VolumeReconstructor::set_intersection_context(), set by
+// the editor): the tube's upper part turned 180 degrees down into its lower part, which stays.
+// Without contact_ratio every context triangle is kept, and the solver's count of new pairs is
+// the whole mesh's: the moved part's own and those with the part that stayed (pairs within that
+// part are never new). It has pairs of both kinds.
+TEST(CageEditor, TheSolverCountsThePairsWithTheRestOfTheMesh) {
+  const EditCase s = edit_case();
+  CageEditOptions o;
+  o.reconstruct.contact_ratio = 0.0;
+  o.reconstruct.fallback_schedule = false;
+  o.reconstruct.fold_repair_rounds = 0;
+  const CageEditor ed(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, o);
+  const Vec3 pivot(0, 0, 0.6 * s.cage.vertices.back().z());
+  const EditResult r = ed.apply(EditTransform::rotation(Vec3(0, 1, 0), 180.0, pivot));
+  IntersectionOptions io;
+  io.collect_pairs = true;
+  const IntersectionResult before = find_self_intersections(s.c.detail.vertices, s.c.detail.faces, io);
+  const IntersectionResult after = find_self_intersections(r.positions, s.c.detail.faces, io);
+  std::vector<char> moved(s.c.detail.vertices.size(), 0);
+  for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = r.positions[i] != s.c.detail.vertices[i];
+  auto moves = [&](int j) {
+    const Face& f = s.c.detail.faces[j];
+    return moved[f[0]] || moved[f[1]] || moved[f[2]];
+  };
+  long long own = 0, with_rest = 0;
+  for (const auto& [f, g] : after.pairs) {
+    if (std::binary_search(before.pairs.begin(), before.pairs.end(), std::make_pair(f, g))) continue;
+    if (moves(f) && moves(g))
+      ++own;
+    else
+      ++with_rest;
+  }
+  EXPECT_GT(own, 0);
+  EXPECT_GT(with_rest, 0);
+  EXPECT_EQ(r.stats.new_intersecting_pairs, own + with_rest);
 }
 
 // The identity gives the mesh back bit for bit with no solve (the base at rest). A tiny edit (the
