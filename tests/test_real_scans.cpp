@@ -220,6 +220,7 @@ TEST(RealScanContext, TheSolverCountsAndRepairsFoldsIntoTheRestOfTheMesh) {
   const ScanBend b = load(ScanEdit{"camel_hindleg_hip_110", "camel", "camel_hindleg_hip_110.json", 0.5});
   EditOptions o;
   o.smoothing_fraction = 0.5;
+  o.fill_region_corners = false;  // with the corners filled, the first solve leaves no fold to repair
   const EditResult r = RegionEditor(b.mesh, b.region, b.handle, o).apply(b.transform);
   const auto whole = static_cast<long long>(new_pairs(b.mesh, r.positions));
   EXPECT_EQ(r.stats.new_intersecting_pairs, whole);
@@ -233,8 +234,8 @@ TEST(RealScanContext, TheSolverCountsAndRepairsFoldsIntoTheRestOfTheMesh) {
 // session's limb-bend survey) at smoothing 0.25, whose selection has a region vertex (15440) that
 // is the only region vertex of four faces: four prism volumes on its three coordinates, which no
 // solve meets (4.4e-3 by either solver and any tolerance). Filled, the region takes in the outside
-// vertices of such faces until no region vertex has three of them, and the edit converges; the
-// selection itself is left exactly as it was.
+// vertices of the faces whose only selected vertex has two or more of them, and the edit
+// converges; the selection itself is left exactly as it was.
 TEST(RealScanCorners, FilledRegionCornersLetTheBorderPrismsKeepTheirVolumes) {
   const ScanBend b = load(ScanEdit{"man_rleg_knee_90", "man", "man_rleg_knee_90.json", 0.25});
   EditOptions o;
@@ -250,10 +251,14 @@ TEST(RealScanCorners, FilledRegionCornersLetTheBorderPrismsKeepTheirVolumes) {
   EXPECT_EQ(moved_outside_region(filled, b, r.positions), 0u);
   std::vector<char> in(b.mesh.vertices.size(), 0);
   for (int v : region) in[v] = 1;
+  // No selected vertex is left the only region vertex of two faces.
   std::vector<int> lone(in.size(), 0);
   for (const Face& f : b.mesh.faces)
     if (in[f[0]] + in[f[1]] + in[f[2]] == 1) ++lone[in[f[0]] ? f[0] : in[f[1]] ? f[1] : f[2]];
-  EXPECT_LT(*std::max_element(lone.begin(), lone.end()), 3);
+  int most = 0;
+  for (std::size_t v = 0; v < in.size(); ++v)
+    if (b.region[v]) most = std::max(most, lone[v]);
+  EXPECT_LE(most, 1);
 
   o.fill_region_corners = false;
   const RegionEditor exact(b.mesh, b.region, b.handle, o);

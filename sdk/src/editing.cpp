@@ -411,29 +411,23 @@ class RegionEditor::Impl {
   }
 
   // EditOptions::fill_region_corners: the outside vertices of the faces whose only region vertex
-  // has three or more such faces join the region, round after round; the selection as it was if
-  // that would take in the whole mesh. Whether any joined.
+  // has two or more such faces join the region (once: a joined vertex keeps its base and its
+  // displacement, zero, so its own faces with two outside vertices keep their volumes where it
+  // stands); the selection as it was if that would take in the whole mesh. Whether any joined.
   static bool fill_corners(std::vector<char>& in_region, const std::vector<Face>& faces) {
-    constexpr int kRounds = 16;
     const std::vector<char> selected = in_region;
-    std::vector<int> lone(in_region.size());  // per vertex: faces where it is the only region vertex
+    // Per face, its only region vertex (-1 if it has none or several); per vertex, how many.
     auto only = [&](const Face& f) {
-      const int inside = in_region[f[0]] + in_region[f[1]] + in_region[f[2]];
+      const int inside = selected[f[0]] + selected[f[1]] + selected[f[2]];
       if (inside != 1) return -1;
-      return in_region[f[0]] ? f[0] : in_region[f[1]] ? f[1] : f[2];
+      return selected[f[0]] ? f[0] : selected[f[1]] ? f[1] : f[2];
     };
-    for (int round = 0; round < kRounds; ++round) {
-      std::fill(lone.begin(), lone.end(), 0);
-      for (const Face& f : faces)
-        if (const int v = only(f); v >= 0) ++lone[v];
-      std::vector<int> join;
-      for (const Face& f : faces)
-        if (const int v = only(f); v >= 0 && lone[v] >= 3)
-          for (int u : f)
-            if (u != v) join.push_back(u);
-      if (join.empty()) break;
-      for (int u : join) in_region[u] = 1;
-    }
+    std::vector<int> lone(selected.size(), 0);
+    for (const Face& f : faces)
+      if (const int v = only(f); v >= 0) ++lone[v];
+    for (const Face& f : faces)
+      if (const int v = only(f); v >= 0 && lone[v] >= 2)
+        for (int u : f) in_region[u] = 1;
     if (std::all_of(in_region.begin(), in_region.end(), [](char c) { return c != 0; })) in_region = selected;
     return in_region != selected;
   }
