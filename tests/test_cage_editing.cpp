@@ -9,7 +9,7 @@
 #include "strata/cage_editing.h"
 #include "strata/encoding.h"
 #include "strata/exceptions.h"
-#include "strata/intersections.h"
+#include "test_meshes.h"
 
 using namespace strata;
 
@@ -96,24 +96,10 @@ TEST(CageEditor, TheSolverCountsThePairsWithTheRestOfTheMesh) {
   const CageEditor ed(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, o);
   const Vec3 pivot(0, 0, 0.6 * s.cage.vertices.back().z());
   const EditResult r = ed.apply(EditTransform::rotation(Vec3(0, 1, 0), 180.0, pivot));
-  IntersectionOptions io;
-  io.collect_pairs = true;
-  const IntersectionResult before = find_self_intersections(s.c.detail.vertices, s.c.detail.faces, io);
-  const IntersectionResult after = find_self_intersections(r.positions, s.c.detail.faces, io);
   std::vector<char> moved(s.c.detail.vertices.size(), 0);
   for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = r.positions[i] != s.c.detail.vertices[i];
-  auto moves = [&](int j) {
-    const Face& f = s.c.detail.faces[j];
-    return moved[f[0]] || moved[f[1]] || moved[f[2]];
-  };
-  long long own = 0, with_rest = 0;
-  for (const auto& [f, g] : after.pairs) {
-    if (std::binary_search(before.pairs.begin(), before.pairs.end(), std::make_pair(f, g))) continue;
-    if (moves(f) && moves(g))
-      ++own;
-    else
-      ++with_rest;
-  }
+  const auto [own, with_rest] =
+      test::new_pairs_by_part(s.c.detail.vertices, r.positions, s.c.detail.faces, moved);
   EXPECT_GT(own, 0);
   EXPECT_GT(with_rest, 0);
   EXPECT_EQ(r.stats.new_intersecting_pairs, own + with_rest);

@@ -284,23 +284,8 @@ TEST(Layers, PairsThatTheEditedBaseExplainsAreNotRetried) {
     num_solved += solved[i];
   }
   EXPECT_EQ(num_solved, old.rebuilt[0].solved_vertices);
-  IntersectionOptions io;
-  io.collect_pairs = true;
-  const IntersectionResult at_rest =
-      find_self_intersections(after.encoding.detail_rest, after.mesh.faces, io);
-  const IntersectionResult now = find_self_intersections(after.mesh.vertices, after.mesh.faces, io);
-  auto in_part = [&](int j) {
-    const Face& f = after.mesh.faces[j];
-    return solved[f[0]] || solved[f[1]] || solved[f[2]];
-  };
-  long long own = 0, with_rest = 0;
-  for (const auto& [f, g] : now.pairs) {
-    if (std::binary_search(at_rest.pairs.begin(), at_rest.pairs.end(), std::make_pair(f, g))) continue;
-    if (in_part(f) && in_part(g))
-      ++own;
-    else if (in_part(f) || in_part(g))
-      ++with_rest;
-  }
+  const auto [own, with_rest] =
+      test::new_pairs_by_part(after.encoding.detail_rest, after.mesh.vertices, after.mesh.faces, solved);
   EXPECT_GT(with_rest, 0);
   EXPECT_EQ(so.new_intersecting_pairs, own + with_rest);
 }

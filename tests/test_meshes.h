@@ -7,12 +7,12 @@
 #include <utility>
 #include <vector>
 
+#include "strata/intersections.h"
 #include "strata/mesh.h"
 #include "strata/reconstruction.h"
 
 namespace strata::test {
 
-//! The largest distance between corresponding points of \p a and \p b (same sizes).
 // The multigrid preset as it was before the rest Laplacian (rest offsets, the coarsest level as
 // the others, 3 final cycles): the tests whose folds or local ends were measured on it.
 inline ReconstructOptions rest_offset_multigrid_preset() {
@@ -24,10 +24,33 @@ inline ReconstructOptions rest_offset_multigrid_preset() {
   return o;
 }
 
+//! The largest distance between corresponding points of \p a and \p b (same sizes).
 inline double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   double d = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
   return d;
+}
+
+//! The intersecting pairs of \p faces at \p now that are not at \p rest, counted by how many of
+//! their two faces have a vertex that \p part flags: {both, one} (pairs with neither are not
+//! counted). An edit's new pairs within its solved part, and between it and the rest.
+inline std::pair<long long, long long> new_pairs_by_part(const std::vector<Vec3>& rest,
+                                                         const std::vector<Vec3>& now,
+                                                         const std::vector<Face>& faces,
+                                                         const std::vector<char>& part) {
+  IntersectionOptions io;
+  io.collect_pairs = true;
+  const IntersectionResult before = find_self_intersections(rest, faces, io);
+  const IntersectionResult after = find_self_intersections(now, faces, io);
+  auto in_part = [&](int j) { return part[faces[j][0]] || part[faces[j][1]] || part[faces[j][2]]; };
+  long long both = 0, one = 0;
+  for (const auto& pair : after.pairs) {
+    if (std::binary_search(before.pairs.begin(), before.pairs.end(), pair)) continue;
+    const int k = in_part(pair.first) + in_part(pair.second);
+    both += k == 2;
+    one += k == 1;
+  }
+  return {both, one};
 }
 
 //! A sphere: the icosahedron subdivided \p levels times (20 * 4^levels faces), its vertices

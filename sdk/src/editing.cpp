@@ -187,8 +187,7 @@ class RegionEditor::Impl {
         handle_.push_back(i);
       }
     }
-    for (int i = 0; i < n; ++i)
-      if (in_region_[i]) region_.push_back(i);
+    list_region();
     if (region_.empty()) throw InvalidInput("the region selects no vertex");
     if (handle_.empty()) throw InvalidInput("the handle selects no vertex of the region");
     if (handle_.size() == region_.size())
@@ -199,11 +198,7 @@ class RegionEditor::Impl {
     decompose(adj);
     // After the decomposition: the vertices that fill the corners are solved, over the base and
     // blend of the selection (the mesh itself there, s = 0), which they leave as they were.
-    if (opt_.fill_region_corners && fill_corners(in_region_, mesh.faces)) {
-      region_.clear();
-      for (int i = 0; i < n; ++i)
-        if (in_region_[i]) region_.push_back(i);
-    }
+    if (opt_.fill_region_corners && fill_corners(in_region_, mesh.faces)) list_region();
     decompose_seconds_ = seconds_since(t0);
     const auto t1 = Clock::now();
     encode(adj);
@@ -408,6 +403,13 @@ class RegionEditor::Impl {
     s_.assign(n, 0.0);
     for (int i : handle_) s_[i] = 1.0;
     for (std::size_t k = 0; k < free.size(); ++k) s_[free[k]] = blend(static_cast<Eigen::Index>(k), 0);
+  }
+
+  // region_ from in_region_.
+  void list_region() {
+    region_.clear();
+    for (int i = 0; i < static_cast<int>(in_region_.size()); ++i)
+      if (in_region_[i]) region_.push_back(i);
   }
 
   // EditOptions::fill_region_corners: the outside vertices of the faces whose only region vertex

@@ -559,8 +559,8 @@ class VolumeReconstructor::Impl {
     return res;
   }
 
-  // The caller's encoding (the solver's own is renumbered if renum_ is not empty): restored on
-  // first use rather than kept, which would cost its memory through every solve.
+  // VolumeReconstructor::set_intersection_context(): checked, into the solver's numbering, and
+  // cut to the faces near the detail at rest.
   void set_intersection_context(IntersectionContext c) {
     const auto n = static_cast<long long>(enc_.num_detail_vertices());
     const long long total = n + static_cast<long long>(c.points.size());
@@ -613,6 +613,8 @@ class VolumeReconstructor::Impl {
   const std::vector<Vec3>& context_rest_points() const {
     return context_.rest_points.empty() ? context_.points : context_.rest_points;
   }
+  // The caller's encoding (the solver's own is renumbered if renum_ is not empty): restored on
+  // first use rather than kept, which would cost its memory through every solve.
   const DetailEncoding& encoding() const {
     if (renum_.empty()) return enc_;
     // Once, even from two threads (a getter that looks read-only).
@@ -1450,14 +1452,14 @@ class VolumeReconstructor::Impl {
       }
       fallback_ = std::make_unique<Impl>(enc_, std::move(o));
       fallback_->phase_ = "fallback";
+      // Already in the solver's numbering; set_intersection_context() keeps it up to date after.
+      if (!context_.faces.empty()) fallback_->set_intersection_context(context_);
     }
     // The rest detail's pairs, counted already (first.counted), are the same for it.
     if (!fallback_->rest_pairs_ && rest_pairs_)
       fallback_->rest_pairs_ = std::make_unique<IntersectionResult>(*rest_pairs_);
     if (!fallback_->rest_base_pairs_ && rest_base_pairs_)
       fallback_->rest_base_pairs_ = std::make_unique<IntersectionResult>(*rest_base_pairs_);
-    if (fallback_->context_.faces.size() != context_.faces.size())
-      fallback_->set_intersection_context(context_);
     ++st.fallbacks;
     ReconstructResult r = fallback_->run(fr, nullptr, nullptr, request);
     Outcome other;
