@@ -504,7 +504,7 @@ IntersectionResult search_pairs(const std::vector<Vec3>& vertices, const std::ve
     if (faces_b && !faces_b->empty()) {
       if (faces_a.empty())
         origin = bbox_centre(vertices, *faces_b);
-      else  // one frame for both trees: the centre of both lists' boxes
+      else  // one frame for both trees: midway between the two lists' box centres
         origin = origin / 2.0 + bbox_centre(vertices, *faces_b) / 2.0;
     }
     const Tree a = build_tree(vertices, faces_a, origin, check_cancel);
