@@ -30,6 +30,13 @@ struct DoubleTraits : public OpenMesh::DefaultTraits {
 };
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
+// taubin_smooth(): a pass may not leave a face with less than this share of its area in the input.
+constexpr double kMinAreaRatio = 0.01;
+
+double double_area(const std::vector<Vec3>& x, const Face& f) {
+  return (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]).norm();
+}
+
 }  // namespace
 
 std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
@@ -41,6 +48,36 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
   const std::vector<char> boundary = internal::boundary_vertices(m.num_vertices(), m.faces);
   std::vector<Vec3> next(x.size());
+  // Twice each face's area in the mesh: no pass leaves a face below kMinAreaRatio of it.
+  std::vector<double> area0(m.faces.size());
+  tbb::parallel_for(std::size_t{0}, m.faces.size(),
+                    [&](std::size_t f) { area0[f] = double_area(x, m.faces[f]); });
+  std::vector<int> reverted, queue;
+  std::vector<char> is_reverted(x.size(), 0);
+  auto collapsed = [&](std::size_t f) { return double_area(next, m.faces[f]) < kMinAreaRatio * area0[f]; };
+  // The faces that the pass into `next` collapses get their vertices back from `x`, and so do the
+  // faces around those that collapse then; at worst every vertex, where no face had collapsed.
+  auto keep_faces = [&] {
+    std::vector<char> bad(m.faces.size(), 0);
+    tbb::parallel_for(std::size_t{0}, m.faces.size(), [&](std::size_t f) { bad[f] = collapsed(f); });
+    queue.clear();
+    for (std::size_t f = 0; f < m.faces.size(); ++f)
+      if (bad[f]) queue.push_back(static_cast<int>(f));
+    while (!queue.empty()) {
+      const int f = queue.back();
+      queue.pop_back();
+      if (!collapsed(f)) continue;
+      for (int v : m.faces[f]) {
+        if (is_reverted[v]) continue;
+        is_reverted[v] = 1;
+        reverted.push_back(v);
+        next[v] = x[v];
+        for (int k = adj.face_offsets[v]; k < adj.face_offsets[v + 1]; ++k) queue.push_back(adj.faces[k]);
+      }
+    }
+    for (int v : reverted) is_reverted[v] = 0;
+    reverted.clear();
+  };
   auto pass = [&](double factor) {
     tbb::parallel_for(0, m.num_vertices(), [&](int v) {
       Vec3 sum = Vec3::Zero();
@@ -53,6 +90,7 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
       }
       next[v] = n > 0 ? Vec3(x[v] + factor * (sum / n - x[v])) : x[v];
     });
+    keep_faces();
     x.swap(next);
   };
   for (int s = 0; s < steps; ++s) {
