@@ -315,6 +315,24 @@ TEST(ApiInput, EditorsRefuseEnumsOutOfRangeAndEmptyMeshes) {
   two.faces.push_back({0, 1});
   EXPECT_TRUE(throws_with<InvalidInput>([&] { cage_blend_field(two, cage_region, cage_handle); },
                                         {"cage face 6 has 2 corners, fewer than 3"}));
+  // Two cubes, the second wholly inside the region and away from the handle: its field is
+  // undetermined (it failed as "the cage's blend field could not be factorized").
+  PolyMesh pair = cube_cage();
+  for (int v = 0; v < 8; ++v) pair.vertices.push_back(pair.vertices[v] + Vec3(5, 0, 0));
+  for (int f = 0; f < 6; ++f) {
+    std::vector<int> g = pair.faces[f];
+    for (int& v : g) v += 8;
+    pair.faces.push_back(g);
+  }
+  std::vector<char> pair_region(16, 1), pair_handle(16, 0);
+  for (int v = 4; v < 8; ++v) pair_handle[v] = 1;
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { cage_blend_field(pair, pair_region, pair_handle); },
+                                        {"a connected part of the cage region (cage vertex 8) touches "
+                                         "neither the rest of the cage nor the handle"}));
+  // With a handle vertex on the second cube too, both parts are anchored.
+  pair_handle[12] = 1;
+  const std::vector<double> s = cage_blend_field(pair, pair_region, pair_handle);
+  for (double v : s) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(ApiInput, SubdivisionMessagesNameTheProblem) {

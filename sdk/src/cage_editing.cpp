@@ -76,6 +76,40 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   }
   if (free.empty()) return s;
   const int m = static_cast<int>(free.size());
+  // Every connected part of the free vertices must touch a held one (outside the region or on the
+  // handle); otherwise its field is undetermined (a cage of several pieces, one of them inside the
+  // region away from the handle: CGAL's boeing failed as "could not be factorized").
+  {
+    std::vector<std::vector<int>> nb(n);
+    for (const std::vector<int>& f : cage.faces)
+      for (std::size_t k = 0; k < f.size(); ++k) {
+        nb[f[k]].push_back(f[(k + 1) % f.size()]);
+        nb[f[(k + 1) % f.size()]].push_back(f[k]);
+      }
+    std::vector<char> seen(m, 0);
+    std::vector<int> stack;
+    for (int start = 0; start < m; ++start) {
+      if (seen[start]) continue;
+      bool anchored = false;
+      seen[start] = 1;
+      stack.assign(1, free[start]);
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        for (int u : nb[v]) {
+          if (free_id[u] < 0) {
+            anchored = true;
+          } else if (!seen[free_id[u]]) {
+            seen[free_id[u]] = 1;
+            stack.push_back(u);
+          }
+        }
+      }
+      if (!anchored)
+        throw InvalidInput("a connected part of the cage region (cage vertex " + std::to_string(free[start]) +
+                           ") touches neither the rest of the cage nor the handle");
+    }
+  }
   std::vector<Eigen::Triplet<double>> tf;
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
   const Eigen::VectorXd Bfixed = B * fixed;

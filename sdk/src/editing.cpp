@@ -327,15 +327,16 @@ class RegionEditor::Impl {
 
     // Rows of Q = L M^-1 L for the unknowns: Q_ij = sum_k L_ik L_kj / M_k over k in {i} and i's
     // neighbours; held columns j go to the right-hand side.
+    // rim_rows: the rows of open-edge vertices too (see the blend field below).
     auto assemble = [&](const std::vector<int>& unknowns, const std::vector<int>& id, int cols,
                         const std::function<void(int, int, double, Eigen::MatrixXd&)>& held,
-                        Eigen::MatrixXd& rhs) {
+                        Eigen::MatrixXd& rhs, bool rim_rows) {
       const int m = static_cast<int>(unknowns.size());
       std::vector<Eigen::Triplet<double>> trip;
       trip.reserve(static_cast<std::size_t>(m) * 50);
       rhs = Eigen::MatrixXd::Zero(m, cols);
       auto add_row_k = [&](int r, int k, double lik) {
-        if (on_boundary[k]) return;  // open edges: no Laplacian term (it would pull the rim in)
+        if (on_boundary[k] && !rim_rows) return;  // open edges: no Laplacian term (it would pull the rim in)
         const double c = lik / area[k];
         auto add = [&](int j, double lkj) {
           if (id[j] >= 0)
@@ -355,24 +356,29 @@ class RegionEditor::Impl {
       }
       return trip;
     };
+    // may_fail: a singular system returns an empty matrix instead of throwing.
     auto solve = [](const std::vector<int>& unknowns, std::vector<Eigen::Triplet<double>>& trip,
-                    const Eigen::MatrixXd& rhs, const char* what) {
+                    const Eigen::MatrixXd& rhs, const char* what, bool may_fail) {
       const int m = static_cast<int>(unknowns.size());
       Eigen::SparseMatrix<double> Q(m, m);
       Q.setFromTriplets(trip.begin(), trip.end());
       // A vertex whose neighbours all lie on open edges has no Laplacian row (a mesh of triangles
       // that share no edge): CHOLMOD was handed an empty column and the process crashed.
       for (int r = 0; r < m; ++r)
-        if (!(Q.coeff(r, r) > 0))
+        if (!(Q.coeff(r, r) > 0)) {
+          if (may_fail) return Eigen::MatrixXd();
           throw InvalidInput(std::string("the region's ") + what + " system is singular at vertex " +
                              std::to_string(unknowns[r]) +
                              ": it and its neighbours lie on open edges, with no interior vertex to fair");
+        }
       const internal::SerialOpenMp serial;
       Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt;
       llt.cholmod().print = 0;  // its failures are thrown; CHOLMOD printed them on stdout too
       llt.compute(Q);
-      if (llt.info() != Eigen::Success)
+      if (llt.info() != Eigen::Success) {
+        if (may_fail) return Eigen::MatrixXd();
         throw SolverError(std::string("the region's ") + what + " system could not be factorized");
+      }
       Eigen::MatrixXd sol = llt.solve(rhs);
       if (llt.info() != Eigen::Success || !sol.allFinite())
         throw SolverError(std::string("the region's ") + what + " solve failed");
@@ -382,24 +388,31 @@ class RegionEditor::Impl {
     Eigen::MatrixXd rhs;
     std::vector<Eigen::Triplet<double>> trip = assemble(
         region_, region_id, 3,
-        [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs);
+        [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs, false);
     for (int i : region_) {
       const int r = region_id[i];
       trip.emplace_back(r, r, pull * area[i]);
       rhs.row(r) += pull * area[i] * x[i].transpose();
     }
-    const Eigen::MatrixXd faired = solve(region_, trip, rhs, "fairing");
+    const Eigen::MatrixXd faired = solve(region_, trip, rhs, "fairing", false);
     base_ = x;
     for (std::size_t k = 0; k < region_.size(); ++k)
       base_[region_[k]] = faired.row(static_cast<Eigen::Index>(k)).transpose();
 
-    trip = assemble(
-        free, free_id, 1,
-        [&](int r, int j, double v, Eigen::MatrixXd& b) {
-          if (in_handle_[j]) b(r, 0) -= v;
-        },
-        rhs);
-    const Eigen::MatrixXd blend = solve(free, trip, rhs, "blend field");
+    auto handle_held = [&](int r, int j, double v, Eigen::MatrixXd& b) {
+      if (in_handle_[j]) b(r, 0) -= v;
+    };
+    trip = assemble(free, free_id, 1, handle_held, rhs, false);
+    Eigen::MatrixXd blend = solve(free, trip, rhs, "blend field", true);
+    if (blend.size() == 0) {
+      // Without the pull, open edges can leave the blend undetermined: a free vertex whose
+      // neighbours all lie on them (CGAL's elephant-with-holes), or a strip of rim vertices that
+      // no interior row ties to a held one (its holes, ALSTOM_TEST4). With the rim's rows the
+      // system is definite wherever every connected part touches a held vertex
+      // (check_components()): s^T Q s = |M^-1/2 L s|^2 vanishes only for s constant on each part.
+      trip = assemble(free, free_id, 1, handle_held, rhs, true);
+      blend = solve(free, trip, rhs, "blend field", false);
+    }
     s_.assign(n, 0.0);
     for (int i : handle_) s_[i] = 1.0;
     for (std::size_t k = 0; k < free.size(); ++k) s_[free[k]] = blend(static_cast<Eigen::Index>(k), 0);

@@ -121,14 +121,19 @@ expect_fail "detail 1e80 away"      "far.obj: vertex 0 has a coordinate of magni
 expect_fail "cage fit 1e80"         "far.obj: vertex 0 has a coordinate" cage fit far.obj -o out/cage.obj
 expect_fail "threads 100000"        "threads = 100000 is out of range" $(rec $G/detail.obj $G/base.obj \
   $G/edited_base.obj --set threads=100000)
-# Every other face: triangles that share no edge (the region's system had empty rows).
+# Every other face: triangles that share no edge (the region's system had empty rows: CHOLMOD
+# crashed, then the edit was refused). Every vertex is on an open edge, and the blend field takes
+# those rows: the edit is made.
 awk '/^f / {if (n++ % 2) next} {print}' $G/detail.obj | grep -v '^#' >apart.obj
 cat >edit.json <<'JSON'
 {"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1]}},
  "handle": {"halfspace": {"point": [0, 0, 4], "normal": [0, 0, 1]}},
  "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 30, "pivot": [0, 0, 3]}}}
 JSON
-expect_fail "deform, no shared edge" "system is singular at vertex" deform apart.obj --edit edit.json -o out/d.obj
+if ! "$STRATA" deform -q apart.obj --edit edit.json -o apart_edited.obj >stdout.txt 2>stderr.txt ||
+  [ ! -s apart_edited.obj ]; then
+  echo "FAIL [deform, no shared edge]: failed" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+fi
 # A scan with a vertex in no face is fitted (OpenMesh aborted in the decimation).
 { grep -v '^#' $G/detail.obj; echo "v 50 50 50"; } >stray.obj
 if ! "$STRATA" cage fit -q stray.obj --faces 100 -o cage_stray.obj >stdout.txt 2>stderr.txt; then

@@ -169,12 +169,14 @@ struct EditResult {
 //! towards the mesh (EditOptions::smoothing_wavelength sets the cut-off), with the rest of the
 //! mesh held as the boundary condition, so the base is tangent-continuous with it. (Pure fairing
 //! would neck a limb in and make its thickness "detail".) The blend field s is bi-harmonic on the
-//! region minus the handle, 0 on the rest and 1 on the handle. The detail of the prisms touching
-//! the region is encoded over that base; vertices outside the region are pinned, so only the
-//! region is solved, and so are handle vertices away from the blended part (they move rigidly).
-//! The region solved is the selection with its sharp corners filled
-//! (EditOptions::fill_region_corners; region_vertices()), over the selection's base and blend.
-//! The rest of the mesh is the solver's intersection context
+//! region minus the handle, 0 on the rest and 1 on the handle. Open edges (holes, a CAD part's
+//! rims) have no Laplacian rows in either system, which would pull the rim in; where that leaves
+//! the blend undetermined (free vertices whose neighbours all lie on open edges, or rims that no
+//! interior row ties to the rest), the blend field takes the rim's rows too. The detail of the prisms
+//! touching the region is encoded over that base; vertices outside the region are pinned, so only the region
+//! is solved, and so are handle vertices away from the blended part (they move rigidly). The region solved is
+//! the selection with its sharp corners filled (EditOptions::fill_region_corners; region_vertices()), over
+//! the selection's base and blend. The rest of the mesh is the solver's intersection context
 //! (VolumeReconstructor::set_intersection_context()): its fold check, retries and repair count the
 //! region's new pairs with the fixed triangles around it too, so ReconstructStats::
 //! new_intersecting_pairs is the whole mesh's count, but for contacts with triangles that lay far
