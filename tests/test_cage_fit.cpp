@@ -121,7 +121,14 @@ TEST(CageFit, RejectsBadInput) {
   TriMesh nan = scan;
   nan.vertices[3].x() = NAN;
   EXPECT_THROW(fit_cage(nan), InvalidInput);
-  EXPECT_THROW(fit_cage(scan), InvalidInput);  // 320 faces < the default 400
+  // A cage as fine as the scan, or finer, is refused (the default is a quarter of a small scan).
+  EXPECT_THROW(fit_cage(scan,
+                        [] {
+                          CageFitOptions o;
+                          o.faces = 400;
+                          return o;
+                        }()),
+               InvalidInput);
   auto with = [](auto set) {
     CageFitOptions o;
     o.faces = 100;
@@ -267,4 +274,25 @@ TEST(CageIo, ParsesTagsAndNamesTheProblem) {
     EXPECT_NE(std::string(e.what()).find("/dev/zero: cannot read: not a regular file"), std::string::npos)
         << e.what();
   }
+}
+
+// The cage's default size: 1% of the scan, at least min_faces (400), at most a quarter of the
+// scan (at least 4); a count that is set is taken as it is.
+TEST(CageFit, TheDefaultCageIsAtMostAQuarterOfTheScan) {
+  const CageFitOptions o;
+  EXPECT_EQ(default_cage_faces(o, 100000), 1000);
+  EXPECT_EQ(default_cage_faces(o, 20480), 400);
+  EXPECT_EQ(default_cage_faces(o, 1600), 400);
+  EXPECT_EQ(default_cage_faces(o, 1000), 250);
+  EXPECT_EQ(default_cage_faces(o, 320), 80);
+  EXPECT_EQ(default_cage_faces(o, 12), 4);
+  CageFitOptions set = o;
+  set.faces = 500;
+  EXPECT_EQ(default_cage_faces(set, 320), 500);
+  // A 320-face sphere, which failed with "fewer than the cage's 400", gets an 80-face cage whose
+  // limit surface follows the sphere.
+  const CageFit fit = fit_cage(test::icosphere(2));
+  EXPECT_EQ(fit.cage.num_faces(), 80);
+  const RadialError e = radial_error(fit.cage);
+  EXPECT_LT(e.max, 0.05);
 }

@@ -188,6 +188,27 @@ TEST(Layers, BadAmplitudesAndBandsAreRejected) {
   EXPECT_EQ(model.history().size(), model_of("camel").history().size());
 }
 
+// A scan smaller than the default cage's 400 faces (a 1280-face sphere with bumps; a 320-face one
+// failed with "not more than the cage's 400") is built with a cage a quarter of its size, and a
+// band-0 edit rebuilds its finer bands to their volumes.
+TEST(Layers, ASmallScanGetsACageAQuarterOfItsSize) {
+  TriMesh scan = test::icosphere(3);
+  for (Vec3& p : scan.vertices) p *= 1.0 + 0.03 * std::sin(9 * p.x()) * std::sin(7 * p.y());
+  LayeredModel model = LayeredModel::build(scan);
+  ASSERT_EQ(model.num_bands(), 3);
+  EXPECT_EQ(model.band(0).cage.num_faces(), 320);
+  EXPECT_GT(model.band(1).mesh.num_faces(), 320);
+  EXPECT_LT(model.band(1).mesh.num_faces(), 1280);
+  EditStep step;
+  step.region = Selection::halfspace(Vec3(0, 0, 0), Vec3::UnitZ());
+  step.handle = Selection::halfspace(Vec3(0, 0, 0.7), Vec3::UnitZ());
+  step.transform = EditTransform::rotation(Vec3::UnitX(), 30.0, Vec3::Zero());
+  const layers::CascadeReport r = model.edit(0, step);
+  ASSERT_EQ(r.rebuilt.size(), 2u);
+  for (const layers::BandRebuild& b : r.rebuilt)
+    EXPECT_LE(b.volume.max_relative_error, 1e-3) << "band " << b.band;
+}
+
 // --- Edits and the cascade ---------------------------------------------------------------------
 
 EditStep camel_neck_bend() {

@@ -472,10 +472,7 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   };
   const int nb = o.bands;
   const int scan_faces = scan.num_faces();
-  const int cage_faces =
-      o.cage.faces > 0
-          ? o.cage.faces
-          : std::max(o.cage.min_faces, static_cast<int>(std::lround(o.cage.face_fraction * scan_faces)));
+  const int cage_faces = default_cage_faces(o.cage, scan_faces);
   if (cage_faces >= scan_faces)
     throw InvalidInput("build: the scan has " + std::to_string(scan_faces) +
                        " faces, not more than the cage's " + std::to_string(cage_faces));

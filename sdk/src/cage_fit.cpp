@@ -154,12 +154,16 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   return fit;
 }
 
+int default_cage_faces(const CageFitOptions& options, int scan_faces) {
+  if (options.faces > 0) return options.faces;
+  const int by_fraction =
+      std::max(options.min_faces, static_cast<int>(std::lround(options.face_fraction * scan_faces)));
+  return std::min(by_fraction, std::max(4, scan_faces / 4));
+}
+
 namespace {
 CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
-  const int target = options.faces > 0
-                         ? options.faces
-                         : std::max(options.min_faces,
-                                    static_cast<int>(std::lround(options.face_fraction * scan.num_faces())));
+  const int target = default_cage_faces(options, scan.num_faces());
   if (target > scan.num_faces())
     throw InvalidInput("cage fit: the scan has " + std::to_string(scan.num_faces()) +
                        " faces, fewer than the cage's " + std::to_string(target));

@@ -89,9 +89,9 @@ Subcommand register_cage(CLI::App& parent) {
       "then the cage is solved so that its limit surface approximates the smoothed scan in least squares.");
   fit->add_option("scan", o->scan, "Scan mesh (.obj, .off, .ply, .stl)")->required();
   fit->add_option("-o,--output", o->output, "Cage to write (.obj, .off, .ply)")->required();
-  fit->add_option(
-         "--faces", o->fit.faces,
-         "Cage faces (default: 1% of the scan's faces, at least " + std::to_string(o->fit.min_faces) + ")")
+  fit->add_option("--faces", o->fit.faces,
+                  "Cage faces (default: 1% of the scan's faces, at least " +
+                      std::to_string(o->fit.min_faces) + " but at most a quarter of the scan's)")
       ->check(at_least(0));
   fit->add_option("--smoothness", o->fit.smoothness, "Weight of the cage's smoothness term")
       ->check(in_range(0.0, 1e12))

@@ -499,7 +499,9 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
     app->add_option("--bands", o->bands, "Bands in all, the cage included (2 to 8)")
         ->check(in_range(2, 8))
         ->capture_default_str();
-    app->add_option("--cage-faces", o->cage_faces, "Cage faces (default: 1% of the scan's, at least 400)")
+    app->add_option(
+           "--cage-faces", o->cage_faces,
+           "Cage faces (default: 1% of the scan's, at least 400 but at most a quarter of the scan's)")
         ->check(at_least(0));
     app->add_option("--report", o->report, "Write a JSON report of every model");
     app->add_flag("-q,--quiet", o->quiet, "No progress on stderr");

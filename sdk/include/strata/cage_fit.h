@@ -22,7 +22,8 @@ namespace strata {
 
 //! Options of fit_cage(), with their defaults.
 struct CageFitOptions {
-  //! Faces of the cage. 0 (default): face_fraction of the scan's faces, at least min_faces.
+  //! Faces of the cage. 0 (default): face_fraction of the scan's faces, at least min_faces, but
+  //! at most a quarter of the scan's (default_cage_faces()).
   int faces = 0;
   double face_fraction = 0.01;
   int min_faces = 400;
@@ -43,6 +44,12 @@ struct CageFitOptions {
   //! Projection of the targets onto the limit surface in each round.
   ProjectOptions projection;
 };
+
+//! The cage's face count that \p options give for a scan of \p scan_faces faces: options.faces
+//! if set, else face_fraction of the scan's faces, at least min_faces and at most a quarter of
+//! the scan's faces (but at least 4), so that a small scan (a 320-face sphere)
+//! gets a cage four times coarser than itself instead of one as fine as itself.
+int default_cage_faces(const CageFitOptions& options, int scan_faces);
 
 //! The fitted cage and its measured fitting error.
 struct CageFit {
