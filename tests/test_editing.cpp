@@ -247,6 +247,47 @@ TEST(RegionEditor, AStripWithEveryVertexOnARimGetsABlendField) {
   }
 }
 
+// A part of the region that touches neither the handle nor the rest of the mesh has no blend to
+// follow (CGAL's boeing, bones and b9_mesh failed with "a connected part of the region touches
+// neither the fixed rest of the mesh nor the handle"): it is left out and stays where it is, and
+// the rest of the region is edited as without it (to within the solver's tolerance). A region that is then
+// all handle is refused.
+TEST(RegionEditor, APartConnectedToNeitherTheHandleNorTheRestIsLeftOut) {
+  const TriMesh tube = bumpy_cylinder(2000);
+  TriMesh m = tube;
+  // A loose square of two triangles inside the region (z = 3), away from the handle (z >= 4).
+  const int base = m.num_vertices();
+  for (const Vec3& p : {Vec3(0.1, 0.1, 3), Vec3(0.3, 0.1, 3), Vec3(0.3, 0.3, 3), Vec3(0.1, 0.3, 3)})
+    m.vertices.push_back(p);
+  m.faces.push_back({base, base + 1, base + 2});
+  m.faces.push_back({base, base + 2, base + 3});
+  const RegionEditor ed(m, above(m, 2.0), above(m, 4.0));
+  EXPECT_EQ(ed.left_out_vertices(), 4);
+  const RegionEditor alone(tube, above(tube, 2.0), above(tube, 4.0));
+  EXPECT_EQ(alone.left_out_vertices(), 0);
+  EXPECT_EQ(ed.region_vertices(), alone.region_vertices());
+  const EditTransform t = EditTransform::rotation(Vec3::UnitY(), 30.0, Vec3(0, 0, 3));
+  const EditResult r = ed.apply(t), r_alone = alone.apply(t);
+  for (int v = base; v < base + 4; ++v) EXPECT_EQ(r.positions[v], m.vertices[v]) << v;
+  // Not to the bit: the square is part of the solver's intersection context.
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(r.volume.max_relative_error, 1e-3);
+  EXPECT_LT(
+      max_distance(std::vector<Vec3>(r.positions.begin(), r.positions.begin() + base), r_alone.positions),
+      1e-3);
+  // The loose square and the handle only: nothing is left to blend.
+  std::vector<char> region = above(m, 4.0), handle = region;
+  for (int v = base; v < base + 4; ++v) region[v] = 1;
+  try {
+    const RegionEditor none(m, region, handle);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("the handle is the whole region once the 4 vertices"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // Triangles that share no edge (every other face of a tube): every vertex lies on open edges. The
 // editor refused them (CHOLMOD had been handed empty columns and crashed); with the rim's rows the
 // blend field is defined, and the edit leaves the rest of the mesh where it was.

@@ -76,9 +76,10 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   }
   if (free.empty()) return s;
   const int m = static_cast<int>(free.size());
-  // Every connected part of the free vertices must touch a held one (outside the region or on the
-  // handle); otherwise its field is undetermined (a cage of several pieces, one of them inside the
-  // region away from the handle: CGAL's boeing failed as "could not be factorized").
+  // The connected parts of the free vertices that touch no held one (outside the region or on the
+  // handle) keep s = 0: their field would be undetermined (a cage of several pieces, one of them
+  // inside the region away from the handle: CGAL's boeing failed as "could not be factorized"),
+  // and connected to nothing that moves, they stay. The others are renumbered.
   {
     std::vector<std::vector<int>> nb(n);
     for (const std::vector<int>& f : cage.faces)
@@ -86,12 +87,13 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
         nb[f[k]].push_back(f[(k + 1) % f.size()]);
         nb[f[(k + 1) % f.size()]].push_back(f[k]);
       }
-    std::vector<char> seen(m, 0);
-    std::vector<int> stack;
+    std::vector<char> seen(m, 0), floating(m, 0);
+    std::vector<int> part, stack;
     for (int start = 0; start < m; ++start) {
       if (seen[start]) continue;
       bool anchored = false;
       seen[start] = 1;
+      part.assign(1, start);
       stack.assign(1, free[start]);
       while (!stack.empty()) {
         const int v = stack.back();
@@ -101,31 +103,40 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
             anchored = true;
           } else if (!seen[free_id[u]]) {
             seen[free_id[u]] = 1;
+            part.push_back(free_id[u]);
             stack.push_back(u);
           }
         }
       }
       if (!anchored)
-        throw InvalidInput("a connected part of the cage region (cage vertex " + std::to_string(free[start]) +
-                           ") touches neither the rest of the cage nor the handle");
+        for (int k : part) floating[k] = 1;
     }
+    std::vector<int> kept;
+    for (int k = 0; k < m; ++k) {
+      free_id[free[k]] = -1;
+      if (!floating[k]) kept.push_back(free[k]);
+    }
+    free.swap(kept);
+    for (std::size_t k = 0; k < free.size(); ++k) free_id[free[k]] = static_cast<int>(k);
   }
+  if (free.empty()) return s;
+  const int m_kept = static_cast<int>(free.size());
   std::vector<Eigen::Triplet<double>> tf;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_kept);
   const Eigen::VectorXd Bfixed = B * fixed;
   for (int k = 0; k < B.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
       if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0)
         tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
-  for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
-  Eigen::SparseMatrix<double> A(m, m);
+  for (int k = 0; k < m_kept; ++k) rhs[k] = -Bfixed[free[k]];
+  Eigen::SparseMatrix<double> A(m_kept, m_kept);
   A.setFromTriplets(tf.begin(), tf.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
   if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
   const Eigen::VectorXd x = ldlt.solve(rhs);
   if (ldlt.info() != Eigen::Success || !x.allFinite())
     throw SolverError("the cage's blend field solve failed");
-  for (int k = 0; k < m; ++k) s[free[k]] = x[k];
+  for (int k = 0; k < m_kept; ++k) s[free[k]] = x[k];
   return s;
 }
 

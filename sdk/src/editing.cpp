@@ -195,6 +195,7 @@ class RegionEditor::Impl {
     if (static_cast<int>(region_.size()) == n)
       throw InvalidInput("the region is the whole mesh: nothing is held fixed");
     const internal::Adjacency adj = internal::build_adjacency(n, mesh.faces);
+    leave_out_floating_parts(adj);
     decompose(adj);
     // After the decomposition: the vertices that fill the corners are solved, over the base and
     // blend of the selection (the mesh itself there, s = 0), which they leave as they were.
@@ -260,6 +261,7 @@ class RegionEditor::Impl {
   const std::vector<double>& blend() const { return s_; }
   const std::vector<int>& region() const { return region_; }
   const std::vector<int>& handle() const { return handle_; }
+  int left_out() const { return left_out_; }
   const DetailEncoding& encoding() const { return detail_.encoding(); }
   const std::vector<int>& sub_vertices() const { return sub_vertices_; }
   const EditOptions& options() const { return opt_; }
@@ -288,7 +290,6 @@ class RegionEditor::Impl {
         free.push_back(i);
       }
     }
-    check_components(adj, free_id, free);
 
     // Clamped cotangent weights on the edges (a small floor keeps every edge connected, so the
     // systems stay definite on meshes with obtuse triangles), barycentric vertex areas.
@@ -409,7 +410,7 @@ class RegionEditor::Impl {
       // neighbours all lie on them (CGAL's elephant-with-holes), or a strip of rim vertices that
       // no interior row ties to a held one (its holes, ALSTOM_TEST4). With the rim's rows the
       // system is definite wherever every connected part touches a held vertex
-      // (check_components()): s^T Q s = |M^-1/2 L s|^2 vanishes only for s constant on each part.
+      // (leave_out_floating_parts()): s^T Q s = |M^-1/2 L s|^2 vanishes only for s constant on each part.
       trip = assemble(free, free_id, 1, handle_held, rhs, true);
       blend = solve(free, trip, rhs, "blend field", false);
     }
@@ -447,34 +448,46 @@ class RegionEditor::Impl {
     return in_region != selected;
   }
 
-  // Every connected part of the free vertices must touch a held vertex (fixed rest or handle);
-  // otherwise its fairing has no boundary condition.
-  void check_components(const internal::Adjacency& adj, const std::vector<int>& free_id,
-                        const std::vector<int>& free) const {
-    std::vector<char> seen(free.size(), 0);
-    std::vector<int> stack;
-    for (std::size_t start = 0; start < free.size(); ++start) {
-      if (seen[start]) continue;
+  // The connected parts of the region minus the handle that touch neither the handle nor the rest
+  // of the mesh (a part of a multi-part model, or a scan's loose fragment, that the selection takes
+  // in whole away from the handle) leave the region: their blend, and so their edit, would be
+  // undetermined, and connected to nothing that moves, they stay where they are. The region left
+  // must still hold a vertex to blend.
+  void leave_out_floating_parts(const internal::Adjacency& adj) {
+    const int n = mesh_.num_vertices();
+    std::vector<char> seen(n, 0);
+    std::vector<int> part, stack;
+    for (int start : region_) {
+      if (in_handle_[start] || seen[start]) continue;
       bool anchored = false;
+      part.assign(1, start);
       seen[start] = 1;
-      stack.assign(1, free[start]);
+      stack.assign(1, start);
       while (!stack.empty()) {
         const int v = stack.back();
         stack.pop_back();
         for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
           const int u = adj.neighbors[t];
-          if (free_id[u] < 0) {
+          if (!in_region_[u] || in_handle_[u]) {
             anchored = true;
-          } else if (!seen[free_id[u]]) {
-            seen[free_id[u]] = 1;
+          } else if (!seen[u]) {
+            seen[u] = 1;
+            part.push_back(u);
             stack.push_back(u);
           }
         }
       }
-      if (!anchored)
-        throw InvalidInput("a connected part of the region (vertex " + std::to_string(free[start]) +
-                           ") touches neither the fixed rest of the mesh nor the handle");
+      if (anchored) continue;
+      for (int v : part) in_region_[v] = 0;
+      left_out_ += static_cast<int>(part.size());
     }
+    if (left_out_ == 0) return;
+    list_region();
+    if (handle_.size() == region_.size())
+      throw InvalidInput(
+          "the handle is the whole region once the " + std::to_string(left_out_) +
+          " vertices of its parts connected to neither the handle nor the rest of the mesh are "
+          "left out: nothing to blend");
   }
 
   // The region's prisms: every face with a region vertex. Its vertices outside the region have
@@ -554,6 +567,7 @@ class RegionEditor::Impl {
   internal::DetailSolve detail_;
   std::vector<char> in_region_, in_handle_;
   std::vector<int> region_, handle_;
+  int left_out_ = 0;  // vertices of the selection left out (leave_out_floating_parts())
   std::vector<Vec3> base_;
   std::vector<double> s_;
   std::vector<int> sub_vertices_;
@@ -583,6 +597,9 @@ const std::vector<int>& RegionEditor::region_vertices() const {
 }
 const std::vector<int>& RegionEditor::handle_vertices() const {
   return impl_->handle();
+}
+int RegionEditor::left_out_vertices() const {
+  return impl_->left_out();
 }
 int RegionEditor::region_faces() const {
   return static_cast<int>(impl_->encoding().detail_faces.size());

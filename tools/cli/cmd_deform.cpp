@@ -42,7 +42,15 @@ struct EditFacts {
   std::size_t region_vertices = 0, handle_vertices = 0;
   int region_faces = 0;
   const EncodeReport* encoding = nullptr;
+  int left_out_vertices = 0;  // RegionEditor::left_out_vertices()
 };
+
+int left_out_vertices(const RegionEditor& e) {
+  return e.left_out_vertices();
+}
+int left_out_vertices(const CageEditor&) {
+  return 0;
+}  // floating cage parts keep s = 0
 
 json edit_json(const EditFacts& editor, Method method, const EditResult& r, double select_seconds,
                double metrics_seconds) {
@@ -50,6 +58,7 @@ json edit_json(const EditFacts& editor, Method method, const EditResult& r, doub
   json j{{"region_vertices", editor.region_vertices},
          {"handle_vertices", editor.handle_vertices},
          {"region_faces", editor.region_faces},
+         {"left_out_vertices", editor.left_out_vertices},
          {"encoding", encoding_json(*editor.encoding)},
          {"volume_metrics", volume_metrics_json(r.volume)},
          {"timing_seconds",
@@ -161,7 +170,7 @@ int run_deform(const DeformCmdOptions& o) {
       warnings.push_back("edit " + std::to_string(edits.size() + 1) + ": " +
                          not_converged_text(r.stats, options.reconstruct.tolerance));
     const EditFacts facts{editor.region_vertices().size(), editor.handle_vertices().size(),
-                          editor.region_faces(), &editor.encoding().report};
+                          editor.region_faces(), &editor.encoding().report, left_out_vertices(editor)};
     json ej = edit_json(facts, method, r, select_seconds, 0.0);
     current.vertices = std::move(r.positions);
     base = std::move(r.base_positions);
@@ -206,6 +215,9 @@ int run_deform(const DeformCmdOptions& o) {
         named(where, [&] { return std::make_unique<RegionEditor>(current, region, handle, options); });
     log.phase(label + ": " + std::to_string(editor->region_vertices().size()) + " region vertices, " +
               std::to_string(editor->handle_vertices().size()) + " handle vertices; reconstructing");
+    if (editor->left_out_vertices() > 0)
+      log.phase(label + ": " + std::to_string(editor->left_out_vertices()) +
+                " selected vertices left out: their parts touch neither the handle nor the rest of the mesh");
     record(*editor, named(where, [&] { return editor->apply(e.transform); }), select_seconds,
            base_out.vertices);
   }

@@ -49,8 +49,10 @@ struct CageEditOptions {
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
 //!        handle is empty, the handle is the whole region, a cage face has fewer than 3 corners
-//!        or an index out of range, or a connected part of the region's free vertices touches
-//!        neither the rest of the cage nor the handle (its field is undetermined). A region that is the whole
+//!        or an index out of range. A connected part of the region's vertices outside the handle
+//!        that touches neither the rest of the cage nor the handle (a cage of several pieces, one
+//!        of them in the region away from the handle) keeps s = 0: its field would be
+//!        undetermined. A region that is the whole
 //!        cage (of one piece) gives s = 1 everywhere: the edit moves the model rigidly. A cage vertex in no
 //!        face (it shapes no surface) keeps s = 0, or 1 on the handle.
 //! \throw SolverError if the field's system cannot be factorized or solved.

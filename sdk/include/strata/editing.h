@@ -200,9 +200,9 @@ class RegionEditor {
   //! kMaxCoordinate, an option is out of range (smoothing_wavelength at least 0,
   //! smoothing_fraction above 0, both finite, and the wavelength not so small that the fairing's
   //! weights overflow; handle_solved_rings 0-1000; drag_end_cycles 1-100000), the flags do not match the
-  //! vertex count, the region or the handle is empty, the handle is the whole region, the region is the whole
-  //! mesh, or a connected part of the region touches neither the fixed rest nor the handle (its fairing is
-  //! undetermined). \throw SolverError if the fairing system cannot be factorized.
+  //! vertex count, the region or the handle is empty, the handle is the whole region (also once the parts
+  //! that left_out_vertices() counts are left out), or the region is the whole mesh. \throw SolverError if
+  //! the fairing system cannot be factorized.
   RegionEditor(const TriMesh& mesh, const std::vector<char>& region, const std::vector<char>& handle,
                EditOptions options = {});
   ~RegionEditor();
@@ -219,6 +219,11 @@ class RegionEditor {
   //! (EditOptions::fill_region_corners). Vertices outside it keep their positions exactly.
   const std::vector<int>& region_vertices() const;
   const std::vector<int>& handle_vertices() const;
+  //! Vertices of the selected region left out of it: those of its connected parts (without the
+  //! handle) that touch neither the handle nor the rest of the mesh, whose blend would be
+  //! undetermined (a part of a multi-part model, or a scan's loose fragment, taken in whole away
+  //! from the handle). They stay where they are. 0 for a region of one piece.
+  int left_out_vertices() const;
   //! Number of prisms solved: the faces with at least one region vertex.
   int region_faces() const;
   //! The region's detail encoding (submesh indices; see region_submesh_vertices()).
