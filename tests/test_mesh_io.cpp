@@ -1096,6 +1096,34 @@ TEST(MeshIoErrors, InconsistentOrientation) {
   }
 }
 
+// ReadOptions::orient_faces: the same file is read, its second face flipped to agree with the
+// first (which keeps its orientation: the part is open), in every format; a file already
+// consistent is read unchanged.
+TEST(MeshIoErrors, InconsistentOrientationIsFixedOnRequest) {
+  Fixture fx;
+  const Soup s{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}}, {{0, 1, 2}, {0, 1, 3}}};
+  ReadOptions orient;
+  orient.orient_faces = true;
+  for (Fmt fmt : kAllFormats) {
+    const std::string path = fx.put(s, fmt);
+    int flipped = -1;
+    std::vector<std::vector<int>> polygons;
+    const TriMesh m = read_mesh(path, orient, &polygons, &flipped);
+    EXPECT_EQ(flipped, 1) << fmt_name(fmt);
+    ASSERT_EQ(m.num_faces(), 2) << fmt_name(fmt);
+    EXPECT_EQ(m.faces[0], (Face{0, 1, 2})) << fmt_name(fmt);
+    EXPECT_EQ(m.faces[1], (Face{0, 3, 1})) << fmt_name(fmt);
+    ASSERT_EQ(polygons.size(), 2u);
+    EXPECT_EQ(polygons[1], (std::vector<int>{3, 1, 0})) << fmt_name(fmt);  // reversed with its face
+    validate_mesh(m, "oriented");
+  }
+  const Soup good{{{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}}, {{0, 1, 2}, {1, 0, 3}}};
+  int flipped = -1;
+  const TriMesh m = read_mesh(fx.put(good, Fmt::Off), orient, nullptr, &flipped);
+  EXPECT_EQ(flipped, 0);
+  EXPECT_EQ(m.faces[1], (Face{1, 0, 3}));
+}
+
 TEST(MeshIoErrors, TruncatedFiles) {
   test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = without_unreferenced(awkward_octahedron());

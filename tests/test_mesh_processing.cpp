@@ -9,8 +9,11 @@
 #include <set>
 #include <vector>
 
+#include "strata/exceptions.h"
 #include "strata/mesh.h"
+#include "strata/mesh_io.h"
 #include "strata/mesh_processing.h"
+#include "test_meshes.h"
 
 using namespace strata;
 
@@ -132,4 +135,85 @@ TEST(TaubinSmooth, NoFaceOfAStripCollapses) {
   const std::vector<Vec3> ref = reference_taubin(m, 5, &lowest), x = taubin_smooth(m, 5);
   ASSERT_GT(lowest, 0.01);
   for (int v = 0; v < m.num_vertices(); ++v) EXPECT_LE((x[v] - ref[v]).norm(), 1e-12) << "vertex " << v;
+}
+
+
+// A sphere with a random third of its faces flipped: orient_faces() flips them back (a closed
+// part faces outwards), and the mesh passes validation again. All faces flipped (inside out):
+// all flipped back.
+TEST(OrientFaces, AClosedPartAgreesAndFacesOutwards) {
+  const TriMesh sphere = test::icosphere(3);
+  ASSERT_GT(signed_volume(sphere), 0);
+  TriMesh m = sphere;
+  std::mt19937 rng(3);
+  int shuffled = 0;
+  for (Face& f : m.faces)
+    if (rng() % 3 == 0) std::swap(f[1], f[2]), ++shuffled;
+  EXPECT_THROW(validate_mesh(m, "shuffled"), InvalidInput);
+  EXPECT_EQ(orient_faces(m), shuffled);
+  EXPECT_EQ(m.faces, sphere.faces);
+  TriMesh inside_out = sphere;
+  for (Face& f : inside_out.faces) std::swap(f[1], f[2]);
+  EXPECT_EQ(orient_faces(inside_out), sphere.num_faces());
+  EXPECT_EQ(inside_out.faces, sphere.faces);
+  TriMesh again = sphere;
+  EXPECT_EQ(orient_faces(again), 0);
+}
+
+// An open part keeps its first face's orientation; two parts are oriented each on its own; a face
+// with a repeated corner or an index out of range joins nothing and is left for the validation.
+TEST(OrientFaces, OpenPartsKeepTheirFirstFace) {
+  TriMesh m = strip(6);
+  const std::vector<Face> faces = m.faces;
+  TriMesh other = strip(3);
+  const int offset = m.num_vertices();
+  for (Vec3 p : other.vertices) m.vertices.push_back(p + Vec3(0, 0, 5));
+  for (Face f : other.faces) {
+    for (int& v : f) v += offset;
+    std::swap(f[1], f[2]);  // the second strip all the other way: consistent, left so
+    m.faces.push_back(f);
+  }
+  std::swap(m.faces[0][1], m.faces[0][2]);  // the first face against the rest of its strip
+  std::swap(m.faces[7][1], m.faces[7][2]);
+  m.faces.push_back({0, 0, 1});
+  m.faces.push_back({0, 1, 1000});
+  const TriMesh before = m;
+  EXPECT_EQ(orient_faces(m), 10);  // the strip's other 10 faces follow its first
+  EXPECT_EQ(m.faces[0], before.faces[0]);
+  for (int f = 1; f < 12; ++f) {
+    Face g = faces[f];
+    std::swap(g[1], g[2]);
+    EXPECT_EQ(m.faces[f], g) << f;
+  }
+  for (int f = 12; f < m.num_faces(); ++f) EXPECT_EQ(m.faces[f], before.faces[f]) << f;
+}
+
+// A Moebius strip cannot be oriented: an error naming an edge, the mesh unchanged.
+TEST(OrientFaces, AMoebiusStripIsRefused) {
+  TriMesh m;
+  const int n = 12;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    for (int side : {-1, 1}) {
+      const double w = 0.3 * side;
+      m.vertices.emplace_back((1 + w * std::cos(t / 2)) * std::cos(t),
+                              (1 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2));
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i, b = 2 * i + 1;
+    // The last quad joins the first with its sides swapped: the half twist.
+    const int c = i + 1 < n ? 2 * (i + 1) : 1, d = i + 1 < n ? 2 * (i + 1) + 1 : 0;
+    m.faces.push_back({a, c, d});
+    m.faces.push_back({a, d, b});
+  }
+  const TriMesh before = m;
+  try {
+    orient_faces(m);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("is not orientable (a Moebius strip)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(m.faces, before.faces);
 }

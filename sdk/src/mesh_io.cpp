@@ -33,6 +33,7 @@
 #include "internal/read_file.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
+#include "strata/mesh_processing.h"
 
 namespace strata {
 namespace {
@@ -1444,6 +1445,12 @@ TriMesh read_mesh(const std::string& path) {
 }
 
 TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons) {
+  return read_mesh(path, ReadOptions{}, polygons, nullptr);
+}
+
+TriMesh read_mesh(const std::string& path, const ReadOptions& options,
+                  std::vector<std::vector<int>>* polygons, int* flipped_faces) {
+  if (flipped_faces) *flipped_faces = 0;
   const Format format = format_of(path);
   const std::string file = internal::read_whole_file(path);
   // A UTF-8 byte order mark, as some Windows editors write, starts no keyword: skipped in the
@@ -1469,6 +1476,25 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
       if (polygons)
         for (const Face& f : mesh.faces) polygons->push_back({f[0], f[1], f[2]});
       break;
+  }
+  if (options.orient_faces) {
+    const std::vector<Face> before = polygons ? mesh.faces : std::vector<Face>{};
+    int flipped = 0;
+    try {
+      flipped = orient_faces(mesh);
+    } catch (const InvalidInput& e) {
+      fail_input(path, e.what());
+    }
+    if (flipped_faces) *flipped_faces = flipped;
+    // A flipped triangle's polygon runs the other way too (all of its triangles flip together in
+    // a consistent part, the polygon's fan or clipping being oriented as the polygon).
+    if (polygons && flipped > 0) {
+      std::size_t tri = 0;
+      for (std::vector<int>& poly : *polygons) {
+        if (tri < mesh.faces.size() && mesh.faces[tri] != before[tri]) std::reverse(poly.begin(), poly.end());
+        tri += poly.size() >= 3 ? poly.size() - 2 : 0;
+      }
+    }
   }
   long long face = -1;
   const std::string problem = find_mesh_problem(mesh, &face);

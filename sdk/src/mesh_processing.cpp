@@ -185,4 +185,99 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   return out;
 }
 
+int orient_faces(TriMesh& mesh) {
+  const long long nv = static_cast<long long>(mesh.vertices.size());
+  const int nf = mesh.num_faces();
+  auto usable = [&](const Face& f) {
+    for (int c = 0; c < 3; ++c)
+      if (f[c] < 0 || f[c] >= nv || f[c] == f[(c + 1) % 3]) return false;
+    return true;
+  };
+  // Per undirected edge, its usable faces' uses: (face, whether it runs from the smaller vertex).
+  struct Use {
+    long long key;
+    int face;
+    bool forward;
+  };
+  std::vector<Use> uses;
+  uses.reserve(3 * static_cast<std::size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const Face& t = mesh.faces[f];
+    if (!usable(t)) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int a = t[c], b = t[(c + 1) % 3];
+      uses.push_back({std::min(a, b) * nv + std::max(a, b), f, a < b});
+    }
+  }
+  std::sort(uses.begin(), uses.end(),
+            [](const Use& x, const Use& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+  // Faces joined across the edges of exactly two faces; `same`: whether they traverse it alike.
+  struct Link {
+    int other;
+    bool same;
+    long long key;
+  };
+  std::vector<std::vector<Link>> links(nf);
+  std::vector<char> open(nf, 0);  // a face with an edge of one face (its part is not closed)
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    if (j - i == 2) {
+      const bool same = uses[i].forward == uses[i + 1].forward;
+      links[uses[i].face].push_back({uses[i + 1].face, same, uses[i].key});
+      links[uses[i + 1].face].push_back({uses[i].face, same, uses[i].key});
+    } else if (j - i == 1) {
+      open[uses[i].face] = 1;
+    }
+    i = j;
+  }
+  std::vector<signed char> flip(nf, -1);
+  std::vector<int> part, queue;
+  int flipped = 0;
+  std::vector<char> result(nf, 0);
+  for (int start = 0; start < nf; ++start) {
+    if (flip[start] >= 0 || !usable(mesh.faces[start])) continue;
+    part.assign(1, start);
+    flip[start] = 0;
+    queue.assign(1, start);
+    bool closed = true;
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const int f = queue[q];
+      closed = closed && !open[f];
+      for (const Link& l : links[f]) {
+        // Alike, the two must end with opposite flips; opposite, with the same.
+        const signed char want = static_cast<signed char>(l.same ? 1 - flip[f] : flip[f]);
+        if (flip[l.other] < 0) {
+          flip[l.other] = want;
+          part.push_back(l.other);
+          queue.push_back(l.other);
+        } else if (flip[l.other] != want) {
+          throw InvalidInput("orient faces: the part of face " + std::to_string(start) +
+                             " is not orientable (a Moebius strip): its faces cannot agree across edge (" +
+                             std::to_string(l.key / nv) + "," + std::to_string(l.key % nv) + ")");
+        }
+      }
+    }
+    if (closed) {  // outwards: the divergence theorem's signed volume, as flipped, positive
+      double volume = 0.0;
+      const Vec3 o = mesh.vertices[mesh.faces[start][0]];  // about a point of the part: no cancellation
+      for (int f : part) {
+        const Face& t = mesh.faces[f];
+        const Vec3 a = mesh.vertices[t[0]] - o, b = mesh.vertices[t[1]] - o, c = mesh.vertices[t[2]] - o;
+        const double v = a.dot(b.cross(c));
+        volume += flip[f] ? -v : v;
+      }
+      if (volume < 0)
+        for (int f : part) flip[f] = static_cast<signed char>(1 - flip[f]);
+    }
+    for (int f : part) result[f] = flip[f] == 1;
+  }
+  for (int f = 0; f < nf; ++f)
+    if (result[f]) {
+      std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+      ++flipped;
+    }
+  return flipped;
+}
+
 }  // namespace strata

@@ -25,7 +25,7 @@ int run_cage_fit(const CageFitCmdOptions& o) {
   const Log log(o.quiet);
   Stopwatch sw;
   log.phase("reading " + o.scan);
-  const NamedMesh scan = read_named_mesh(o.scan);
+  const NamedMesh scan = read_scan(o.scan);
   const double read_seconds = sw.seconds();
   log.phase("fitting a cage to " + std::to_string(scan.mesh.num_faces()) + " faces");
   const CageFit fit = [&] {

@@ -108,7 +108,7 @@ int run_deform(const DeformCmdOptions& o) {
   Stopwatch sw;
   log.phase("reading " + o.input + " and " + o.edit);
   const EditScript script = read_edit_script(o.edit);
-  const NamedMesh input = read_named_mesh(o.input);
+  const NamedMesh input = read_scan(o.input);
   const double read_seconds = sw.seconds();
   const TimedIntersections input_pairs =
       find_intersections(input.mesh.vertices, input.mesh.faces, input.name);
@@ -254,6 +254,7 @@ int run_deform(const DeformCmdOptions& o) {
               {"base", o.base},
               {"cage", cage_json},
               {"input", mesh_json(input.mesh, input.name)},
+              {"input_reoriented_faces", input.reoriented_faces},
               {"edit_script", o.edit},
               {"output", mesh_json(current, o.output)},
               {"edits", edits},

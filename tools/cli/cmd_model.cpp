@@ -130,7 +130,7 @@ int run_build(const BuildCmdOptions& o) {
     json r{{"scan", scan_path}, {"model", out}};
     Stopwatch sw;
     try {
-      const NamedMesh scan = read_named_mesh(scan_path);
+      const NamedMesh scan = read_scan(scan_path);
       layers::BuildOptions bo;
       bo.bands = o.bands;
       bo.cage.faces = o.cage_faces;
@@ -155,6 +155,7 @@ int run_build(const BuildCmdOptions& o) {
       r["ok"] = true;
       r["faces"] = scan.mesh.num_faces();
       r["vertices"] = scan.mesh.num_vertices();
+      r["reoriented_faces"] = scan.reoriented_faces;
       r["bands"] = band_summary_json(model);
       r["build_seconds"] = build_seconds;
       r["seconds"] = sw.seconds();

@@ -141,6 +141,19 @@ NamedMesh read_named_mesh(const std::string& path) {
   return m;
 }
 
+NamedMesh read_scan(const std::string& path) {
+  NamedMesh m;
+  m.name = path;
+  ReadOptions ro;
+  ro.orient_faces = true;
+  m.mesh = read_mesh(path, ro, nullptr, &m.reoriented_faces);
+  check_coordinates(m.mesh.vertices, path + ":");
+  if (m.reoriented_faces > 0)
+    std::cerr << "strata: note: " << path << ": " << m.reoriented_faces
+              << " faces flipped to agree with their neighbours' orientation\n";
+  return m;
+}
+
 std::pair<NamedMesh, NamedMesh> read_base_pair(const std::string& base, const std::string& edited) {
   std::vector<std::vector<int>> base_polygons, edited_polygons;
   std::pair<NamedMesh, NamedMesh> r{{read_mesh(base, &base_polygons), base},

@@ -97,10 +97,16 @@ inline CLI::Validator above(double lo) {
 struct NamedMesh {
   TriMesh mesh;
   std::string name;
+  int reoriented_faces = 0;  //!< read_scan(): faces flipped to agree with their neighbours
 };
 
 //! read_mesh(path) with the path in the name.
 NamedMesh read_named_mesh(const std::string& path);
+
+//! A scan to build, fit or edit: read_named_mesh(), but faces that disagree with their
+//! neighbours' orientation are flipped (ReadOptions::orient_faces; closed parts face outwards)
+//! instead of refused, with a note on stderr naming the file and the count.
+NamedMesh read_scan(const std::string& path);
 
 //! The extension of \p path with its dot, lower case ("a/B.OBJ" -> ".obj").
 std::string lower_extension(const std::string& path);

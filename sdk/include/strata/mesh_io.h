@@ -62,6 +62,20 @@ TriMesh read_mesh(const std::string& path);
 //! \throw as read_mesh(path).
 TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons);
 
+//! Options of read_mesh(path, options, ...).
+struct ReadOptions {
+  //! Orient each connected part consistently (orient_faces(), outwards where closed) before the
+  //! validation, instead of refusing faces that disagree with their neighbours: STL exports and
+  //! merged scans often hold some. Off by default: a file is read as it is.
+  bool orient_faces = false;
+};
+
+//! As read_mesh(path, polygons), with \p options. *flipped_faces (if not null): the faces that
+//! orient_faces flipped (their polygons in \p polygons are reversed too).
+//! \throw as read_mesh(path), and InvalidInput if orient_faces is set and a part is not orientable.
+TriMesh read_mesh(const std::string& path, const ReadOptions& options,
+                  std::vector<std::vector<int>>* polygons, int* flipped_faces = nullptr);
+
 //! Encoding to use for formats that have both (PLY, STL).
 enum class MeshEncoding {
   Default,  //!< Binary for PLY and STL, ASCII for OBJ and OFF.
