@@ -46,7 +46,12 @@ Document build_layers(const Document& document, int bands) {
 
 Document Document::load(const std::string& path) {
   if (ends_with_strata(path)) return from_model(layers::read_model(path), path);
-  return from_mesh(read_mesh(path), path);
+  ReadOptions ro;
+  ro.orient_faces = true;
+  int flipped = 0;
+  Document d = from_mesh(read_mesh(path, ro, nullptr, &flipped), path);
+  d.reoriented_faces_ = flipped;
+  return d;
 }
 
 Document Document::from_model(layers::LayeredModel model, const std::string& name) {

@@ -22,9 +22,13 @@ Document build_layers(const Document& document, int bands);
 
 class Document {
  public:
-  //! Reads a .strata model (by extension, any case) or a mesh (.obj, .ply, .off, .stl).
+  //! Reads a .strata model (by extension, any case) or a mesh (.obj, .ply, .off, .stl); a mesh's
+  //! faces that disagree with their neighbours' orientation are flipped (ReadOptions::
+  //! orient_faces, as the CLI's scan commands do), counted by reoriented_faces().
   //! \throw IoError / InvalidInput with the reader's message.
   static Document load(const std::string& path);
+  //! Faces that load() flipped.
+  int reoriented_faces() const { return reoriented_faces_; }
   //! Wraps an existing model or mesh.
   static Document from_model(layers::LayeredModel model, const std::string& name);
   static Document from_mesh(TriMesh mesh, const std::string& name);
@@ -75,7 +79,8 @@ class Document {
  private:
   std::string name_;
   std::optional<layers::LayeredModel> model_;
-  TriMesh mesh_;                            // plain mesh
+  TriMesh mesh_;  // plain mesh
+  int reoriented_faces_ = 0;
   std::vector<double> mesh_errors_;         // plain mesh: per face, NaN outside the last edit's region
   std::vector<Vec3> mesh_vectors_;          // plain mesh: the last edit by displacement vectors
   std::vector<double> mesh_vector_errors_;  // plain mesh: their prism errors, as mesh_errors_

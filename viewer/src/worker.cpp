@@ -284,7 +284,11 @@ void Worker::load(const std::string& path) {
         mesh_dragging_ = false;
         view_.visible.clear();
         d = std::move(loaded);
-        return "opened " + path;
+        const int flipped = d.reoriented_faces();
+        return "opened " + path +
+               (flipped > 0
+                    ? " (" + std::to_string(flipped) + " faces flipped to agree with their neighbours)"
+                    : "");
       },
       true);
 }
