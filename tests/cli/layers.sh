@@ -95,6 +95,10 @@ c = r["changes"][0]
 assert [b["band"] for b in c["rebuilt"]] == [1, 2], c
 for b in c["rebuilt"]:
     assert b["solved_vertices"] > 0 and b["volume_metrics"]["max_relative_error"] <= 1e-3, b
+    # The solver's statistics, as deform's "iterations".
+    it = b["iterations"]
+    assert it["converged"] == b["solver_converged"] and it["cycles"] > 0, it
+    assert abs(it["solver_max_relative_error"] - b["volume_metrics"]["max_relative_error"]) < 1e-9, it
 assert r["warnings"] == [], r["warnings"]
 PY
 "$STRATA" info bent.strata --json | python3 -c "import json,sys; h=json.load(sys.stdin)['history']; assert h[-1]['op']=='edit' and h[-1]['edit']['script'].endswith('camel_neck.json'), h" \

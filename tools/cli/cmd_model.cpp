@@ -303,7 +303,10 @@ void add_cascade_warnings(const layers::CascadeReport& r, const LayeredModel& mo
 
 json cascade_json(const layers::CascadeReport& r, const LayeredModel& model) {
   json rebuilt = json::array();
-  for (const layers::BandRebuild& b : r.rebuilt)
+  // The solver's statistics (the deform report's "iterations": cycles, retries, fallbacks, fold
+  // repairs, new pairs, each phase's seconds), for a volume solve.
+  const bool volumes = model.options().method == EditOptions::Method::Volumes;
+  for (const layers::BandRebuild& b : r.rebuilt) {
     rebuilt.push_back({{"band", b.band},
                        {"solved_vertices", b.solved_vertices},
                        {"rest_vertices", b.rest_vertices},
@@ -312,12 +315,17 @@ json cascade_json(const layers::CascadeReport& r, const LayeredModel& model) {
                        {"volume_metrics", volume_metrics_json(b.volume)},
                        {"solver_converged", b.stats.converged},
                        {"seconds", b.seconds}});
+    if (volumes && b.solved_prisms > 0) rebuilt.back()["iterations"] = iterations_json(b.stats);
+  }
   json j{{"edited_band", r.edited_band},
          {"edit_seconds", r.edit_seconds},
          {"edit_volume_metrics", volume_metrics_json(r.edit_volume)},
          {"rebuilt", rebuilt},
          {"total_seconds", r.total_seconds}};
-  if (edit_solved(r, model)) j["edit_solver_converged"] = r.edit_stats.converged;
+  if (edit_solved(r, model)) {
+    j["edit_solver_converged"] = r.edit_stats.converged;
+    if (volumes) j["edit_iterations"] = iterations_json(r.edit_stats);
+  }
   return j;
 }
 
