@@ -137,32 +137,46 @@ TEST(TaubinSmooth, NoFaceOfAStripCollapses) {
   for (int v = 0; v < m.num_vertices(); ++v) EXPECT_LE((x[v] - ref[v]).norm(), 1e-12) << "vertex " << v;
 }
 
-
-// A sphere with a random third of its faces flipped: orient_faces() flips them back (a closed
-// part faces outwards), and the mesh passes validation again. All faces flipped (inside out):
-// all flipped back.
-TEST(OrientFaces, AClosedPartAgreesAndFacesOutwards) {
+// A sphere with a random third of its faces flipped: orient_faces() flips them back (the side
+// that flips fewer faces), and the mesh passes validation again. A part already consistent is
+// left alone, inside out (all faces flipped) or the inward inner shell of a cavity.
+TEST(OrientFaces, APartTakesTheSideThatFlipsFewerFaces) {
   const TriMesh sphere = test::icosphere(3);
-  ASSERT_GT(signed_volume(sphere), 0);
   TriMesh m = sphere;
   std::mt19937 rng(3);
   int shuffled = 0;
   for (Face& f : m.faces)
     if (rng() % 3 == 0) std::swap(f[1], f[2]), ++shuffled;
+  ASSERT_LT(2 * shuffled, m.num_faces());
   EXPECT_THROW(validate_mesh(m, "shuffled"), InvalidInput);
   EXPECT_EQ(orient_faces(m), shuffled);
   EXPECT_EQ(m.faces, sphere.faces);
+  // The same with face 0 among the flipped ones: the majority, not face 0, decides.
+  TriMesh first = sphere;
+  for (int f = 0; f < first.num_faces(); f += 4) std::swap(first.faces[f][1], first.faces[f][2]);
+  EXPECT_EQ(orient_faces(first), (first.num_faces() + 3) / 4);
+  EXPECT_EQ(first.faces, sphere.faces);
   TriMesh inside_out = sphere;
   for (Face& f : inside_out.faces) std::swap(f[1], f[2]);
-  EXPECT_EQ(orient_faces(inside_out), sphere.num_faces());
-  EXPECT_EQ(inside_out.faces, sphere.faces);
-  TriMesh again = sphere;
-  EXPECT_EQ(orient_faces(again), 0);
+  const std::vector<Face> kept = inside_out.faces;
+  EXPECT_EQ(orient_faces(inside_out), 0);
+  EXPECT_EQ(inside_out.faces, kept);
+  // A solid with a cavity: the outer shell outwards, the inner one inwards; valid, and unchanged.
+  TriMesh cavity = test::icosphere(2, 2.0);
+  const TriMesh inner = test::icosphere(2, 1.0);
+  const int offset = cavity.num_vertices();
+  for (const Vec3& p : inner.vertices) cavity.vertices.push_back(p);
+  for (Face f : inner.faces) cavity.faces.push_back({f[0] + offset, f[2] + offset, f[1] + offset});
+  validate_mesh(cavity, "cavity");
+  const std::vector<Face> before = cavity.faces;
+  EXPECT_EQ(orient_faces(cavity), 0);
+  EXPECT_EQ(cavity.faces, before);
 }
 
-// An open part keeps its first face's orientation; two parts are oriented each on its own; a face
-// with a repeated corner or an index out of range joins nothing and is left for the validation.
-TEST(OrientFaces, OpenPartsKeepTheirFirstFace) {
+// An open part: the few faces against the rest are flipped, whichever face comes first (face 0
+// among them); a second part, consistent, is left alone; a face with a repeated corner or an
+// index out of range joins nothing and is left for the validation.
+TEST(OrientFaces, OpenPartsFollowTheirMajority) {
   TriMesh m = strip(6);
   const std::vector<Face> faces = m.faces;
   TriMesh other = strip(3);
@@ -173,18 +187,13 @@ TEST(OrientFaces, OpenPartsKeepTheirFirstFace) {
     std::swap(f[1], f[2]);  // the second strip all the other way: consistent, left so
     m.faces.push_back(f);
   }
-  std::swap(m.faces[0][1], m.faces[0][2]);  // the first face against the rest of its strip
+  std::swap(m.faces[0][1], m.faces[0][2]);  // two faces of the first strip against the rest
   std::swap(m.faces[7][1], m.faces[7][2]);
   m.faces.push_back({0, 0, 1});
   m.faces.push_back({0, 1, 1000});
   const TriMesh before = m;
-  EXPECT_EQ(orient_faces(m), 10);  // the strip's other 10 faces follow its first
-  EXPECT_EQ(m.faces[0], before.faces[0]);
-  for (int f = 1; f < 12; ++f) {
-    Face g = faces[f];
-    std::swap(g[1], g[2]);
-    EXPECT_EQ(m.faces[f], g) << f;
-  }
+  EXPECT_EQ(orient_faces(m), 2);
+  for (int f = 0; f < 12; ++f) EXPECT_EQ(m.faces[f], faces[f]) << f;
   for (int f = 12; f < m.num_faces(); ++f) EXPECT_EQ(m.faces[f], before.faces[f]) << f;
 }
 

@@ -218,7 +218,6 @@ int orient_faces(TriMesh& mesh) {
     long long key;
   };
   std::vector<std::vector<Link>> links(nf);
-  std::vector<char> open(nf, 0);  // a face with an edge of one face (its part is not closed)
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i;
     while (j < uses.size() && uses[j].key == uses[i].key) ++j;
@@ -226,8 +225,6 @@ int orient_faces(TriMesh& mesh) {
       const bool same = uses[i].forward == uses[i + 1].forward;
       links[uses[i].face].push_back({uses[i + 1].face, same, uses[i].key});
       links[uses[i + 1].face].push_back({uses[i].face, same, uses[i].key});
-    } else if (j - i == 1) {
-      open[uses[i].face] = 1;
     }
     i = j;
   }
@@ -240,10 +237,8 @@ int orient_faces(TriMesh& mesh) {
     part.assign(1, start);
     flip[start] = 0;
     queue.assign(1, start);
-    bool closed = true;
     for (std::size_t q = 0; q < queue.size(); ++q) {
       const int f = queue[q];
-      closed = closed && !open[f];
       for (const Link& l : links[f]) {
         // Alike, the two must end with opposite flips; opposite, with the same.
         const signed char want = static_cast<signed char>(l.same ? 1 - flip[f] : flip[f]);
@@ -258,18 +253,12 @@ int orient_faces(TriMesh& mesh) {
         }
       }
     }
-    if (closed) {  // outwards: the divergence theorem's signed volume, as flipped, positive
-      double volume = 0.0;
-      const Vec3 o = mesh.vertices[mesh.faces[start][0]];  // about a point of the part: no cancellation
-      for (int f : part) {
-        const Face& t = mesh.faces[f];
-        const Vec3 a = mesh.vertices[t[0]] - o, b = mesh.vertices[t[1]] - o, c = mesh.vertices[t[2]] - o;
-        const double v = a.dot(b.cross(c));
-        volume += flip[f] ? -v : v;
-      }
-      if (volume < 0)
-        for (int f : part) flip[f] = static_cast<signed char>(1 - flip[f]);
-    }
+    // The side that flips fewer faces (a tie keeps the lowest-numbered face): a part already
+    // consistent is left as it is, even inside out or the inner shell of a cavity.
+    std::size_t flips = 0;
+    for (int f : part) flips += flip[f] == 1;
+    if (2 * flips > part.size())
+      for (int f : part) flip[f] = static_cast<signed char>(1 - flip[f]);
     for (int f : part) result[f] = flip[f] == 1;
   }
   for (int f = 0; f < nf; ++f)

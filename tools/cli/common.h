@@ -104,7 +104,7 @@ struct NamedMesh {
 NamedMesh read_named_mesh(const std::string& path);
 
 //! A scan to build, fit or edit: read_named_mesh(), but faces that disagree with their
-//! neighbours' orientation are flipped (ReadOptions::orient_faces; closed parts face outwards)
+//! neighbours' orientation are flipped (ReadOptions::orient_faces: the fewer of a part's faces)
 //! instead of refused, with a note on stderr naming the file and the count.
 NamedMesh read_scan(const std::string& path);
 

@@ -39,8 +39,9 @@ check "no GL errors (scan)" "r['gl_errors'] == 0 and len(r['frame_ms']) == 1" "$
 r=$("$VIEWER" "$MESH" --screenshot "$T/flat.png" "${COMMON[@]}" --shading flat --wireframe --view iso)
 s=$($STATS "$T/flat.png" "$T/scan.png")
 check "flat + wireframe drawn, differs from smooth" "s['centre_foreground'] > 0.5 and s['changed'] > 0.02" "$s"
-# A scan whose faces disagree in orientation (every 4th face flipped) is drawn as the scan is:
-# the viewer flips them back (ReadOptions::orient_faces), and the image is the same.
+# A scan whose faces disagree in orientation (every 4th face flipped) is opened, not refused
+# (ReadOptions::orient_faces), and drawn as the scan. (The image does not show orientation: that
+# the faces come back as they were is checked by OrientFaces.* and cli.layers.)
 awk '/^f / && n++ % 4 == 0 {print $1, $2, $4, $3; next} {print}' "$MESH" >"$T/shuffled.obj"
 if r=$("$VIEWER" "$T/shuffled.obj" --screenshot "$T/shuffled.png" "${COMMON[@]}"); then
   s=$($STATS "$T/shuffled.png" "$T/scan.png")

@@ -172,7 +172,8 @@ struct EditResult {
 //! region minus the handle, 0 on the rest and 1 on the handle. Open edges (holes, a CAD part's
 //! rims) have no Laplacian rows in either system, which would pull the rim in; where that leaves
 //! the blend undetermined (free vertices whose neighbours all lie on open edges, or rims that no
-//! interior row ties to the rest), the blend field takes the rim's rows too. The detail of the prisms
+//! interior row ties to the rest: the system is singular, or its solution leaves [-0.5, 1.5]),
+//! the blend field takes the rim's rows too. The detail of the prisms
 //! touching the region is encoded over that base; vertices outside the region are pinned, so only the region
 //! is solved, and so are handle vertices away from the blended part (they move rigidly). The region solved is
 //! the selection with its sharp corners filled (EditOptions::fill_region_corners; region_vertices()), over

@@ -64,7 +64,7 @@ TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygo
 
 //! Options of read_mesh(path, options, ...).
 struct ReadOptions {
-  //! Orient each connected part consistently (orient_faces(), outwards where closed) before the
+  //! Orient each connected part consistently (orient_faces(): the fewer faces flipped) before the
   //! validation, instead of refusing faces that disagree with their neighbours: STL exports and
   //! merged scans often hold some. Off by default: a file is read as it is.
   bool orient_faces = false;

@@ -36,12 +36,13 @@ std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 TriMesh decimate_mesh(const TriMesh& mesh, int target_faces);
 
 //! Flips faces of \p mesh so that each connected part (faces joined by edges of exactly two faces)
-//! is consistently oriented: every such edge is traversed once each way. A part keeps the
-//! orientation of its lowest-numbered face, but a closed part (no edge of one face) whose signed
-//! volume is then negative is flipped whole, so that it faces outwards. A face is flipped by
-//! swapping its last two corners. Faces with an index out of range or a repeated corner, and edges
-//! of one face or of three or more, are left for validate_mesh() to report: they join nothing.
-//! Returns the number of faces flipped (0 for a mesh already oriented so).
+//! is consistently oriented: every such edge is traversed once each way. Of the part's two
+//! consistent orientations the one that flips fewer faces is taken (a tie keeps the
+//! lowest-numbered face's), so a part that is already consistent is left as it is, inside out or
+//! not (the inner shell of a cavity faces inwards). A face is flipped by swapping its last two
+//! corners. Faces with an index out of range or a repeated corner, and edges of one face or of
+//! three or more, are left for validate_mesh() to report: they join nothing.
+//! Returns the number of faces flipped (0 for a mesh already consistent).
 //! \throw InvalidInput if a part is not orientable (a Moebius strip), naming an edge where its
 //!        orientation cannot agree; the mesh is then unchanged.
 int orient_faces(TriMesh& mesh);
