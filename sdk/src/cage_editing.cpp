@@ -64,79 +64,44 @@ std::vector<double> cage_blend_field(const PolyMesh& cage, const std::vector<cha
   std::vector<char> in_face(n, 0);
   for (const std::vector<int>& f : cage.faces)
     for (int v : f) in_face[v] = 1;
+  // The connected parts of the free vertices that touch no held one (outside the region or on the
+  // handle) keep s = 0 too: their field would be undetermined (a cage of several pieces, one of
+  // them inside the region away from the handle: CGAL's boeing failed as "could not be
+  // factorized"), and connected to nothing that moves, they stay. Over the edge graph: L's column
+  // v holds v's neighbours.
+  std::vector<char> is_free(n, 0);
+  for (int v = 0; v < n; ++v) is_free[v] = region[v] && !handle[v] && in_face[v];
+  Eigen::SparseMatrix<double> graph = L;
+  graph.makeCompressed();
+  const std::vector<char> floating =
+      internal::floating_parts(graph.outerIndexPtr(), graph.innerIndexPtr(), is_free);
   for (int v = 0; v < n; ++v) {
-    if (region[v] && !handle[v] && !in_face[v]) continue;
-    if (region[v] && !handle[v]) {
+    if (is_free[v] && !floating[v]) {
       free_id[v] = static_cast<int>(free.size());
       free.push_back(v);
-    } else if (region[v]) {
+    } else if (region[v] && handle[v]) {
       fixed[v] = 1.0;
       s[v] = 1.0;
     }
   }
   if (free.empty()) return s;
   const int m = static_cast<int>(free.size());
-  // The connected parts of the free vertices that touch no held one (outside the region or on the
-  // handle) keep s = 0: their field would be undetermined (a cage of several pieces, one of them
-  // inside the region away from the handle: CGAL's boeing failed as "could not be factorized"),
-  // and connected to nothing that moves, they stay. The others are renumbered.
-  {
-    std::vector<std::vector<int>> nb(n);
-    for (const std::vector<int>& f : cage.faces)
-      for (std::size_t k = 0; k < f.size(); ++k) {
-        nb[f[k]].push_back(f[(k + 1) % f.size()]);
-        nb[f[(k + 1) % f.size()]].push_back(f[k]);
-      }
-    std::vector<char> seen(m, 0), floating(m, 0);
-    std::vector<int> part, stack;
-    for (int start = 0; start < m; ++start) {
-      if (seen[start]) continue;
-      bool anchored = false;
-      seen[start] = 1;
-      part.assign(1, start);
-      stack.assign(1, free[start]);
-      while (!stack.empty()) {
-        const int v = stack.back();
-        stack.pop_back();
-        for (int u : nb[v]) {
-          if (free_id[u] < 0) {
-            anchored = true;
-          } else if (!seen[free_id[u]]) {
-            seen[free_id[u]] = 1;
-            part.push_back(free_id[u]);
-            stack.push_back(u);
-          }
-        }
-      }
-      if (!anchored)
-        for (int k : part) floating[k] = 1;
-    }
-    std::vector<int> kept;
-    for (int k = 0; k < m; ++k) {
-      free_id[free[k]] = -1;
-      if (!floating[k]) kept.push_back(free[k]);
-    }
-    free.swap(kept);
-    for (std::size_t k = 0; k < free.size(); ++k) free_id[free[k]] = static_cast<int>(k);
-  }
-  if (free.empty()) return s;
-  const int m_kept = static_cast<int>(free.size());
   std::vector<Eigen::Triplet<double>> tf;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_kept);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
   const Eigen::VectorXd Bfixed = B * fixed;
   for (int k = 0; k < B.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(B, k); it; ++it)
       if (free_id[it.row()] >= 0 && free_id[it.col()] >= 0)
         tf.emplace_back(free_id[it.row()], free_id[it.col()], it.value());
-  for (int k = 0; k < m_kept; ++k) rhs[k] = -Bfixed[free[k]];
-  Eigen::SparseMatrix<double> A(m_kept, m_kept);
+  for (int k = 0; k < m; ++k) rhs[k] = -Bfixed[free[k]];
+  Eigen::SparseMatrix<double> A(m, m);
   A.setFromTriplets(tf.begin(), tf.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
   if (ldlt.info() != Eigen::Success) throw SolverError("the cage's blend field could not be factorized");
   const Eigen::VectorXd x = ldlt.solve(rhs);
   if (ldlt.info() != Eigen::Success || !x.allFinite())
     throw SolverError("the cage's blend field solve failed");
-  for (int k = 0; k < m_kept; ++k) s[free[k]] = x[k];
+  for (int k = 0; k < m; ++k) s[free[k]] = x[k];
   return s;
 }
 

@@ -463,33 +463,12 @@ class RegionEditor::Impl {
   // undetermined, and connected to nothing that moves, they stay where they are. The region left
   // must still hold a vertex to blend.
   void leave_out_floating_parts(const internal::Adjacency& adj) {
-    const int n = mesh_.num_vertices();
-    std::vector<char> seen(n, 0);
-    std::vector<int> part, stack;
-    for (int start : region_) {
-      if (in_handle_[start] || seen[start]) continue;
-      bool anchored = false;
-      part.assign(1, start);
-      seen[start] = 1;
-      stack.assign(1, start);
-      while (!stack.empty()) {
-        const int v = stack.back();
-        stack.pop_back();
-        for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) {
-          const int u = adj.neighbors[t];
-          if (!in_region_[u] || in_handle_[u]) {
-            anchored = true;
-          } else if (!seen[u]) {
-            seen[u] = 1;
-            part.push_back(u);
-            stack.push_back(u);
-          }
-        }
-      }
-      if (anchored) continue;
-      for (int v : part) in_region_[v] = 0;
-      left_out_ += static_cast<int>(part.size());
-    }
+    std::vector<char> free(in_region_.size(), 0);
+    for (int v : region_) free[v] = !in_handle_[v];
+    const std::vector<char> floating =
+        internal::floating_parts(adj.neighbor_offsets.data(), adj.neighbors.data(), free);
+    for (std::size_t v = 0; v < floating.size(); ++v)
+      if (floating[v]) in_region_[v] = 0, ++left_out_;
     if (left_out_ == 0) return;
     list_region();
     if (handle_.size() == region_.size())

@@ -34,7 +34,7 @@ using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 constexpr double kMinAreaRatio = 0.01;
 
 double double_area(const std::vector<Vec3>& x, const Face& f) {
-  return (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]).norm();
+  return triangle_area_normal(x[f[0]], x[f[1]], x[f[2]]).norm();
 }
 
 }  // namespace
@@ -228,24 +228,20 @@ int orient_faces(TriMesh& mesh) {
     }
     i = j;
   }
-  std::vector<signed char> flip(nf, -1);
-  std::vector<int> part, queue;
-  int flipped = 0;
-  std::vector<char> result(nf, 0);
+  std::vector<signed char> flip(nf, -1);  // per face: 1 flipped, 0 kept, -1 unusable
+  std::vector<int> part;                  // also the search's queue
   for (int start = 0; start < nf; ++start) {
     if (flip[start] >= 0 || !usable(mesh.faces[start])) continue;
-    part.assign(1, start);
     flip[start] = 0;
-    queue.assign(1, start);
-    for (std::size_t q = 0; q < queue.size(); ++q) {
-      const int f = queue[q];
+    part.assign(1, start);
+    for (std::size_t q = 0; q < part.size(); ++q) {
+      const int f = part[q];
       for (const Link& l : links[f]) {
         // Alike, the two must end with opposite flips; opposite, with the same.
         const signed char want = static_cast<signed char>(l.same ? 1 - flip[f] : flip[f]);
         if (flip[l.other] < 0) {
           flip[l.other] = want;
           part.push_back(l.other);
-          queue.push_back(l.other);
         } else if (flip[l.other] != want) {
           throw InvalidInput("orient faces: the part of face " + std::to_string(start) +
                              " is not orientable (a Moebius strip): its faces cannot agree across edge (" +
@@ -259,10 +255,11 @@ int orient_faces(TriMesh& mesh) {
     for (int f : part) flips += flip[f] == 1;
     if (2 * flips > part.size())
       for (int f : part) flip[f] = static_cast<signed char>(1 - flip[f]);
-    for (int f : part) result[f] = flip[f] == 1;
   }
+  // Only now, so that a part found not orientable leaves the mesh unchanged.
+  int flipped = 0;
   for (int f = 0; f < nf; ++f)
-    if (result[f]) {
+    if (flip[f] == 1) {
       std::swap(mesh.faces[f][1], mesh.faces[f][2]);
       ++flipped;
     }

@@ -169,6 +169,31 @@ std::vector<double> normalized_cotan_weights(const std::vector<Vec3>& x, const s
   return w;
 }
 
+std::vector<char> floating_parts(const int* offsets, const int* neighbors, const std::vector<char>& free) {
+  const std::size_t n = free.size();
+  std::vector<char> seen(n, 0), floating(n, 0);
+  std::vector<int> part;  // also the search's queue
+  for (std::size_t start = 0; start < n; ++start) {
+    if (!free[start] || seen[start]) continue;
+    bool anchored = false;
+    seen[start] = 1;
+    part.assign(1, static_cast<int>(start));
+    for (std::size_t q = 0; q < part.size(); ++q)
+      for (int t = offsets[part[q]]; t < offsets[part[q] + 1]; ++t) {
+        const int u = neighbors[t];
+        if (!free[u]) {
+          anchored = true;
+        } else if (!seen[u]) {
+          seen[u] = 1;
+          part.push_back(u);
+        }
+      }
+    if (!anchored)
+      for (int v : part) floating[v] = 1;
+  }
+  return floating;
+}
+
 std::vector<int> ring_distance(const Adjacency& adj, const std::vector<char>& seeds, int cap) {
   const int n = adj.num_vertices();
   std::vector<int> dist(n, cap), frontier, next;

@@ -41,6 +41,11 @@ std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vect
 //! farther than cap - 1 edges (or unreachable) get cap.
 std::vector<int> ring_distance(const Adjacency& adj, const std::vector<char>& seeds, int cap);
 
+//! One flag per vertex: whether it is \p free and its connected part of free vertices (through the
+//! graph's rows: vertex v's neighbours are neighbors[offsets[v] .. offsets[v + 1])) touches no
+//! vertex that is not: in a problem held at the other vertices its values are undetermined.
+std::vector<char> floating_parts(const int* offsets, const int* neighbors, const std::vector<char>& free);
+
 //! One flag per vertex: whether it lies on a boundary edge (an edge of one face only).
 std::vector<char> boundary_vertices(int num_vertices, const std::vector<Face>& faces);
 
