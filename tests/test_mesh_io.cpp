@@ -1248,19 +1248,74 @@ TEST(MeshIoErrors, UnparsableContent) {
 // Garbage never crashes: random bytes, every prefix of valid files, and byte flips.
 
 //! Reads \p path; passes if it throws a strata::Error or returns a mesh that validates.
+// ---------------------------------------------------------------------------------------------
+// Vertex colours and texture coordinates (read_mesh_file, write_mesh with VertexAttributes).
+
+::testing::AssertionResult same_attributes(const VertexAttributes& a, const VertexAttributes& b) {
+  if (a.colors.size() != b.colors.size() || a.texcoords.size() != b.texcoords.size())
+    return ::testing::AssertionFailure() << "sizes " << a.colors.size() << "/" << a.texcoords.size() << " vs "
+                                         << b.colors.size() << "/" << b.texcoords.size();
+  if (a.colors_have_alpha != b.colors_have_alpha) return ::testing::AssertionFailure() << "alpha differs";
+  for (size_t v = 0; v < a.colors.size(); ++v)
+    for (int c = 0; c < 4; ++c)
+      if (!same_bits(a.colors[v][c], b.colors[v][c]))
+        return ::testing::AssertionFailure() << "vertex " << v << " colour channel " << c << ": "
+                                             << a.colors[v][c] << " vs " << b.colors[v][c];
+  for (size_t v = 0; v < a.texcoords.size(); ++v)
+    for (int c = 0; c < 2; ++c)
+      if (!same_bits(a.texcoords[v][c], b.texcoords[v][c]))
+        return ::testing::AssertionFailure() << "vertex " << v << " texture coordinate " << c << ": "
+                                             << a.texcoords[v][c] << " vs " << b.texcoords[v][c];
+  return ::testing::AssertionSuccess();
+}
+
+// Full-precision random values, or 8-bit colours (k / 255) that PLY stores as uchar.
+VertexAttributes random_attributes(std::size_t n, bool alpha, bool eight_bit, bool texcoords, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int> byte(0, 255);
+  VertexAttributes a;
+  a.colors_have_alpha = alpha;
+  for (std::size_t v = 0; v < n; ++v) {
+    std::array<double, 4> c{};
+    for (int k = 0; k < 4; ++k) c[k] = eight_bit ? byte(rng) / 255.0 : unit(rng);
+    if (!alpha) c[3] = 1.0;
+    a.colors.push_back(c);
+    if (texcoords) a.texcoords.push_back({unit(rng) * 3 - 1, unit(rng) / 7});
+  }
+  return a;
+}
+
+// Reads \p path twice, by read_mesh() and read_mesh_file(): each throws a strata error or
+// returns a valid mesh (with attributes that fit it), and both the same mesh when they read it.
 ::testing::AssertionResult error_or_valid(const std::string& path, TriMesh* out = nullptr) {
+  bool plain_read = false;
+  TriMesh plain;
   try {
-    TriMesh m = read_mesh(path);
-    validate_mesh(m, path);
-    if (out) *out = std::move(m);
-    return ::testing::AssertionSuccess();
+    plain = read_mesh(path);
+    validate_mesh(plain, path);
+    plain_read = true;
   } catch (const Error&) {
-    return ::testing::AssertionSuccess();
   } catch (const std::exception& e) {
     return ::testing::AssertionFailure() << "non-strata exception: " << e.what();
   } catch (...) {
     return ::testing::AssertionFailure() << "unknown exception";
   }
+  try {
+    MeshFile f = read_mesh_file(path);
+    check_vertex_attributes(f.attributes, f.mesh.vertices.size(), path);
+    if (!plain_read)
+      return ::testing::AssertionFailure() << "read_mesh_file() reads what read_mesh() refuses";
+    if (!identical(plain, f.mesh)) return ::testing::AssertionFailure() << "the two reads differ";
+  } catch (const Error&) {
+    // Attributes may make a file an error (a colour of NaN), never the other way round.
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "non-strata exception (read_mesh_file): " << e.what();
+  } catch (...) {
+    return ::testing::AssertionFailure() << "unknown exception (read_mesh_file)";
+  }
+  if (out && plain_read) *out = std::move(plain);
+  return ::testing::AssertionSuccess();
 }
 
 TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
@@ -1278,7 +1333,12 @@ TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
       "property list uint int vertex_indices\nend_header\n",
       "ply\nformat ascii 1.0\nelement face 99999999\nproperty list int int vertex_indices\nend_header\n",
       "solid ",
-      std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4)};
+      std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4),
+      "v 0 0 0 1 0 0\nvt 0 0\nf 1/1 ",
+      "STCOFF\n3 1 0\n0 0 0 1 0 0 0 0\n",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float u\nproperty float v\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"};
   const char alphabet[] = "vf0123456789 -+./\n#eE\r";
   int files = 0;
   for (const std::string ext : {".obj", ".off", ".ply", ".stl"})
@@ -1293,7 +1353,7 @@ TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
         write_bytes(path, bytes);
         EXPECT_TRUE(error_or_valid(path)) << path;
       }
-  EXPECT_EQ(files, 4 * 10 * 12);
+  EXPECT_EQ(files, 4 * 13 * 12);
 }
 
 TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
@@ -1307,8 +1367,10 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
   const Case cases[] = {{"p.obj", MeshEncoding::Ascii, false}, {"p.off", MeshEncoding::Ascii, false},
                         {"a.ply", MeshEncoding::Ascii, false}, {"b.ply", MeshEncoding::Binary, true},
                         {"a.stl", MeshEncoding::Ascii, false}, {"b.stl", MeshEncoding::Binary, true}};
+  // With colours and texture coordinates, whose parsing is then cut too.
+  const VertexAttributes attributes = random_attributes(m.vertices.size(), true, false, true, 21);
   for (const Case& c : cases) {
-    write_mesh(m, dir.file(c.name), c.enc);
+    write_mesh(m, attributes, dir.file(c.name), c.enc);
     const TriMesh whole = read_mesh(dir.file(c.name));
     const std::string full = read_bytes(dir.file(c.name));
     const std::string cut = dir.file("cut_" + c.name);
@@ -1343,7 +1405,7 @@ TEST(MeshIoFuzz, ByteFlipsInValidFiles) {
                                   {"b.ply", MeshEncoding::Binary},
                                   {"a.stl", MeshEncoding::Ascii},
                                   {"b.stl", MeshEncoding::Binary}}) {
-    write_mesh(m, dir.file(name), enc);
+    write_mesh(m, random_attributes(m.vertices.size(), false, true, true, 22), dir.file(name), enc);
     const std::string full = read_bytes(dir.file(name));
     for (int trial = 0; trial < 150; ++trial) {
       std::string bytes = full;
@@ -1462,6 +1524,215 @@ TEST(MeshIoValidate, WriteRefusesMeshesReadWouldReject) {
 
 // ---------------------------------------------------------------------------------------------
 // Atomic writes
+
+TEST(MeshIoAttributes, RoundTripIsExactInObjOffAndPly) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const TriMesh m = awkward_octahedron();
+  const std::size_t n = m.vertices.size();
+  int run = 0;
+  for (bool alpha : {false, true})
+    for (bool eight_bit : {false, true})
+      for (bool uv : {false, true}) {
+        const VertexAttributes a = random_attributes(n, alpha, eight_bit, uv, 100 + run++);
+        for (const auto& [name, enc] :
+             std::vector<std::pair<std::string, MeshEncoding>>{{"a.obj", MeshEncoding::Default},
+                                                               {"b.off", MeshEncoding::Default},
+                                                               {"c.ply", MeshEncoding::Ascii},
+                                                               {"d.ply", MeshEncoding::Binary}}) {
+          const std::string path = dir.file(name);
+          write_mesh(m, a, path, enc);
+          const MeshFile f = read_mesh_file(path);
+          const std::string what =
+              name + (alpha ? " alpha" : "") + (eight_bit ? " 8-bit" : "") + (uv ? " uv" : "");
+          EXPECT_TRUE(identical(m, f.mesh)) << what;
+          EXPECT_TRUE(same_attributes(a, f.attributes)) << what;
+          EXPECT_TRUE(f.dropped.empty()) << what;
+          // Canonical: what was read writes the same bytes.
+          write_mesh(f.mesh, f.attributes, dir.file("again_" + name), enc);
+          EXPECT_EQ(read_bytes(path), read_bytes(dir.file("again_" + name))) << what;
+          if (name.back() == 'y') {
+            const std::string head = read_bytes(path).substr(0, 400);
+            EXPECT_NE(head.find(eight_bit ? "property uchar red" : "property double red"), std::string::npos)
+                << what;
+            EXPECT_EQ(head.find("alpha") != std::string::npos, alpha) << what;
+          }
+        }
+      }
+  // Without attributes, the files are those write_mesh(mesh, path) writes.
+  write_mesh(m, VertexAttributes{}, dir.file("x.ply"));
+  write_mesh(m, dir.file("y.ply"));
+  EXPECT_EQ(read_bytes(dir.file("x.ply")), read_bytes(dir.file("y.ply")));
+}
+
+TEST(MeshIoAttributes, ReadsTheLayoutsScannersWrite) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const Soup s = tetra();
+  // Binary PLY, uchar red green blue after the position (the common scanner layout), and a
+  // normal in between.
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nproperty float nx\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  for (std::size_t v = 0; v < s.v.size(); ++v) {
+    for (double x : s.v[v]) put(ply, static_cast<float>(x));
+    put(ply, 0.5f);
+    for (int c = 0; c < 3; ++c) put(ply, static_cast<uint8_t>(60 * v + 10 * c));
+  }
+  for (const auto& f : s.f) {
+    put(ply, static_cast<uint8_t>(3));
+    for (long long i : f) put(ply, static_cast<int32_t>(i));
+  }
+  write_bytes(dir.file("rgb.ply"), ply);
+  MeshFile f = read_mesh_file(dir.file("rgb.ply"));
+  ASSERT_EQ(f.attributes.colors.size(), 4u);
+  EXPECT_FALSE(f.attributes.colors_have_alpha);
+  EXPECT_EQ(f.attributes.colors[3], (std::array<double, 4>{180 / 255.0, 190 / 255.0, 200 / 255.0, 1.0}));
+  EXPECT_TRUE(f.attributes.texcoords.empty());
+
+  // ASCII PLY: ushort diffuse colours with alpha, s t texture coordinates.
+  write_bytes(
+      dir.file("us.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+      "property ushort diffuse_red\nproperty ushort diffuse_green\nproperty ushort diffuse_blue\n"
+      "property ushort diffuse_alpha\nproperty float s\nproperty float t\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 65535 0 0 65535 0.25 0.5\n1 0 0 0 65535 0 0 1 0\n0 1 0 0 0 65535 65535 0 1\n"
+      "0 0 1 13107 13107 13107 65535 0.5 0.5\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  f = read_mesh_file(dir.file("us.ply"));
+  EXPECT_TRUE(f.attributes.colors_have_alpha);
+  EXPECT_EQ(f.attributes.colors[0], (std::array<double, 4>{1.0, 0.0, 0.0, 1.0}));
+  EXPECT_EQ(f.attributes.colors[3], (std::array<double, 4>{0.2, 0.2, 0.2, 1.0}));
+  EXPECT_EQ(f.attributes.texcoords[0], (std::array<double, 2>{0.25, 0.5}));
+
+  // COFF with integer colours (0-255, CGAL's and Geomview's) and with float ones (0-1).
+  write_bytes(dir.file("i.off"),
+              "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 51 51 51 255\n"
+              "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  f = read_mesh_file(dir.file("i.off"));
+  EXPECT_TRUE(f.attributes.colors_have_alpha);
+  EXPECT_EQ(f.attributes.colors[3], (std::array<double, 4>{0.2, 0.2, 0.2, 1.0}));
+  write_bytes(
+      dir.file("f.off"),
+      "STCOFF\n4 4 0\n0 0 0 1.0 0 0 0.1 0.3\n1 0 0 0 1e0 0 1 0\n0 1 0 0 0 .5 0 1\n0 0 1 0.2 0.2 0.2 1 1\n"
+      "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  f = read_mesh_file(dir.file("f.off"));
+  EXPECT_FALSE(f.attributes.colors_have_alpha);
+  EXPECT_EQ(f.attributes.colors[2], (std::array<double, 4>{0.0, 0.0, 0.5, 1.0}));
+  EXPECT_EQ(f.attributes.texcoords[0], (std::array<double, 2>{0.1, 0.3}));
+  EXPECT_TRUE(f.dropped.empty());
+
+  // OBJ: MeshLab's "v x y z r g b", and vt shared by each vertex's corners (one per vertex, in
+  // another order than the vertices, relative indices too); a weight w is not a colour.
+  write_bytes(dir.file("c.obj"),
+              "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 0 0 1 0.2 0.2 0.2\n"
+              "vt 0.4 0.4\nvt 0.3 0.3\nvt 0.2 0.2\nvt 0.1 0.1\n"
+              "f 1/4 3/2 2/3\nf 1/4 2/3 4/1\nf 1/-1 4/-4 3/-3\nf 2/3 3/2 4/1\n");
+  f = read_mesh_file(dir.file("c.obj"));
+  EXPECT_EQ(f.attributes.colors[3], (std::array<double, 4>{0.2, 0.2, 0.2, 1.0}));
+  EXPECT_EQ(f.attributes.texcoords[0], (std::array<double, 2>{0.1, 0.1}));
+  EXPECT_EQ(f.attributes.texcoords[3], (std::array<double, 2>{0.4, 0.4}));
+  write_bytes(dir.file("w.obj"),
+              "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nv 0 0 1 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  f = read_mesh_file(dir.file("w.obj"));
+  EXPECT_TRUE(f.attributes.empty());
+  EXPECT_TRUE(f.dropped.empty());
+  // read_mesh() reads the same meshes, ignoring the attributes.
+  for (const char* name : {"rgb.ply", "us.ply", "i.off", "f.off", "c.obj"})
+    EXPECT_TRUE(identical(read_mesh(dir.file(name)), read_mesh_file(dir.file(name)).mesh)) << name;
+}
+
+TEST(MeshIoAttributes, WhatCannotBeKeptIsListedAsDropped) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::string faces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  write_bytes(dir.file("some.obj"), "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nv 0 0 1\n" + faces);
+  MeshFile f = read_mesh_file(dir.file("some.obj"));
+  EXPECT_TRUE(f.attributes.empty());
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_EQ(f.dropped[0], "vertex colours: only 2 of the 4 vertices have one");
+
+  write_bytes(dir.file("seam.obj"),
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n"
+              "f 1/1 3/3 2/2\nf 1/4 2/2 4/4\nf 1/1 4/4 3/3\nf 2/2 3/3 4/4\n");
+  f = read_mesh_file(dir.file("seam.obj"));
+  EXPECT_TRUE(f.attributes.texcoords.empty());
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_NE(f.dropped[0].find("texture coordinates: 1 vertices have more than one"), std::string::npos);
+
+  write_bytes(
+      dir.file("part.obj"),
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/1 3/1 2/1\nf 1 2 4\nf 1/1 4/1 3/1\nf 2/1 3/1 4/1\n");
+  f = read_mesh_file(dir.file("part.obj"));
+  EXPECT_TRUE(f.attributes.texcoords.empty());
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_EQ(f.dropped[0], "texture coordinates: 3 of the 12 face corners have none");
+
+  write_bytes(dir.file("map.off"),
+              "COFF\n4 4 0\n0 0 0 3\n1 0 0 3\n0 1 0 3\n0 0 1 3\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  f = read_mesh_file(dir.file("map.off"));
+  EXPECT_TRUE(f.attributes.empty());
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_EQ(f.dropped[0], "vertex colours: vertex 0 has 1 colour value (a colour map index), not 3 or 4");
+
+  write_bytes(
+      dir.file("red.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+      "property uchar red\nelement face 4\nproperty list uchar int vertex_indices\n"
+      "property list uchar float texcoord\nend_header\n0 0 0 1\n1 0 0 2\n0 1 0 3\n0 0 1 4\n"
+      "3 0 2 1 6 0 0 0 0 0 0\n3 0 1 3 0\n3 0 3 2 0\n3 1 2 3 0\n");
+  f = read_mesh_file(dir.file("red.ply"));
+  EXPECT_TRUE(f.attributes.empty());
+  EXPECT_EQ(f.dropped,
+            (std::vector<std::string>{
+                "vertex colours: the vertex element has only 1 of the red, green and blue properties",
+                "texture coordinates per face corner (face property texcoord; Strata keeps one per "
+                "vertex)"}));
+}
+
+TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::string faces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  write_bytes(dir.file("nan.obj"), "v 0 0 0 1 0 0\nv 1 0 0 nan 0 0\nv 0 1 0 0 0 1\nv 0 0 1 0 0 0\n" + faces);
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh_file(dir.file("nan.obj")); },
+                                        {dir.file("nan.obj"), "line 2: vertex 1 has a non-finite colour"}));
+  write_bytes(
+      dir.file("nan.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+      "property double u\nproperty double v\nelement face 4\nproperty list uchar int vertex_indices\n"
+      "end_header\n0 0 0 0 0\n1 0 0 0 0\n0 1 0 inf 0\n0 0 1 0 0\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { read_mesh_file(dir.file("nan.ply")); },
+                                {dir.file("nan.ply") + ": vertex 2 has a non-finite texture coordinate"}));
+  write_bytes(dir.file("vt.obj"),
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/2 3/1 2/1\n" + faces.substr(8));
+  EXPECT_TRUE(throws_with<InvalidInput>(
+      [&] { read_mesh_file(dir.file("vt.obj")); },
+      {dir.file("vt.obj"), "line 6", "'1/2'", "texture coordinate index out of range"}));
+  write_bytes(dir.file("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt zero 0\n" + faces);
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh_file(dir.file("bad.obj")); },
+                                   {dir.file("bad.obj"), "line 5", "cannot parse 'zero'"}));
+  // Attributes that do not fit the mesh are refused before anything is written.
+  const TriMesh m = awkward_octahedron();
+  VertexAttributes a = random_attributes(m.vertices.size() - 1, false, false, false, 3);
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, a, dir.file("w.ply")); },
+                                        {dir.file("w.ply"), "6 vertex colours for 7 vertices"}));
+  a = random_attributes(m.vertices.size(), false, false, true, 3);
+  a.texcoords[4][1] = std::nan("");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, a, dir.file("w.obj")); },
+                                        {"vertex 4 has a non-finite texture coordinate"}));
+  EXPECT_FALSE(fs::exists(dir.file("w.ply")));
+  EXPECT_FALSE(fs::exists(dir.file("w.obj")));
+}
+
+TEST(MeshIoAttributes, StlStoresNone) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  EXPECT_FALSE(format_stores_vertex_attributes("x.stl"));
+  for (const char* name : {"x.obj", "x.OFF", "x.ply"}) EXPECT_TRUE(format_stores_vertex_attributes(name));
+  write_mesh(m, random_attributes(m.vertices.size(), true, false, true, 5), dir.file("a.stl"));
+  write_mesh(m, dir.file("b.stl"));
+  EXPECT_EQ(read_bytes(dir.file("a.stl")), read_bytes(dir.file("b.stl")));
+  EXPECT_TRUE(read_mesh_file(dir.file("a.stl")).attributes.empty());
+}
 
 TEST(MeshIoAtomicFile, WritesAndReplacesWithoutLeftovers) {
   test::ScratchDir dir{"strata_mesh_io"};

@@ -23,6 +23,22 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
+void check_vertex_attributes(const VertexAttributes& attributes, std::size_t num_vertices,
+                             const std::string& what) {
+  auto check = [&](const auto& values, const char* name, const char* plural) {
+    if (values.empty()) return;
+    if (values.size() != num_vertices)
+      throw InvalidInput(what + ": " + std::to_string(values.size()) + " vertex " + plural + " for " +
+                         std::to_string(num_vertices) + " vertices");
+    for (std::size_t i = 0; i < values.size(); ++i)
+      for (double x : values[i])
+        if (!std::isfinite(x))
+          throw InvalidInput(what + ": vertex " + std::to_string(i) + " has a non-finite " + name);
+  };
+  check(attributes.colors, "colour", "colours");
+  check(attributes.texcoords, "texture coordinate", "texture coordinates");
+}
+
 void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what) {
   const long long n = static_cast<long long>(num_vertices);
   for (std::size_t j = 0; j < faces.size(); ++j)

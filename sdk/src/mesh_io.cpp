@@ -282,6 +282,10 @@ struct FaceRecord {
     size_t first_face, n;
   };
   std::vector<Cut> cuts;
+  //! If given, the per-vertex colours and texture coordinates the file holds, and notes on the
+  //! data of that kind that could not be kept (read_mesh_file()).
+  VertexAttributes* attributes = nullptr;
+  std::vector<std::string>* dropped = nullptr;
 };
 
 //! "1st", "2nd", "3rd", "4th", .., "11th", .., "21st" for \p n >= 1.
@@ -427,6 +431,11 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
   ObjCountComment declared;
   long long face_lines = 0;
   bool seen_data = false;
+  const bool want_attributes = record && record->attributes;
+  std::vector<std::array<double, 4>> colors;  // up to the last coloured vertex
+  long long colored = 0;
+  bool alpha = false;
+  std::vector<std::array<double, 2>> texcoords;  // the vt lines
 
   // Pass 1: vertices (and counts), so faces can refer to vertices defined later in the file.
   {
@@ -451,7 +460,35 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
           p[k] = need_double(s, name, lines.where());
         }
         check_vertex_count(static_cast<long long>(mesh.vertices.size()) + 1, name);
-        mesh.vertices.push_back(p);  // further numbers (w or a color) are ignored
+        mesh.vertices.push_back(p);
+        if (want_attributes) {
+          // Three or four more numbers are a colour ("v x y z r g b [a]", as MeshLab writes it);
+          // one is the rational weight w, ignored as before.
+          std::array<double, 4> c{0.0, 0.0, 0.0, 1.0};
+          int n = 0;
+          std::string_view s;
+          bool numbers = true;
+          while (tok.next(s)) {
+            if (n < 4) numbers = numbers && parse_double(s, c[n]) == Parsed::Ok;
+            ++n;
+          }
+          if (numbers && (n == 3 || n == 4)) {
+            if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]) || !std::isfinite(c[3]))
+              fail_input(name, lines.where() + ": vertex " + std::to_string(mesh.vertices.size() - 1) +
+                                   " has a non-finite colour");
+            colors.resize(mesh.vertices.size() - 1, {0.0, 0.0, 0.0, 1.0});
+            colors.push_back(c);
+            ++colored;
+            alpha = alpha || n == 4;
+          }
+        }
+      } else if (key == "vt" && want_attributes) {
+        std::array<double, 2> uv{0.0, 0.0};
+        std::string_view s;
+        if (!tok.next(s)) fail_io(name, lines.where() + ": texture coordinate has no values");
+        uv[0] = need_double(s, name, lines.where());
+        if (tok.next(s)) uv[1] = need_double(s, name, lines.where());
+        texcoords.push_back(uv);
       }
     }
   }
@@ -469,7 +506,13 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
   std::vector<long long> corners;
   LineReader lines(text);
   std::string_view raw;
-  long long vertices_so_far = 0;
+  long long vertices_so_far = 0, texcoords_so_far = 0;
+  // Per vertex, the vt its corners use (-1: none yet); corners with and without one; vertices
+  // whose corners use different texture coordinates (seams).
+  std::vector<long long> vt_of(want_attributes && !texcoords.empty() ? mesh.vertices.size() : 0, -1);
+  long long corners_with_vt = 0, corners_without_vt = 0;
+  bool vt_by_index = true;  // every corner uses the vt of its vertex's number (as write_mesh writes)
+  std::vector<char> seam(vt_of.size(), 0);
   while (lines.next(raw)) {
     LineTokens tok(strip_comment(raw));
     std::string_view key;
@@ -478,11 +521,45 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
       ++vertices_so_far;
       continue;
     }
+    if (key == "vt") {
+      ++texcoords_so_far;
+      continue;
+    }
     if (key != "f") continue;
     corners.clear();
     std::string_view corner;
     while (tok.next(corner)) {
-      const std::string_view index_text = corner.substr(0, corner.find('/'));  // "i", "i/t", "i//n", "i/t/n"
+      const std::size_t slash = corner.find('/');
+      const std::string_view index_text = corner.substr(0, slash);  // "i", "i/t", "i//n", "i/t/n"
+      if (!vt_of.empty()) {
+        std::string_view t = slash == std::string_view::npos ? std::string_view() : corner.substr(slash + 1);
+        t = t.substr(0, t.find('/'));
+        long long ti = 0;
+        if (t.empty()) {
+          ++corners_without_vt;
+        } else if (parse_int(t, ti) != Parsed::Ok || ti == 0 || ti > texcoords_so_far ||
+                   -ti > texcoords_so_far) {
+          fail_input(name, lines.where() + ": face corner " + quote_token(corner) +
+                               " has a texture coordinate index out of range (" +
+                               std::to_string(texcoords_so_far) + " precede it)");
+        } else {
+          ++corners_with_vt;
+          ti = ti > 0 ? ti - 1 : texcoords_so_far + ti;
+          long long vi = 0;
+          if (parse_int(index_text, vi) == Parsed::Ok && vi != 0) {
+            vi = vi > 0 ? vi - 1 : vertices_so_far + vi;
+            vt_by_index = vt_by_index && vi == ti;
+            if (vi >= 0 && vi < static_cast<long long>(vt_of.size())) {
+              long long& mine = vt_of[static_cast<std::size_t>(vi)];
+              if (mine < 0)
+                mine = ti;
+              else if (mine != ti &&
+                       texcoords[static_cast<std::size_t>(mine)] != texcoords[static_cast<std::size_t>(ti)])
+                seam[static_cast<std::size_t>(vi)] = 1;
+            }
+          }
+        }
+      }
       long long i = 0;
       if (parse_int(index_text, i) != Parsed::Ok)
         fail_io(name, lines.where() + ": cannot parse face corner " + quote_token(corner) +
@@ -500,6 +577,32 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
     faces.add_checked(corners, [&] { return lines.where(); });
   }
   mesh.faces = faces.finish(mesh.vertices);
+  if (want_attributes) {
+    VertexAttributes& a = *record->attributes;
+    const long long nv = mesh.num_vertices();
+    if (colored == nv && nv > 0) {
+      a.colors = std::move(colors);
+      a.colors_have_alpha = alpha;
+    } else if (colored > 0) {
+      record->dropped->push_back("vertex colours: only " + std::to_string(colored) + " of the " +
+                                 std::to_string(nv) + " vertices have one");
+    }
+    const long long seams = std::count(seam.begin(), seam.end(), 1);
+    if (corners_with_vt > 0 && corners_without_vt > 0) {
+      record->dropped->push_back("texture coordinates: " + std::to_string(corners_without_vt) + " of the " +
+                                 std::to_string(corners_with_vt + corners_without_vt) +
+                                 " face corners have none");
+    } else if (seams > 0) {
+      record->dropped->push_back("texture coordinates: " + std::to_string(seams) +
+                                 " vertices have more than one (texture seams; Strata keeps one per vertex)");
+    } else if (corners_with_vt > 0 && vt_by_index && texcoords.size() == mesh.vertices.size()) {
+      a.texcoords = std::move(texcoords);  // vertices in no face keep theirs too
+    } else if (corners_with_vt > 0) {
+      a.texcoords.assign(mesh.vertices.size(), {0.0, 0.0});  // (0, 0) for vertices in no face
+      for (std::size_t v = 0; v < vt_of.size(); ++v)
+        if (vt_of[v] >= 0) a.texcoords[v] = texcoords[static_cast<std::size_t>(vt_of[v])];
+    }
+  }
   return mesh;
 }
 
@@ -524,12 +627,13 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
   LineTokens header(line);
   std::string_view magic;
   header.next(magic);
+  bool has_st = false, has_color = false, has_normal = false;
   {
     // [ST][C][N][4][n]OFF
     std::string_view m = magic;
-    if (m.substr(0, 2) == "ST") m.remove_prefix(2);
-    if (!m.empty() && m[0] == 'C') m.remove_prefix(1);
-    if (!m.empty() && m[0] == 'N') m.remove_prefix(1);
+    if (m.substr(0, 2) == "ST") m.remove_prefix(2), has_st = true;
+    if (!m.empty() && m[0] == 'C') m.remove_prefix(1), has_color = true;
+    if (!m.empty() && m[0] == 'N') m.remove_prefix(1), has_normal = true;
     if (!m.empty() && (m[0] == '4' || m[0] == 'n'))
       fail_io(name, "OFF variant " + quote_token(magic) + " (not 3-dimensional) is not supported");
     if (m != "OFF")
@@ -557,6 +661,54 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
   if (nf > kMaxIndexCount) fail_io(name, lines.where() + ": face count " + std::to_string(nf) + " too large");
 
   TriMesh mesh;
+  // The values after a vertex's position: [nx ny nz] [r g b [a]] [s t]. A colour of integers is
+  // on a 0-255 scale, one of floats on 0-1 (Geomview's OFF); a single value (a colour map index)
+  // or another count cannot be kept, nor can texture coordinates missing on a vertex.
+  const bool want_attributes = record && record->attributes;
+  std::vector<std::array<double, 4>> colors;
+  std::vector<std::array<double, 2>> texcoords;
+  bool alpha = false, colors_ok = true, texcoords_ok = true;
+  std::string color_problem, st_problem;
+  auto read_off_vertex_extras = [&](LineTokens& t, long long v, const std::string& where) {
+    std::vector<std::string_view> extra;
+    std::string_view x;
+    while (t.next(x)) extra.push_back(x);
+    std::size_t first = has_normal ? 3 : 0;
+    std::size_t end = extra.size();
+    if (has_st) {
+      if (end < first + 2) {
+        if (texcoords_ok)
+          st_problem = "vertex " + std::to_string(v) + " has " +
+                       std::to_string(end > first ? end - first : 0) + " values after its position" +
+                       (has_normal ? " and normal" : "") + ", not the 2 of ST";
+        texcoords_ok = false;
+      } else {
+        texcoords.push_back(
+            {need_double(extra[end - 2], name, where), need_double(extra[end - 1], name, where)});
+        end -= 2;
+      }
+    }
+    if (!has_color || !colors_ok) return;
+    const std::size_t n = end > first ? end - first : 0;
+    if (n != 3 && n != 4) {
+      color_problem = "vertex " + std::to_string(v) + " has " + std::to_string(n) +
+                      (n == 1 ? " colour value (a colour map index)" : " colour values") + ", not 3 or 4";
+      colors_ok = false;
+      return;
+    }
+    std::array<double, 4> c{0.0, 0.0, 0.0, 1.0};
+    bool integers = true;
+    for (std::size_t k = 0; k < n; ++k) {
+      long long i = 0;
+      integers = integers && parse_int(extra[first + k], i) == Parsed::Ok;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      c[k] = need_double(extra[first + k], name, where);
+      if (integers) c[k] /= 255.0;
+    }
+    colors.push_back(c);
+    alpha = alpha || n == 4;
+  };
   // Each vertex needs at least 6 bytes of text; never trust a header count for allocation.
   mesh.vertices.reserve(
       static_cast<size_t>(std::min<long long>(nv, static_cast<long long>(text.size() / 6))));
@@ -573,6 +725,20 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
       p[k] = need_double(tok, name, lines.where());
     }
     mesh.vertices.push_back(p);
+    if (want_attributes && (has_color || has_st)) read_off_vertex_extras(t, v, lines.where());
+  }
+  if (want_attributes) {
+    VertexAttributes& a = *record->attributes;
+    if (has_color && colors_ok && nv > 0) {
+      a.colors = std::move(colors);
+      a.colors_have_alpha = alpha;
+    } else if (has_color && nv > 0) {
+      record->dropped->push_back("vertex colours: " + color_problem);
+    }
+    if (has_st && texcoords_ok && nv > 0)
+      a.texcoords = std::move(texcoords);
+    else if (has_st && nv > 0)
+      record->dropped->push_back("texture coordinates: " + st_problem);
   }
 
   FaceBuilder faces(name, nv, 0, record);
@@ -641,6 +807,26 @@ size_t ply_size(PlyType t) {
       return 8;
   }
   return 8;
+}
+
+//! The largest value of an integer type: a colour channel of that type is scaled by it to [0, 1].
+double ply_max(PlyType t) {
+  switch (t) {
+    case PlyType::Int8:
+      return 127.0;
+    case PlyType::UInt8:
+      return 255.0;
+    case PlyType::Int16:
+      return 32767.0;
+    case PlyType::UInt16:
+      return 65535.0;
+    case PlyType::Int32:
+      return 2147483647.0;
+    case PlyType::UInt32:
+      return 4294967295.0;
+    default:
+      return 1.0;
+  }
 }
 
 bool ply_is_integer(PlyType t) {
@@ -865,6 +1051,8 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   FaceBuilder faces(name, num_vertices, 0, record);
   std::vector<long long> corners;
   PlyValue value;
+  const bool want_attributes = record && record->attributes;
+  VertexAttributes attrs;
   for (const PlyElement& e : h.elements) {
     // An element without properties holds no data, whatever its count; but vertices must have
     // coordinates (faces are checked against the vertex count).
@@ -893,6 +1081,44 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
       for (int c = 0; c < 3; ++c)
         if (xyz[c] < 0)
           fail_io(name, std::string("vertex element has no property ") + static_cast<char>('x' + c));
+    // Colour channels (red green blue [alpha], or diffuse_*) and texture coordinates (u v, s t,
+    // texture_u texture_v or texture_s texture_t) of the vertices, if all their parts are there.
+    std::array<int, 4> rgba{-1, -1, -1, -1};
+    std::array<int, 2> uv{-1, -1};
+    if (is_vertex && want_attributes) {
+      auto find = [&](std::initializer_list<const char*> names) {
+        for (const char* n : names)
+          for (int k = 0; k < static_cast<int>(e.props.size()); ++k)
+            if (!e.props[k].is_list && e.props[k].name == n) return k;
+        return -1;
+      };
+      rgba = {find({"red", "diffuse_red"}), find({"green", "diffuse_green"}), find({"blue", "diffuse_blue"}),
+              find({"alpha", "diffuse_alpha"})};
+      const int channels = (rgba[0] >= 0) + (rgba[1] >= 0) + (rgba[2] >= 0);
+      if (channels > 0 && channels < 3) {
+        record->dropped->push_back("vertex colours: the vertex element has only " + std::to_string(channels) +
+                                   " of the red, green and blue properties");
+        rgba = {-1, -1, -1, -1};
+      }
+      if (rgba[0] < 0) rgba[3] = -1;
+      const std::array<std::array<const char*, 2>, 4> pairs{
+          {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}}};
+      for (const auto& pair : pairs) {
+        uv = {find({pair[0]}), find({pair[1]})};
+        if (uv[0] >= 0 && uv[1] >= 0) break;
+        uv = {-1, -1};
+      }
+      if (rgba[0] >= 0) {
+        attrs.colors.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
+        attrs.colors_have_alpha = rgba[3] >= 0;
+      }
+      if (uv[0] >= 0) attrs.texcoords.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
+    }
+    if (is_face && want_attributes)
+      for (const PlyProperty& p : e.props)
+        if (p.is_list && (p.name == "texcoord" || p.name == "texcoords"))
+          record->dropped->push_back("texture coordinates per face corner (face property " + p.name +
+                                     "; Strata keeps one per vertex)");
     if (is_face && index_prop < 0) fail_io(name, "face element has no list property vertex_indices");
     if (is_vertex) mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
 
@@ -902,12 +1128,18 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
     };
     for (long long i = 0; i < e.count; ++i) {
       Vec3 p = Vec3::Zero();
+      std::array<double, 4> color{0.0, 0.0, 0.0, 1.0};
+      std::array<double, 2> tex{0.0, 0.0};
       for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
         const PlyProperty& prop = e.props[k];
         if (!prop.is_list) {
           if (!src.read(prop.type, value)) truncated(i);
           for (int c = 0; c < 3; ++c)
             if (k == xyz[c]) p[c] = value.d;
+          for (int c = 0; c < 4; ++c)
+            if (k == rgba[c]) color[c] = ply_is_integer(prop.type) ? value.d / ply_max(prop.type) : value.d;
+          for (int c = 0; c < 2; ++c)
+            if (k == uv[c]) tex[c] = value.d;
           continue;
         }
         if (!src.read(prop.count_type, value)) truncated(i);
@@ -921,7 +1153,11 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
         }
         if (keep) faces.add_checked(corners, [&] { return "face " + std::to_string(i); });
       }
-      if (is_vertex) mesh.vertices.push_back(p);
+      if (is_vertex) {
+        mesh.vertices.push_back(p);
+        if (rgba[0] >= 0) attrs.colors.push_back(color);
+        if (uv[0] >= 0) attrs.texcoords.push_back(tex);
+      }
     }
   }
   const std::string rest = src.leftover();
@@ -930,6 +1166,7 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   // header names one vertex element, and one with a count has coordinates.
   assert(static_cast<long long>(mesh.vertices.size()) == num_vertices);
   mesh.faces = faces.finish(mesh.vertices);
+  if (want_attributes) *record->attributes = std::move(attrs);
   return mesh;
 }
 
@@ -1287,22 +1524,58 @@ void write_vec(ChunkedWriter& w, const Vec3& p) {
   w.number(p[2]);
 }
 
+// A number that reads back as a float, not an integer: OFF tells a colour of integers (0-255)
+// from one of floats (0-1) by this.
+void float_token(ChunkedWriter& w, double x) {
+  char tmp[40];
+  const auto r = std::to_chars(tmp, tmp + 32, x);
+  std::string_view t(tmp, static_cast<std::size_t>(r.ptr - tmp));
+  w.text(t);
+  if (t.find_first_of(".eEn") == std::string_view::npos) w.text(".0");  // "n": nan, inf
+}
+
+// The colour channels written: RGB, or RGBA if the colours came with alpha.
+int color_channels(const VertexAttributes& a) {
+  return a.colors_have_alpha ? 4 : 3;
+}
+
 // Faces are triangles (Face) or polygons (std::vector<int>): anything with size() and [].
+// \p a: the vertices' colours and texture coordinates, or null.
 template <class F>
-void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w) {
+void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
+               const VertexAttributes* a = nullptr) {
+  const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
   // The count comment lets read_mesh detect truncation (OBJ has no counts of its own).
   w.text("# " + std::to_string(vertices.size()) + " vertices, " + std::to_string(faces.size()) + " faces\n");
-  for (const Vec3& p : vertices) {
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
     w.text("v ");
-    write_vec(w, p);
+    write_vec(w, vertices[v]);
+    if (colors)
+      for (int c = 0; c < color_channels(*a); ++c) {
+        w.text(" ");
+        w.number(a->colors[v][c]);
+      }
     w.text("\n");
     w.maybe_flush();
   }
+  if (uv)
+    for (const auto& t : a->texcoords) {
+      w.text("vt ");
+      w.number(t[0]);
+      w.text(" ");
+      w.number(t[1]);
+      w.text("\n");
+      w.maybe_flush();
+    }
   for (const F& f : faces) {
     w.text("f");
     for (int i : f) {
       w.text(" ");
       w.integer(i + 1ll);
+      if (uv) {
+        w.text("/");
+        w.integer(i + 1ll);
+      }
     }
     w.text("\n");
     w.maybe_flush();
@@ -1321,10 +1594,24 @@ void write_face_line(ChunkedWriter& w, const F& f) {
 }
 
 template <class F>
-void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w) {
-  w.text("OFF\n" + std::to_string(vertices.size()) + " " + std::to_string(faces.size()) + " 0\n");
-  for (const Vec3& p : vertices) {
-    write_vec(w, p);
+void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
+               const VertexAttributes* a = nullptr) {
+  const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
+  w.text(std::string(uv ? "ST" : "") + (colors ? "C" : "") + "OFF\n" + std::to_string(vertices.size()) + " " +
+         std::to_string(faces.size()) + " 0\n");
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    write_vec(w, vertices[v]);
+    if (colors)
+      for (int c = 0; c < color_channels(*a); ++c) {
+        w.text(" ");
+        float_token(w, a->colors[v][c]);
+      }
+    if (uv) {
+      w.text(" ");
+      w.number(a->texcoords[v][0]);
+      w.text(" ");
+      w.number(a->texcoords[v][1]);
+    }
     w.text("\n");
     w.maybe_flush();
   }
@@ -1334,20 +1621,63 @@ void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
   }
 }
 
+// Whether every colour channel is k / 255 for an integer k in [0, 255], as 8-bit colours read:
+// then they are written as uchar, which every PLY reader takes.
+bool colors_are_8_bit(const VertexAttributes& a) {
+  for (const auto& c : a.colors)
+    for (double x : c) {
+      if (!(x >= 0.0 && x <= 1.0)) return false;
+      if (std::round(x * 255.0) / 255.0 != x) return false;
+    }
+  return true;
+}
+
 template <class F>
-void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
-               bool binary) {
+void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w, bool binary,
+               const VertexAttributes* a = nullptr) {
+  const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
+  const bool uchar = colors && colors_are_8_bit(*a);
+  const int channels = colors ? color_channels(*a) : 0;
+  std::string props = "property double x\nproperty double y\nproperty double z\n";
+  static const char* const kChannel[] = {"red", "green", "blue", "alpha"};
+  for (int c = 0; c < channels; ++c)
+    props += std::string("property ") + (uchar ? "uchar " : "double ") + kChannel[c] + "\n";
+  if (uv) props += "property double texture_u\nproperty double texture_v\n";
   w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
-         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(vertices.size()) +
-         "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
-         std::to_string(faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n");
-  for (const Vec3& p : vertices) {
+         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(vertices.size()) + "\n" + props +
+         "element face " + std::to_string(faces.size()) +
+         "\nproperty list uchar int vertex_indices\nend_header\n");
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    const Vec3& p = vertices[v];
     if (binary) {
       w.binary_le(p[0]);
       w.binary_le(p[1]);
       w.binary_le(p[2]);
+      for (int c = 0; c < channels; ++c) {
+        if (uchar)
+          w.binary_le(static_cast<uint8_t>(std::lround(a->colors[v][c] * 255.0)));
+        else
+          w.binary_le(a->colors[v][c]);
+      }
+      if (uv) {
+        w.binary_le(a->texcoords[v][0]);
+        w.binary_le(a->texcoords[v][1]);
+      }
     } else {
       write_vec(w, p);
+      for (int c = 0; c < channels; ++c) {
+        w.text(" ");
+        if (uchar)
+          w.integer(std::lround(a->colors[v][c] * 255.0));
+        else
+          w.number(a->colors[v][c]);
+      }
+      if (uv) {
+        w.text(" ");
+        w.number(a->texcoords[v][0]);
+        w.text(" ");
+        w.number(a->texcoords[v][1]);
+      }
       w.text("\n");
     }
     w.maybe_flush();
@@ -1440,16 +1770,11 @@ void validate_mesh(const TriMesh& mesh, const std::string& name) {
   if (!problem.empty()) fail_input(name.empty() ? std::string("mesh") : name, problem);
 }
 
-TriMesh read_mesh(const std::string& path) {
-  return read_mesh(path, nullptr);
-}
+namespace {
 
-TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons) {
-  return read_mesh(path, ReadOptions{}, polygons, nullptr);
-}
-
-TriMesh read_mesh(const std::string& path, const ReadOptions& options,
-                  std::vector<std::vector<int>>* polygons, int* flipped_faces) {
+TriMesh read_mesh_impl(const std::string& path, const ReadOptions& options,
+                       std::vector<std::vector<int>>* polygons, int* flipped_faces,
+                       VertexAttributes* attributes, std::vector<std::string>* dropped) {
   if (flipped_faces) *flipped_faces = 0;
   const Format format = format_of(path);
   const std::string file = internal::read_whole_file(path);
@@ -1459,6 +1784,8 @@ TriMesh read_mesh(const std::string& path, const ReadOptions& options,
   if (format != Format::Stl && data.substr(0, 3) == kUtf8Bom) data.remove_prefix(3);
   FaceRecord record;
   record.polygons = polygons;
+  record.attributes = attributes;
+  record.dropped = dropped;
   if (polygons) polygons->clear();
   TriMesh mesh;
   switch (format) {
@@ -1502,8 +1829,41 @@ TriMesh read_mesh(const std::string& path, const ReadOptions& options,
   return mesh;
 }
 
+}  // namespace
+
+TriMesh read_mesh(const std::string& path) {
+  return read_mesh(path, nullptr);
+}
+
+TriMesh read_mesh(const std::string& path, std::vector<std::vector<int>>* polygons) {
+  return read_mesh(path, ReadOptions{}, polygons, nullptr);
+}
+
+TriMesh read_mesh(const std::string& path, const ReadOptions& options,
+                  std::vector<std::vector<int>>* polygons, int* flipped_faces) {
+  return read_mesh_impl(path, options, polygons, flipped_faces, nullptr, nullptr);
+}
+
+MeshFile read_mesh_file(const std::string& path, const ReadOptions& options) {
+  MeshFile f;
+  f.mesh = read_mesh_impl(path, options, &f.polygons, &f.flipped_faces, &f.attributes, &f.dropped);
+  check_vertex_attributes(f.attributes, f.mesh.vertices.size(), path);
+  return f;
+}
+
+bool format_stores_vertex_attributes(const std::string& path) {
+  return format_of(path) != Format::Stl;
+}
+
 void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding) {
+  write_mesh(mesh, VertexAttributes{}, path, encoding);
+}
+
+void write_mesh(const TriMesh& mesh, const VertexAttributes& attributes, const std::string& path,
+                MeshEncoding encoding) {
   const Format format = format_of(path);
+  check_vertex_attributes(attributes, mesh.vertices.size(), path);
+  const VertexAttributes* a = attributes.empty() ? nullptr : &attributes;
   if (encoding == MeshEncoding::Binary && (format == Format::Obj || format == Format::Off))
     fail_input(path, "OBJ and OFF have no binary encoding");
   validate_mesh(mesh, path);
@@ -1526,13 +1886,13 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
     ChunkedWriter w(path, tmp);
     switch (format) {
       case Format::Obj:
-        write_obj(mesh.vertices, mesh.faces, w);
+        write_obj(mesh.vertices, mesh.faces, w, a);
         break;
       case Format::Off:
-        write_off(mesh.vertices, mesh.faces, w);
+        write_off(mesh.vertices, mesh.faces, w, a);
         break;
       case Format::Ply:
-        write_ply(mesh.vertices, mesh.faces, w, binary);
+        write_ply(mesh.vertices, mesh.faces, w, binary, a);
         break;
       case Format::Stl:
         write_stl(mesh, w, binary);

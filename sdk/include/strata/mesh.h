@@ -23,6 +23,31 @@ struct TriMesh {
   int num_faces() const { return static_cast<int>(faces.size()); }
 };
 
+//! Per-vertex data a scan may carry besides its positions: colours and texture coordinates. Read
+//! and written with the mesh (read_mesh_file(), write_mesh() in mesh_io.h), kept by a layered
+//! model with its finest band, and carried unchanged through edits and reconstructions, which move
+//! vertices but keep their numbering. Each array is empty (the file has no such data) or holds
+//! one entry per vertex.
+struct VertexAttributes {
+  //! RGBA per vertex. Integer channels in a file are scaled to [0, 1] (PLY: by the type's
+  //! largest value, 255 for uchar; OFF: integers by 255); floating-point ones are kept as the
+  //! file gives them. Alpha is 1 where the file gives none.
+  std::vector<std::array<double, 4>> colors;
+  //! Whether the colours came with an alpha channel (and are written with one).
+  bool colors_have_alpha = false;
+  //! (u, v) per vertex: PLY u/v, s/t or texture_u/texture_v; OFF's ST values; OBJ's vt where each
+  //! vertex's corners use one (read_mesh_file() lists seams as dropped).
+  std::vector<std::array<double, 2>> texcoords;
+
+  bool empty() const { return colors.empty() && texcoords.empty(); }
+};
+
+//! Checks that each non-empty array of \p attributes has \p num_vertices entries, all finite.
+//! \throw InvalidInput "<what>: N vertex colours for M vertices" or "<what>: vertex I has a
+//!        non-finite colour" (texture coordinate).
+void check_vertex_attributes(const VertexAttributes& attributes, std::size_t num_vertices,
+                             const std::string& what);
+
 //! Checks that every corner of \p faces indexes one of \p num_vertices vertices: what the
 //! functions over a mesh's faces below need before they index its vertices.
 //! \throw InvalidInput "<what>: face F has vertex index I, out of range (N vertices)".

@@ -47,7 +47,8 @@ namespace strata {
 //! over 256 corners. A polygon with a part of zero width gets zero-area triangles, and a polygon of corners
 //! all on one line is fanned: the validation reports their zero area.
 //! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
-//! data (normals, colors, texture coordinates, materials) is ignored. The result has passed
+//! data (normals, colors, texture coordinates, materials) is ignored here; read_mesh_file() also
+//! reads the vertices' colours and texture coordinates. The result has passed
 //! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a
 //! crash). \throw IoError if the file is missing or unreadable, the extension is not supported, or the
 //!        contents cannot be parsed or are truncated (e.g. fewer elements than a header declares).
@@ -76,6 +77,36 @@ struct ReadOptions {
 TriMesh read_mesh(const std::string& path, const ReadOptions& options,
                   std::vector<std::vector<int>>* polygons, int* flipped_faces = nullptr);
 
+//! A mesh file as read_mesh_file() reads it.
+struct MeshFile {
+  TriMesh mesh;  //!< as read_mesh(path, options, ...) returns it
+  //! The faces as the file lists them, before triangulation (read_mesh(path, polygons)).
+  std::vector<std::vector<int>> polygons;
+  //! The file's per-vertex colours and texture coordinates (VertexAttributes), checked finite:
+  //! - OBJ: "v x y z r g b [a]" on every vertex (MeshLab's extension; a single extra number is the
+  //!   weight w, ignored); vt, when each vertex's corners use one (a vertex in no face gets the vt
+  //!   of its own number if every corner's vt is its vertex's number and the counts match, as
+  //!   write_mesh() writes them; else (0, 0)).
+  //! - OFF: the C and ST prefixes' values (integer colours on a 0-255 scale, floats on 0-1).
+  //! - PLY: vertex properties red, green, blue [alpha] (or diffuse_*), any type, integer types
+  //!   scaled by their largest value; u v, s t, texture_u texture_v or texture_s texture_t.
+  //! - STL: none.
+  VertexAttributes attributes;
+  int flipped_faces = 0;  //!< faces ReadOptions::orient_faces flipped (their polygons reversed too)
+  //! Colours or texture coordinates the file holds that VertexAttributes cannot represent, each
+  //! a note for the user (e.g. "texture coordinates: 12 vertices have more than one (texture
+  //! seams; ...)", or colours on only some vertices). Normals, materials and face colours are not
+  //! kept and not listed: normals are recomputed from the geometry.
+  std::vector<std::string> dropped;
+};
+
+//! Reads a mesh with its polygons and per-vertex attributes (MeshFile); the mesh is read and
+//! checked as read_mesh(path, options, ...) does.
+//! \throw as read_mesh(path, options, ...); InvalidInput "<path>: vertex I has a non-finite
+//!        colour" (texture coordinate), or for a face corner's texture coordinate index out of
+//!        range (OBJ); IoError for a vt line that does not parse.
+MeshFile read_mesh_file(const std::string& path, const ReadOptions& options = {});
+
 //! Encoding to use for formats that have both (PLY, STL).
 enum class MeshEncoding {
   Default,  //!< Binary for PLY and STL, ASCII for OBJ and OFF.
@@ -92,6 +123,22 @@ enum class MeshEncoding {
 //!        coordinate overflows float32 for binary STL.
 //! \throw IoError if the extension is not supported or the file cannot be written.
 void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding = MeshEncoding::Default);
+
+//! As write_mesh(mesh, path, encoding), with the vertices' colours and texture coordinates, so
+//! that read_mesh_file() gives back the same values:
+//! - OBJ: "v x y z r g b [a]", and one "vt u v" per vertex with "f i/i j/j k/k" faces;
+//! - OFF: [ST]COFF, colours as floats (always written with a decimal point or an exponent);
+//! - PLY: red green blue [alpha] as uchar when every channel is k / 255 exactly (as 8-bit
+//!   colours read), else as double; texture_u texture_v as double;
+//! - STL stores no vertex data: \p attributes are not written (format_stores_vertex_attributes()).
+//! \throw as write_mesh(mesh, path, encoding), and InvalidInput if \p attributes fails
+//!        check_vertex_attributes() for the mesh's vertex count.
+void write_mesh(const TriMesh& mesh, const VertexAttributes& attributes, const std::string& path,
+                MeshEncoding encoding = MeshEncoding::Default);
+
+//! Whether the format of \p path (by its extension) stores VertexAttributes: OBJ, OFF and PLY
+//! do, STL does not. \throw IoError if the extension is not supported.
+bool format_stores_vertex_attributes(const std::string& path);
 
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
