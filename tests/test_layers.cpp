@@ -145,6 +145,58 @@ TEST(Layers, MutingABandAndRestoringItGivesTheOriginalBack) {
   EXPECT_TRUE(same_bits(model.band(2).mesh.vertices, original));
 }
 
+// The scan's colours and texture coordinates stay with its vertices: through an amplitude change
+// (the finest band is rebuilt), a file and an export, while the positions change.
+TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
+  LayeredModel model = model_of("bear");
+  const int finest = model.num_bands() - 1;
+  const std::size_t n = model.band(finest).mesh.vertices.size();
+  VertexAttributes a;
+  a.colors_have_alpha = true;
+  std::mt19937 rng(4);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (std::size_t v = 0; v < n; ++v) {
+    a.colors.push_back({byte(rng) / 255.0, byte(rng) / 255.0, byte(rng) / 255.0, byte(rng) / 255.0});
+    a.texcoords.push_back({static_cast<double>(v) / n, 1.0 - static_cast<double>(v) / n});
+  }
+  model.set_vertex_attributes(finest, a);
+  const std::vector<Vec3> before = model.band(finest).mesh.vertices;
+  model.set_amplitude(1, 0.5);
+  EXPECT_GT(max_distance(model.band(finest).mesh.vertices, before), 0.0);
+  EXPECT_EQ(model.band(finest).attributes.colors, a.colors);
+  EXPECT_EQ(model.band(finest).attributes.texcoords, a.texcoords);
+  EXPECT_TRUE(model.band(1).attributes.empty());
+
+  test::ScratchDir tmp("strata_layers");
+  layers::write_model(model, tmp.file("c.strata"));
+  const LayeredModel back = layers::read_model(tmp.file("c.strata"));
+  EXPECT_EQ(back.band(finest).attributes.colors, a.colors);
+  EXPECT_EQ(back.band(finest).attributes.texcoords, a.texcoords);
+  EXPECT_TRUE(back.band(finest).attributes.colors_have_alpha);
+  EXPECT_TRUE(back.band(1).attributes.empty());
+  EXPECT_TRUE(same_bits(back.band(finest).mesh.vertices, model.band(finest).mesh.vertices));
+  // As `strata export` writes the band: the edited positions with the scan's colours.
+  write_mesh(back.band_mesh(finest), back.band(finest).attributes, tmp.file("e.ply"));
+  const MeshFile exported = read_mesh_file(tmp.file("e.ply"));
+  EXPECT_TRUE(same_bits(exported.mesh.vertices, model.band(finest).mesh.vertices));
+  EXPECT_EQ(exported.attributes.colors, a.colors);
+  EXPECT_EQ(exported.attributes.texcoords, a.texcoords);
+
+  // A model without attributes writes no key and no section for them.
+  const layers::StrataContainer plain_file = [&] {
+    layers::write_model(model_of("bear"), tmp.file("p.strata"));
+    return layers::read_strata_container(tmp.file("p.strata"));
+  }();
+  EXPECT_EQ(plain_file.model_json.find("attributes"), std::string::npos);
+  EXPECT_EQ(plain_file.find("band2.colors"), nullptr);
+
+  // Misuse is refused, the model unchanged.
+  a.colors.pop_back();
+  EXPECT_THROW(model.set_vertex_attributes(finest, a), InvalidInput);
+  EXPECT_THROW(model.set_vertex_attributes(0, VertexAttributes{}), InvalidInput);
+  EXPECT_EQ(model.band(finest).attributes.texcoords.size(), n);
+}
+
 TEST(Layers, AmplitudeScalesTheBandsPrismVolumes) {
   LayeredModel model = model_of("bear");
   for (double a : {2.0, 0.5, -1.0}) {
@@ -714,6 +766,27 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
           [](nlohmann::json& m, layers::StrataContainer&) { m["type"] = "something.else"; });
   variant("bad_method", "options: unknown method 'magic'",
           [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["method"] = "magic"; });
+  variant("missing_colors", "missing section 'band1.colors'",
+          [](nlohmann::json& m, layers::StrataContainer&) {
+            m["bands"][1]["attributes"] = {{"colors", true}, {"alpha", false}, {"texcoords", false}};
+          });
+  variant("short_texcoords", "section 'band1.texcoords' holds 3 values, expected [0-9]+",
+          [](nlohmann::json& m, layers::StrataContainer& v) {
+            m["bands"][1]["attributes"] = {{"colors", false}, {"alpha", false}, {"texcoords", true}};
+            v.sections.push_back({"band1.texcoords", layers::pack_f64({0.0, 0.5, 1.0})});
+          });
+  variant("nan_color", "band 1: vertex 0 has a non-finite colour",
+          [](nlohmann::json& m, layers::StrataContainer& v) {
+            const long long nv = m["bands"][1]["vertices"].get<long long>();
+            m["bands"][1]["attributes"] = {{"colors", true}, {"alpha", true}, {"texcoords", false}};
+            std::vector<double> c(4 * nv, 0.5);
+            c[2] = std::nan("");
+            v.sections.push_back({"band1.colors", layers::pack_f64(c)});
+          });
+  variant("attributes_text", "'colors' in band 1's attributes is not true or false",
+          [](nlohmann::json& m, layers::StrataContainer&) {
+            m["bands"][1]["attributes"] = {{"colors", "yes"}, {"alpha", false}, {"texcoords", false}};
+          });
   variant("missing_section", "missing section 'band1.rest'", [](nlohmann::json&, layers::StrataContainer& v) {
     v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),
                                     [](const layers::Section& s) { return s.name == "band1.rest"; }),

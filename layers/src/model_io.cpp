@@ -384,6 +384,20 @@ void write_model(const LayeredModel& model, const std::string& path) {
                        {"fallback", e.report.num_fallback},
                        {"ambiguous", e.report.num_ambiguous},
                        {"max_tangential_offset", e.report.max_tangential_offset}}}});
+    // Colours (RGBA) and texture coordinates: a key and sections only where the band has them, so
+    // that a model without them is written as before.
+    const VertexAttributes& va = b.attributes;
+    if (!va.empty()) {
+      bands.back()["attributes"] = {{"colors", !va.colors.empty()},
+                                    {"alpha", va.colors_have_alpha},
+                                    {"texcoords", !va.texcoords.empty()}};
+      std::vector<double> values;
+      for (const auto& col : va.colors) values.insert(values.end(), col.begin(), col.end());
+      if (!va.colors.empty()) c.sections.push_back({p + "colors", pack_f64(values)});
+      values.clear();
+      for (const auto& t : va.texcoords) values.insert(values.end(), t.begin(), t.end());
+      if (!va.texcoords.empty()) c.sections.push_back({p + "texcoords", pack_f64(values)});
+    }
     c.sections.push_back({p + "faces", pack_i32(flatten(b.mesh.faces))});
     c.sections.push_back({p + "rest", pack_f64(flatten(e.detail_rest))});
     if (!at_rest) c.sections.push_back({p + "positions", pack_f64(flatten(b.mesh.vertices))});
@@ -570,6 +584,22 @@ LayeredModel read_model(const std::string& path) {
     band.encoding.report.num_fallback = static_cast<int>(h.integer(rep, "fallback", w, 0, nv));
     band.encoding.report.num_ambiguous = static_cast<int>(h.integer(rep, "ambiguous", w, 0, nv));
     band.encoding.report.max_tangential_offset = h.number(rep, "max_tangential_offset", w);
+    if (b.contains("attributes")) {  // files written before 2026-11-29 have none
+      const json& at = h.at(b, "attributes", w);
+      const std::string wa = w + "'s attributes";
+      VertexAttributes& va = band.attributes;
+      if (h.boolean(at, "colors", wa)) {
+        const std::vector<double> v = unpack_f64(section(p + "colors"), 4 * nv, what(p + "colors"));
+        va.colors.resize(nv);
+        for (long long i = 0; i < nv; ++i) std::copy(&v[4 * i], &v[4 * i] + 4, va.colors[i].begin());
+      }
+      va.colors_have_alpha = h.boolean(at, "alpha", wa);
+      if (h.boolean(at, "texcoords", wa)) {
+        const std::vector<double> v = unpack_f64(section(p + "texcoords"), 2 * nv, what(p + "texcoords"));
+        va.texcoords.resize(nv);
+        for (long long i = 0; i < nv; ++i) va.texcoords[i] = {v[2 * i], v[2 * i + 1]};
+      }
+    }
     band.mesh.faces = rest.faces;
     band.mesh.vertices = h.boolean(b, "positions_at_rest", w)
                              ? rest.vertices
