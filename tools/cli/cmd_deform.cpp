@@ -235,7 +235,8 @@ int run_deform(const DeformCmdOptions& o) {
   StagedOutputs staged;  // the outputs land together, or none does
   validate_result(current, "the mesh edited by " + o.edit, o.output);
   warn_stl_drops_vertices(current, o.output);
-  staged.write(o.output, [&](const std::string& p) { write_mesh(current, p); });
+  warn_stl_drops_attributes(input.attributes, o.output);
+  staged.write(o.output, [&](const std::string& p) { write_mesh(current, input.attributes, p); });
   if (!o.base_output.empty()) {
     if (subdiv)
       staged.write(o.base_output, [&](const std::string& p) { write_cage(cage, p); });

@@ -143,6 +143,7 @@ int run_build(const BuildCmdOptions& o) {
           throw SolverError(scan.name + ": " + e.what());
         }
       }();
+      model.set_vertex_attributes(model.num_bands() - 1, scan.attributes);
       const double build_seconds = sw.seconds();
       std::string written = out;
       if (o.output.empty())
@@ -470,9 +471,13 @@ int run_export(const ExportCmdOptions& o) {
     throw InvalidInput(o.model + ": band 0 at --resolution " + std::to_string(o.resolution) + ": " +
                        e.what());
   }
+  // A triangle band's colours and texture coordinates (the scan's, on the finest band).
+  const VertexAttributes none;
+  const VertexAttributes& attributes = k >= 1 ? model.band(k).attributes : none;
   warn_stl_drops_vertices(mesh, o.output);
+  warn_stl_drops_attributes(attributes, o.output);
   validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault
-  write_mesh(mesh, o.output);
+  write_mesh(mesh, attributes, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces)" << std::endl;
   return 0;

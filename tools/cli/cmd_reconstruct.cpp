@@ -98,7 +98,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   StagedOutputs staged;  // the mesh lands only with its report
   validate_result(result, "the reconstructed detail", o.output);
   warn_stl_drops_vertices(result, o.output);
-  staged.write(o.output, [&](const std::string& p) { write_mesh(result, p); });
+  warn_stl_drops_attributes(detail.attributes, o.output);
+  staged.write(o.output, [&](const std::string& p) { write_mesh(result, detail.attributes, p); });
   times.write = sw.seconds();
 
   json report{{"command", "reconstruct"},

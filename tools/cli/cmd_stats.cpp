@@ -53,7 +53,11 @@ int run_stats(const StatsCmdOptions& o) {
                {"self_intersecting_pairs", isect.num_pairs},
                {"self_intersections_cut_short", isect.truncated},
                {"self_intersection_tests", isect.num_tests},
-               {"intersection_seconds", isect_seconds}};
+               {"intersection_seconds", isect_seconds},
+               {"vertex_colors", m.attributes.colors.empty()      ? "none"
+                                 : m.attributes.colors_have_alpha ? "rgba"
+                                                                  : "rgb"},
+               {"texture_coordinates", !m.attributes.texcoords.empty()}};
   if (o.json) {
     std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
     return 0;
@@ -66,7 +70,10 @@ int run_stats(const StatsCmdOptions& o) {
             << "signed volume            " << r["signed_volume"].get<double>()
             << (boundary == 0 ? "" : " (open mesh: not an enclosed volume)") << "\n"
             << "self-intersecting pairs  " << (isect.truncated ? "at least " : "") << isect.num_pairs
-            << " (non-adjacent triangles, found in " << fixed(isect_seconds, 3) << " s)" << std::endl;
+            << " (non-adjacent triangles, found in " << fixed(isect_seconds, 3) << " s)\n"
+            << "vertex colours           " << r["vertex_colors"].get<std::string>() << "\n"
+            << "texture coordinates      " << (m.attributes.texcoords.empty() ? "none" : "per vertex")
+            << std::endl;
   return 0;
 }
 

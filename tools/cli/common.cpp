@@ -118,6 +118,15 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
               << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
 }
 
+void warn_stl_drops_attributes(const VertexAttributes& attributes, const std::string& path) {
+  if (attributes.empty() || format_stores_vertex_attributes(path)) return;
+  std::cerr << "strata: warning: " << path << ": STL stores no vertex "
+            << (attributes.colors.empty()      ? "texture coordinates"
+                : attributes.texcoords.empty() ? "colours"
+                                               : "colours or texture coordinates")
+            << "; they are not written (OBJ, OFF and PLY keep them)" << std::endl;
+}
+
 void require_numbers(CLI::App& app) {
   const CLI::Validator number(
       [](std::string& text) -> std::string {
@@ -133,21 +142,30 @@ void require_numbers(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) require_numbers(*sub);
 }
 
-NamedMesh read_named_mesh(const std::string& path) {
+namespace {
+
+NamedMesh read_with(const std::string& path, const ReadOptions& options) {
+  MeshFile f = read_mesh_file(path, options);  // its errors start with the path
+  check_coordinates(f.mesh.vertices, path + ":");
+  for (const std::string& d : f.dropped) std::cerr << "strata: note: " << path << ": not kept: " << d << "\n";
   NamedMesh m;
   m.name = path;
-  m.mesh = read_mesh(path);  // its errors start with the path
-  check_coordinates(m.mesh.vertices, path + ":");
+  m.mesh = std::move(f.mesh);
+  m.reoriented_faces = f.flipped_faces;
+  m.attributes = std::move(f.attributes);
   return m;
 }
 
+}  // namespace
+
+NamedMesh read_named_mesh(const std::string& path) {
+  return read_with(path, ReadOptions{});
+}
+
 NamedMesh read_scan(const std::string& path) {
-  NamedMesh m;
-  m.name = path;
   ReadOptions ro;
   ro.orient_faces = true;
-  m.mesh = read_mesh(path, ro, nullptr, &m.reoriented_faces);
-  check_coordinates(m.mesh.vertices, path + ":");
+  NamedMesh m = read_with(path, ro);
   if (m.reoriented_faces > 0)
     std::cerr << "strata: note: " << path << ": " << m.reoriented_faces
               << " faces flipped to agree with their neighbours' orientation\n";

@@ -98,9 +98,13 @@ struct NamedMesh {
   TriMesh mesh;
   std::string name;
   int reoriented_faces = 0;  //!< read_scan(): faces flipped to agree with their neighbours
+  //! The file's vertex colours and texture coordinates (read_mesh_file()), written with the
+  //! command's result mesh, which keeps the vertex numbering.
+  VertexAttributes attributes{};
 };
 
-//! read_mesh(path) with the path in the name.
+//! read_mesh_file(path) with the path in the name; what the file holds that cannot be kept
+//! (MeshFile::dropped) is a note on stderr.
 NamedMesh read_named_mesh(const std::string& path);
 
 //! A scan to build, fit or edit: read_named_mesh(), but faces that disagree with their
@@ -114,6 +118,10 @@ std::string lower_extension(const std::string& path);
 //! Warns on stderr when \p mesh is to be written to an STL \p path and some of its vertices are
 //! in no face: STL holds triangles only, so they would be lost without a word.
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
+
+//! Warns on stderr when \p attributes (colours, texture coordinates) are to be written to an STL
+//! \p path, which stores none.
+void warn_stl_drops_attributes(const VertexAttributes& attributes, const std::string& path);
 
 //! Checks a computed mesh (validate_mesh) before it is written to \p output: an error names the
 //! result (\p what) and says that \p output was not written, where the writer's own check names

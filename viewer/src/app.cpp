@@ -818,6 +818,10 @@ void App::on_key(int key, int mods) {
       view_.color = view_.color == ColorMode::Intersections ? ColorMode::None : ColorMode::Intersections;
       push_view();
       break;
+    case GLFW_KEY_K:
+      view_.color = view_.color == ColorMode::Scan ? ColorMode::None : ColorMode::Scan;
+      push_view();
+      break;
     case GLFW_KEY_R:
       pick_ = pick_ == Pick::Region ? Pick::None : Pick::Region;
       brush_ = false;

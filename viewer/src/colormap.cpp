@@ -19,7 +19,8 @@ ColorMode parse_color_mode(const std::string& name) {
   if (name == "none") return ColorMode::None;
   if (name == "error") return ColorMode::Error;
   if (name == "intersections") return ColorMode::Intersections;
-  throw std::invalid_argument("unknown colour map '" + name + "' (error, intersections or none)");
+  if (name == "scan") return ColorMode::Scan;
+  throw std::invalid_argument("unknown colour map '" + name + "' (error, intersections, scan or none)");
 }
 
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
@@ -31,6 +32,14 @@ std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
     colors[i] =
         t < 0.5f ? Rgb(base + 2.0f * t * (yellow - base)) : Rgb(yellow + (2.0f * t - 1.0f) * (red - yellow));
   }
+  return colors;
+}
+
+std::vector<Rgb> vertex_colors(const VertexAttributes& attributes) {
+  std::vector<Rgb> colors;
+  colors.reserve(attributes.colors.size());
+  for (const auto& c : attributes.colors)
+    colors.emplace_back(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]));
   return colors;
 }
 

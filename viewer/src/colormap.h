@@ -16,14 +16,18 @@ Rgb surface_color();
 //! The colour marking intersecting triangles and large errors (pure-ish red).
 Rgb alarm_color();
 
-//! What --color selects.
-enum class ColorMode { None, Error, Intersections };
-//! Parses "none", "error" or "intersections". \throw std::invalid_argument otherwise.
+//! What --color selects. Scan: the shown band's own vertex colours (a scan's, from its file),
+//! the surface colour where it has none.
+enum class ColorMode { None, Error, Intersections, Scan };
+//! Parses "none", "error", "intersections" or "scan". \throw std::invalid_argument otherwise.
 ColorMode parse_color_mode(const std::string& name);
 
 //! Per-face colours of relative errors: surface colour at 0, through yellow at scale/2, to red at
 //! \p scale and above; NaN (not measured) keeps the surface colour.
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale);
+
+//! Per-vertex colours of \p attributes (their RGB), or none (empty) if they have no colours.
+std::vector<Rgb> vertex_colors(const VertexAttributes& attributes);
 
 //! Per-face colours marking the faces of intersecting non-adjacent triangle pairs (exact test,
 //! find_self_intersections), the rest in the surface colour. \p pairs receives the pair count.

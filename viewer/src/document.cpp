@@ -41,16 +41,18 @@ Document build_layers(const Document& document, int bands) {
   if (document.is_model()) throw InvalidInput(document.name() + " is already a layered model");
   layers::BuildOptions options;
   options.bands = bands;
-  return Document::from_model(layers::LayeredModel::build(document.mesh(), options), document.name());
+  layers::LayeredModel model = layers::LayeredModel::build(document.mesh(), options);
+  model.set_vertex_attributes(model.num_bands() - 1, document.attributes(0));  // the scan's, on its band
+  return Document::from_model(std::move(model), document.name());
 }
 
 Document Document::load(const std::string& path) {
   if (ends_with_strata(path)) return from_model(layers::read_model(path), path);
   ReadOptions ro;
   ro.orient_faces = true;
-  int flipped = 0;
-  Document d = from_mesh(read_mesh(path, ro, nullptr, &flipped), path);
-  d.reoriented_faces_ = flipped;
+  MeshFile f = read_mesh_file(path, ro);
+  Document d = from_mesh(std::move(f.mesh), path, std::move(f.attributes));
+  d.reoriented_faces_ = f.flipped_faces;
   return d;
 }
 
@@ -61,10 +63,12 @@ Document Document::from_model(layers::LayeredModel model, const std::string& nam
   return d;
 }
 
-Document Document::from_mesh(TriMesh mesh, const std::string& name) {
+Document Document::from_mesh(TriMesh mesh, const std::string& name, VertexAttributes attributes) {
   Document d;
   d.name_ = name;
+  check_vertex_attributes(attributes, mesh.vertices.size(), name);
   d.mesh_ = std::move(mesh);
+  d.attributes_ = std::move(attributes);
   d.mesh_errors_.assign(d.mesh_.faces.size(), kNaN);
   return d;
 }
@@ -93,6 +97,13 @@ void Document::check_band(int k) const {
 TriMesh Document::band_mesh(int k) const {
   check_band(k);
   return model_ ? model_->band_mesh(k) : mesh_;
+}
+
+const VertexAttributes& Document::attributes(int k) const {
+  check_band(k);
+  static const VertexAttributes none;
+  if (!model_) return attributes_;
+  return k == 0 ? none : model_->band(k).attributes;
 }
 
 const std::vector<Vec3>& Document::band_points(int k) const {

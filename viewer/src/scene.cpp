@@ -17,6 +17,8 @@ SceneData make_scene(const Document& document, const SceneSettings& settings) {
     if (e.size() == s.mesh.faces.size()) s.colors = error_colors(e, settings.error_scale);
   } else if (settings.color == ColorMode::Intersections) {
     s.colors = intersection_colors(s.mesh, s.intersection_pairs);
+  } else if (settings.color == ColorMode::Scan) {
+    s.colors = vertex_colors(document.attributes(s.shown_band));
   }
   if (settings.cage || s.shown_band == 0) s.net = document.control_net();
   return s;

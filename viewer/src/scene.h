@@ -21,7 +21,7 @@ struct SceneSettings {
 
 struct SceneData {
   TriMesh mesh;
-  std::vector<Rgb> colors;  //!< per face, or empty (surface colour)
+  std::vector<Rgb> colors;  //!< per face, per vertex (ColorMode::Scan), or empty (surface colour)
   std::vector<Vec3> net;    //!< control net segments (pairs), or empty
   std::size_t intersection_pairs = 0;
   double max_error = 0.0;  //!< max relative prism error (error map), 0 otherwise

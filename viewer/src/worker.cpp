@@ -315,7 +315,7 @@ void Worker::export_meshes(const std::string& prefix, const std::string& extensi
   post(
       [prefix, extension](Document& d) {
         for (int k = 0; k < d.num_bands(); ++k)
-          write_mesh(d.band_mesh(k), prefix + "_band" + std::to_string(k) + extension);
+          write_mesh(d.band_mesh(k), d.attributes(k), prefix + "_band" + std::to_string(k) + extension);
         return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension;
       },
       false);

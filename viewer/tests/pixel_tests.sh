@@ -99,6 +99,23 @@ s=$($STATS "$T/crossing.png")
 check "intersection map of two crossing triangles: 1 pair, red" \
   "r['intersecting_pairs'] == 1 and s['reddish'] > 0.25 * s['foreground'] > 0.01 and r['gl_errors'] == 0" "$s" "$r"
 
+# The scan's own colours (--color scan): the scan painted red in its file is drawn red, and so
+# is the finest band of a model built from it and read back; a scan without colours is not.
+awk '/^v / {print $0, 0.9, 0.05, 0.05; next} {print}' "$MESH" >"$T/red.obj"
+r=$("$VIEWER" "$T/red.obj" --screenshot "$T/red.png" "${COMMON[@]}" --color scan)
+s=$($STATS "$T/red.png")
+check "scan colours drawn" "s['reddish'] > 0.6 * s['foreground'] > 0.03 and r['gl_errors'] == 0" "$s" "$r"
+r=$("$VIEWER" "$T/red.obj" --layers 3 --save "$T/red.strata" --screenshot "$T/red_built.png" "${COMMON[@]}")
+r=$("$VIEWER" "$T/red.strata" --screenshot "$T/red_model.png" "${COMMON[@]}" --color scan)
+s=$($STATS "$T/red_model.png" "$T/red.png")
+check "a model keeps the scan's colours on its finest band" "s['changed'] == 0 and r['bands'] == 3" "$s" "$r"
+r=$("$VIEWER" "$T/red.strata" --show 1 --screenshot "$T/red_band1.png" "${COMMON[@]}" --color scan)
+s=$($STATS "$T/red_band1.png")
+check "band 1 has no colours: surface colour" "s['reddish'] == 0 and s['centre_foreground'] > 0.9" "$s" "$r"
+r=$("$VIEWER" "$MESH" --screenshot "$T/plain_scan.png" "${COMMON[@]}" --color scan)
+s=$($STATS "$T/plain_scan.png" "$T/scan.png")
+check "a scan without colours is drawn in the surface colour" "s['changed'] == 0" "$s"
+
 # 4. Bad inputs: exit 1, one "strata-viewer: error:" message, the PNG untouched.
 printf 'not a png' > "$T/keep.png"
 printf 'v 0 0 0\nv 1 0\nf 1 2 3\n' > "$T/corrupt.obj"

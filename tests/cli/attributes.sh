@@ -1,0 +1,169 @@
+#!/usr/bin/env bash
+# A scan's vertex colours and texture coordinates through the CLI: `stats` reports them; `deform`,
+# `reconstruct`, `build` + `edit` + `export` write the result's moved vertices with the scan's
+# values, exactly, in PLY, OBJ and OFF; STL, which stores none, gets a warning; and what a file
+# holds that cannot be kept (texture seams) is a note naming the file.
+# Usage: bash attributes.sh <path-to-strata> <tests/data dir>
+set -euo pipefail
+STRATA=${1:?usage: attributes.sh <path-to-strata> <tests/data dir>}
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/lib/expect.sh"
+
+"$STRATA" generate --case bumps --triangles 8000 --out-dir "$TMP/case" >/dev/null
+cat >"$TMP/bend.json" <<'JSON'
+{"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1]}},
+ "handle": {"halfspace": {"point": [0, 0, 3.5], "normal": [0, 0, 1]}},
+ "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 60, "pivot": [1.2, 0, 2.5]}}}
+JSON
+
+# The generated detail as a scanner would write it: binary PLY, float positions, uchar colours
+# from the position, float u v. Written and read by this script's own code (mesh.py).
+cat >"$TMP/mesh.py" <<'PY'
+import struct, sys
+
+def read_obj(path):
+    v, f = [], []
+    for line in open(path):
+        t = line.split()
+        if t and t[0] == "v": v.append(tuple(float(x) for x in t[1:4]))
+        if t and t[0] == "f": f.append(tuple(int(x.split("/")[0]) - 1 for x in t[1:]))
+    return v, f
+
+def write_scan_ply(obj, out):
+    v, f = read_obj(obj)
+    head = ("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+            "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+            "property float u\nproperty float v\nelement face %d\nproperty list uchar int vertex_indices\n"
+            "end_header\n" % (len(v), len(f)))
+    with open(out, "wb") as o:
+        o.write(head.encode())
+        for i, p in enumerate(v):
+            o.write(struct.pack("<fff", *p))
+            o.write(struct.pack("<BBB", i % 256, (7 * i) % 256, int(40 * (p[2] + 3)) % 256))
+            o.write(struct.pack("<ff", (i % 101) / 100.0, p[2] / 8.0))
+        for t in f:
+            o.write(struct.pack("<B", 3) + struct.pack("<iii", *t))
+
+def read_ply(path):
+    """Positions, colours (0-255) and (u, v) of a binary little-endian PLY of scalar properties."""
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    props, n = [], 0
+    for line in data[:end].decode().splitlines():
+        t = line.split()
+        if t[:2] == ["element", "vertex"]: n, cur = int(t[2]), "vertex"
+        elif t[:1] == ["element"]: cur = t[1]
+        elif t[:1] == ["property"] and cur == "vertex": props.append((t[1], t[2]))
+    fmt = "<" + "".join({"float": "f", "double": "d", "uchar": "B"}[ty] for ty, _ in props)
+    size, names = struct.calcsize(fmt), [nm for _, nm in props]
+    rows = [dict(zip(names, struct.unpack_from(fmt, data, end + k * size))) for k in range(n)]
+    scale = 1 if props[names.index("red")][0] == "uchar" else 255
+    return ([(r["x"], r["y"], r["z"]) for r in rows],
+            [tuple(round(r[c] * scale) for c in ("red", "green", "blue")) for r in rows],
+            [(r.get("u", r.get("texture_u")), r.get("v", r.get("texture_v"))) for r in rows])
+
+def read_text(path):
+    """OBJ ("v x y z r g b", vt) or COFF / STCOFF: positions, colours (0-255), (u, v)."""
+    pos, col, uv = [], [], []
+    lines = [l.split() for l in open(path) if l.strip() and not l.startswith("#")]
+    if path.endswith(".obj"):
+        for t in lines:
+            if t[0] == "v": pos.append(tuple(map(float, t[1:4]))); col.append(tuple(round(float(x) * 255) for x in t[4:7]))
+            if t[0] == "vt": uv.append((float(t[1]), float(t[2])))
+    else:
+        st = lines[0][0].startswith("ST")
+        n = int(lines[1][0])
+        for t in lines[2:2 + n]:
+            pos.append(tuple(map(float, t[:3]))); col.append(tuple(round(float(x) * 255) for x in t[3:6]))
+            if st: uv.append((float(t[-2]), float(t[-1])))
+    return pos, col, uv
+
+def load(path):
+    return read_ply(path) if path.endswith(".ply") else read_text(path)
+
+if __name__ == "__main__":
+    cmd = sys.argv[1]
+    if cmd == "make":
+        write_scan_ply(sys.argv[2], sys.argv[3])
+    elif cmd == "same":  # same colours and (u, v) as the scan; positions moved (or not, "--rest")
+        scan, out = load(sys.argv[2]), load(sys.argv[3])
+        moved = sum(1 for a, b in zip(scan[0], out[0]) if max(abs(x - y) for x, y in zip(a, b)) > 1e-9)
+        errors = []
+        if out[1] != scan[1]: errors.append("colours differ")
+        if [(round(u, 6), round(v, 6)) for u, v in out[2]] != [(round(u, 6), round(v, 6)) for u, v in scan[2]]:
+            errors.append("texture coordinates differ")
+        if (moved == 0) != (len(sys.argv) > 4 and sys.argv[4] == "--rest"): errors.append("%d vertices moved" % moved)
+        if errors:
+            sys.exit("FAIL: %s vs %s: %s" % (sys.argv[2], sys.argv[3], ", ".join(errors)))
+PY
+SCAN="$TMP/scan.ply"
+python3 "$TMP/mesh.py" make "$TMP/case/detail.obj" "$SCAN"
+
+"$STRATA" stats "$SCAN" --json >"$TMP/stats.json"
+python3 -c "
+import json, sys
+s = json.load(open('$TMP/stats.json'))
+if s['vertex_colors'] != 'rgb' or s['texture_coordinates'] is not True: sys.exit('FAIL: stats: %s' % s)"
+
+# deform: the edited vertices with the scan's colours and (u, v), in every format that stores them.
+for ext in ply obj off; do
+  "$STRATA" deform "$SCAN" --edit "$TMP/bend.json" -o "$TMP/deformed.$ext" -q >/dev/null
+  python3 "$TMP/mesh.py" same "$SCAN" "$TMP/deformed.$ext"
+done
+"$STRATA" deform "$SCAN" --edit "$TMP/bend.json" --method vectors -o "$TMP/vectors.ply" -q >/dev/null
+python3 "$TMP/mesh.py" same "$SCAN" "$TMP/vectors.ply"
+# STL stores none: written, with a warning.
+"$STRATA" deform "$SCAN" --edit "$TMP/bend.json" -o "$TMP/deformed.stl" -q >/dev/null 2>"$TMP/stl.err"
+grep -q "deformed.stl: STL stores no vertex colours or texture coordinates" "$TMP/stl.err" ||
+  { echo "FAIL: no STL warning: $(cat "$TMP/stl.err")" >&2; exit 1; }
+
+# reconstruct: the detail's values go with the reconstructed vertices.
+"$STRATA" reconstruct --detail "$SCAN" --base "$TMP/case/base.obj" --edited-base "$TMP/case/edited_base.obj" \
+  -o "$TMP/reconstructed.ply" -q >/dev/null
+python3 "$TMP/mesh.py" same "$SCAN" "$TMP/reconstructed.ply"
+
+# build, export (at rest), edit band 0, export again: the finest band keeps the scan's values.
+"$STRATA" build "$SCAN" -o "$TMP/m.strata" -q >/dev/null
+"$STRATA" export "$TMP/m.strata" -o "$TMP/rest.ply" >/dev/null
+python3 "$TMP/mesh.py" same "$SCAN" "$TMP/rest.ply" --rest
+"$STRATA" edit "$TMP/m.strata" --band 0 --edit "$TMP/bend.json" -o "$TMP/edited.strata" -q >/dev/null
+"$STRATA" export "$TMP/edited.strata" -o "$TMP/edited.obj" >/dev/null
+python3 "$TMP/mesh.py" same "$SCAN" "$TMP/edited.obj"
+"$STRATA" export "$TMP/edited.strata" --band 1 -o "$TMP/band1.ply" >/dev/null
+"$STRATA" stats "$TMP/band1.ply" --json | python3 -c "
+import json, sys
+s = json.load(sys.stdin)
+if s['vertex_colors'] != 'none': sys.exit('FAIL: band 1 exported with colours')"
+
+# Texture coordinates with seams cannot be kept per vertex: a note naming the file, and the rest
+# of the edit goes on.
+python3 - "$TMP/case/detail.obj" "$TMP/seams.obj" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+out, nv = [], 0
+for l in lines:
+    if l.startswith("v "): nv += 1
+    if not l.startswith("f "): out.append(l)
+out += ["vt %d 0" % k for k in range(nv + 1)]
+first = True
+for l in lines:
+    if l.startswith("f "):
+        idx = l.split()[1:]
+        shift = 1 if first else 0  # the first face's corners use other vt than their vertices'
+        out.append("f " + " ".join("%s/%d" % (i, int(i) + shift) for i in idx))
+        first = False
+open(sys.argv[2], "w").write("\n".join(out) + "\n")
+PY
+"$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.obj" -q >/dev/null 2>"$TMP/seams.err"
+grep -q "seams.obj: not kept: texture coordinates: 3 vertices have more than one" "$TMP/seams.err" ||
+  { echo "FAIL: no note on the seams: $(cat "$TMP/seams.err")" >&2; exit 1; }
+if grep -q "^vt" "$TMP/seams_out.obj"; then echo "FAIL: seams written as per-vertex vt" >&2; exit 1; fi
+
+# A colour of NaN is an error naming the file; nothing is written.
+sed '0,/^v /s/^v \(.*\)$/v \1 nan 0 0/' "$TMP/case/detail.obj" >"$TMP/nan.obj"
+sed -i '0,/^v .* nan 0 0$/!{/^v /s/$/ 0 0 0/}' "$TMP/nan.obj"
+expect_exit 1 "nan.obj: line .*: vertex 0 has a non-finite colour" "$TMP/nan.err" \
+  "$STRATA" deform "$TMP/nan.obj" --edit "$TMP/bend.json" -o "$TMP/nan_out.obj"
+[ ! -e "$TMP/nan_out.obj" ] || { echo "FAIL: output written for a NaN colour" >&2; exit 1; }
+echo "attributes: ok"
