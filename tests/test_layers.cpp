@@ -151,7 +151,7 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   LayeredModel model = model_of("bear");
   const int finest = model.num_bands() - 1;
   const std::size_t n = model.band(finest).mesh.vertices.size();
-  VertexAttributes a;
+  MeshAttributes a;
   a.colors_have_alpha = true;
   std::mt19937 rng(4);
   std::uniform_int_distribution<int> byte(0, 255);
@@ -159,7 +159,7 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
     a.colors.push_back({byte(rng) / 255.0, byte(rng) / 255.0, byte(rng) / 255.0, byte(rng) / 255.0});
     a.texcoords.push_back({static_cast<double>(v) / n, 1.0 - static_cast<double>(v) / n});
   }
-  model.set_vertex_attributes(finest, a);
+  model.set_attributes(finest, a);
   const std::vector<Vec3> before = model.band(finest).mesh.vertices;
   model.set_amplitude(1, 0.5);
   EXPECT_GT(max_distance(model.band(finest).mesh.vertices, before), 0.0);
@@ -190,10 +190,34 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   EXPECT_EQ(plain_file.model_json.find("attributes"), std::string::npos);
   EXPECT_EQ(plain_file.find("band2.colors"), nullptr);
 
+  // Texture coordinates per face corner (seams) and materials, as a textured OBJ has them.
+  MeshAttributes t;
+  const std::size_t nf = model.band(finest).mesh.faces.size();
+  t.corner_uv = {{0.0, 0.0}, {1.0, 0.0}, {0.5, 1.0}, {0.25, 0.75}};
+  t.material_library = "bear textures.mtl";
+  t.material_names = {"fur", "claws"};
+  for (std::size_t f = 0; f < nf; ++f) {
+    t.corner_uv_index.push_back(
+        {static_cast<int>(f % 4), static_cast<int>((f + 1) % 4), static_cast<int>((f + 3) % 4)});
+    t.face_materials.push_back(f % 7 == 0 ? 1 : f % 5 == 0 ? -1 : 0);
+  }
+  LayeredModel textured = model;
+  textured.set_attributes(finest, t);
+  layers::write_model(textured, tmp.file("t.strata"));
+  const LayeredModel textured_back = layers::read_model(tmp.file("t.strata"));
+  const MeshAttributes& tb = textured_back.band(finest).attributes;
+  EXPECT_EQ(tb.corner_uv, t.corner_uv);
+  EXPECT_EQ(tb.corner_uv_index, t.corner_uv_index);
+  EXPECT_EQ(tb.face_materials, t.face_materials);
+  EXPECT_EQ(tb.material_names, t.material_names);
+  EXPECT_EQ(tb.material_library, t.material_library);
+
   // Misuse is refused, the model unchanged.
+  t.face_materials[3] = 2;
+  EXPECT_THROW(textured.set_attributes(finest, t), InvalidInput);
   a.colors.pop_back();
-  EXPECT_THROW(model.set_vertex_attributes(finest, a), InvalidInput);
-  EXPECT_THROW(model.set_vertex_attributes(0, VertexAttributes{}), InvalidInput);
+  EXPECT_THROW(model.set_attributes(finest, a), InvalidInput);
+  EXPECT_THROW(model.set_attributes(0, MeshAttributes{}), InvalidInput);
   EXPECT_EQ(model.band(finest).attributes.texcoords.size(), n);
 }
 
@@ -739,6 +763,18 @@ TEST(LayersFile, RandomByteFlipsAreDetected) {
   }
 }
 
+// A band's "attributes" header object (layers/FORMAT.md) with colours, alpha and per-vertex
+// texture coordinates as given, and no seams or materials.
+nlohmann::json attribute_keys(bool colors, bool alpha, bool texcoords) {
+  return {{"colors", colors},
+          {"alpha", alpha},
+          {"texcoords", texcoords},
+          {"corner_texcoords", 0},
+          {"materials", false},
+          {"material_library", ""},
+          {"material_names", nlohmann::json::array()}};
+}
+
 TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
   // Files whose checksums are right but whose model does not hold together: what a buggy writer
   // or a hand edit produces.
@@ -768,24 +804,46 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
           [](nlohmann::json& m, layers::StrataContainer&) { m["options"]["method"] = "magic"; });
   variant("missing_colors", "missing section 'band1.colors'",
           [](nlohmann::json& m, layers::StrataContainer&) {
-            m["bands"][1]["attributes"] = {{"colors", true}, {"alpha", false}, {"texcoords", false}};
+            m["bands"][1]["attributes"] = attribute_keys(true, false, false);
           });
   variant("short_texcoords", "section 'band1.texcoords' holds 3 values, expected [0-9]+",
           [](nlohmann::json& m, layers::StrataContainer& v) {
-            m["bands"][1]["attributes"] = {{"colors", false}, {"alpha", false}, {"texcoords", true}};
+            m["bands"][1]["attributes"] = attribute_keys(false, false, true);
             v.sections.push_back({"band1.texcoords", layers::pack_f64({0.0, 0.5, 1.0})});
           });
   variant("nan_color", "band 1: vertex 0 has a non-finite colour",
           [](nlohmann::json& m, layers::StrataContainer& v) {
             const long long nv = m["bands"][1]["vertices"].get<long long>();
-            m["bands"][1]["attributes"] = {{"colors", true}, {"alpha", true}, {"texcoords", false}};
+            m["bands"][1]["attributes"] = attribute_keys(true, true, false);
             std::vector<double> c(4 * nv, 0.5);
             c[2] = std::nan("");
             v.sections.push_back({"band1.colors", layers::pack_f64(c)});
           });
   variant("attributes_text", "'colors' in band 1's attributes is not true or false",
           [](nlohmann::json& m, layers::StrataContainer&) {
-            m["bands"][1]["attributes"] = {{"colors", "yes"}, {"alpha", false}, {"texcoords", false}};
+            m["bands"][1]["attributes"] = attribute_keys(false, false, false);
+            m["bands"][1]["attributes"]["colors"] = "yes";
+          });
+  variant("bad_material", "band 1: face 0's material 3 is out of range \\(1 materials\\)",
+          [](nlohmann::json& m, layers::StrataContainer& v) {
+            const long long nf = m["bands"][1]["faces"].get<long long>();
+            m["bands"][1]["attributes"] = attribute_keys(false, false, false);
+            m["bands"][1]["attributes"]["materials"] = true;
+            m["bands"][1]["attributes"]["material_names"] = {"skin"};
+            std::vector<std::int32_t> mat(nf, 0);
+            mat[0] = 3;
+            v.sections.push_back({"band1.face_materials", layers::pack_i32(mat)});
+          });
+  variant("seam_index",
+          "band 1: face 1's texture coordinate index 9 is out of range \\(2 texture coordinates\\)",
+          [](nlohmann::json& m, layers::StrataContainer& v) {
+            const long long nf = m["bands"][1]["faces"].get<long long>();
+            m["bands"][1]["attributes"] = attribute_keys(false, false, false);
+            m["bands"][1]["attributes"]["corner_texcoords"] = 2;
+            std::vector<std::int32_t> index(3 * nf, 1);
+            index[4] = 9;
+            v.sections.push_back({"band1.corner_texcoords", layers::pack_f64({0, 0, 1, 1})});
+            v.sections.push_back({"band1.corner_texcoord_indices", layers::pack_i32(index)});
           });
   variant("missing_section", "missing section 'band1.rest'", [](nlohmann::json&, layers::StrataContainer& v) {
     v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),

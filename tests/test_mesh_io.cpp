@@ -1249,9 +1249,9 @@ TEST(MeshIoErrors, UnparsableContent) {
 
 //! Reads \p path; passes if it throws a strata::Error or returns a mesh that validates.
 // ---------------------------------------------------------------------------------------------
-// Vertex colours and texture coordinates (read_mesh_file, write_mesh with VertexAttributes).
+// Vertex colours and texture coordinates (read_mesh_file, write_mesh with MeshAttributes).
 
-::testing::AssertionResult same_attributes(const VertexAttributes& a, const VertexAttributes& b) {
+::testing::AssertionResult same_attributes(const MeshAttributes& a, const MeshAttributes& b) {
   if (a.colors.size() != b.colors.size() || a.texcoords.size() != b.texcoords.size())
     return ::testing::AssertionFailure() << "sizes " << a.colors.size() << "/" << a.texcoords.size() << " vs "
                                          << b.colors.size() << "/" << b.texcoords.size();
@@ -1270,11 +1270,11 @@ TEST(MeshIoErrors, UnparsableContent) {
 }
 
 // Full-precision random values, or 8-bit colours (k / 255) that PLY stores as uchar.
-VertexAttributes random_attributes(std::size_t n, bool alpha, bool eight_bit, bool texcoords, unsigned seed) {
+MeshAttributes random_attributes(std::size_t n, bool alpha, bool eight_bit, bool texcoords, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::uniform_int_distribution<int> byte(0, 255);
-  VertexAttributes a;
+  MeshAttributes a;
   a.colors_have_alpha = alpha;
   for (std::size_t v = 0; v < n; ++v) {
     std::array<double, 4> c{};
@@ -1303,7 +1303,7 @@ VertexAttributes random_attributes(std::size_t n, bool alpha, bool eight_bit, bo
   }
   try {
     MeshFile f = read_mesh_file(path);
-    check_vertex_attributes(f.attributes, f.mesh.vertices.size(), path);
+    check_mesh_attributes(f.attributes, f.mesh, path);
     if (!plain_read)
       return ::testing::AssertionFailure() << "read_mesh_file() reads what read_mesh() refuses";
     if (!identical(plain, f.mesh)) return ::testing::AssertionFailure() << "the two reads differ";
@@ -1335,6 +1335,7 @@ TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
       "solid ",
       std::string(80, 'x') + std::string("\xff\xff\xff\x7f", 4),
       "v 0 0 0 1 0 0\nvt 0 0\nf 1/1 ",
+      "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/2 3/",
       "STCOFF\n3 1 0\n0 0 0 1 0 0 0 0\n",
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float u\nproperty float v\n"
@@ -1353,7 +1354,7 @@ TEST(MeshIoFuzz, RandomBytesForEveryFormat) {
         write_bytes(path, bytes);
         EXPECT_TRUE(error_or_valid(path)) << path;
       }
-  EXPECT_EQ(files, 4 * 13 * 12);
+  EXPECT_EQ(files, 4 * 14 * 12);
 }
 
 TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
@@ -1368,7 +1369,7 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
                         {"a.ply", MeshEncoding::Ascii, false}, {"b.ply", MeshEncoding::Binary, true},
                         {"a.stl", MeshEncoding::Ascii, false}, {"b.stl", MeshEncoding::Binary, true}};
   // With colours and texture coordinates, whose parsing is then cut too.
-  const VertexAttributes attributes = random_attributes(m.vertices.size(), true, false, true, 21);
+  const MeshAttributes attributes = random_attributes(m.vertices.size(), true, false, true, 21);
   for (const Case& c : cases) {
     write_mesh(m, attributes, dir.file(c.name), c.enc);
     const TriMesh whole = read_mesh(dir.file(c.name));
@@ -1533,7 +1534,7 @@ TEST(MeshIoAttributes, RoundTripIsExactInObjOffAndPly) {
   for (bool alpha : {false, true})
     for (bool eight_bit : {false, true})
       for (bool uv : {false, true}) {
-        const VertexAttributes a = random_attributes(n, alpha, eight_bit, uv, 100 + run++);
+        const MeshAttributes a = random_attributes(n, alpha, eight_bit, uv, 100 + run++);
         for (const auto& [name, enc] :
              std::vector<std::pair<std::string, MeshEncoding>>{{"a.obj", MeshEncoding::Default},
                                                                {"b.off", MeshEncoding::Default},
@@ -1559,7 +1560,7 @@ TEST(MeshIoAttributes, RoundTripIsExactInObjOffAndPly) {
         }
       }
   // Without attributes, the files are those write_mesh(mesh, path) writes.
-  write_mesh(m, VertexAttributes{}, dir.file("x.ply"));
+  write_mesh(m, MeshAttributes{}, dir.file("x.ply"));
   write_mesh(m, dir.file("y.ply"));
   EXPECT_EQ(read_bytes(dir.file("x.ply")), read_bytes(dir.file("y.ply")));
 }
@@ -1650,14 +1651,6 @@ TEST(MeshIoAttributes, WhatCannotBeKeptIsListedAsDropped) {
   ASSERT_EQ(f.dropped.size(), 1u);
   EXPECT_EQ(f.dropped[0], "vertex colours: only 2 of the 4 vertices have one");
 
-  write_bytes(dir.file("seam.obj"),
-              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n"
-              "f 1/1 3/3 2/2\nf 1/4 2/2 4/4\nf 1/1 4/4 3/3\nf 2/2 3/3 4/4\n");
-  f = read_mesh_file(dir.file("seam.obj"));
-  EXPECT_TRUE(f.attributes.texcoords.empty());
-  ASSERT_EQ(f.dropped.size(), 1u);
-  EXPECT_NE(f.dropped[0].find("texture coordinates: 1 vertices have more than one"), std::string::npos);
-
   write_bytes(
       dir.file("part.obj"),
       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/1 3/1 2/1\nf 1 2 4\nf 1/1 4/1 3/1\nf 2/1 3/1 4/1\n");
@@ -1688,6 +1681,63 @@ TEST(MeshIoAttributes, WhatCannotBeKeptIsListedAsDropped) {
                 "vertex)"}));
 }
 
+// A textured OBJ as photogrammetry writes it: a material library, materials per group of faces,
+// and texture coordinates per face corner with seams (vertex 1 has two), a quad among the faces.
+TEST(MeshIoAttributes, TextureSeamsAndMaterialsOfAnObjAreKept) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  write_bytes(dir.file("tex.obj"),
+              "mtllib scan.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
+              "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvt 0.9 0.1\n"
+              "usemtl skin\nf 1/1 4/4 3/3 2/2\nusemtl eyes\nf 1/6 2/2 5/5\nf 2/2 3/3 5/5\n"
+              "usemtl skin\nf 3/3 4/4 5/5\nf 4/4 1/1 5/5\n");
+  const MeshFile f = read_mesh_file(dir.file("tex.obj"));
+  ASSERT_EQ(f.mesh.num_faces(), 6);  // the quad is two triangles
+  const MeshAttributes& a = f.attributes;
+  EXPECT_TRUE(f.dropped.empty());
+  EXPECT_TRUE(a.texcoords.empty());
+  EXPECT_EQ(a.corner_uv.size(), 6u);
+  EXPECT_EQ(a.material_library, "scan.mtl");
+  EXPECT_EQ(a.material_names, (std::vector<std::string>{"skin", "eyes"}));
+  EXPECT_EQ(a.face_materials, (std::vector<int>{0, 0, 1, 1, 0, 0}));
+  // Each triangle corner has its own polygon corner's vt: vertex 0 (file's 1) is vt 1 in the quad
+  // and vt 6 in the first eye face.
+  for (std::size_t t = 0; t < f.mesh.faces.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int v = f.mesh.faces[t][c], uv = a.corner_uv_index[t][c];
+      EXPECT_EQ(uv, v == 0 ? (t == 2 ? 5 : 0) : v) << "face " << t << " corner " << c;
+    }
+  // Written and read back: the same attributes, and the same bytes again.
+  write_mesh(f.mesh, a, dir.file("out.obj"));
+  const MeshFile g = read_mesh_file(dir.file("out.obj"));
+  EXPECT_TRUE(identical(f.mesh, g.mesh));
+  EXPECT_EQ(g.attributes.corner_uv, a.corner_uv);
+  EXPECT_EQ(g.attributes.corner_uv_index, a.corner_uv_index);
+  EXPECT_EQ(g.attributes.face_materials, a.face_materials);
+  EXPECT_EQ(g.attributes.material_names, a.material_names);
+  EXPECT_EQ(g.attributes.material_library, a.material_library);
+  write_mesh(g.mesh, g.attributes, dir.file("again.obj"));
+  EXPECT_EQ(read_bytes(dir.file("out.obj")), read_bytes(dir.file("again.obj")));
+  // Formats that cannot store them say so, and write the rest.
+  EXPECT_EQ(attributes_not_stored(a, "x.ply"),
+            (std::vector<std::string>{"texture coordinates per face corner (texture seams)", "materials"}));
+  write_mesh(f.mesh, a, dir.file("out.ply"));
+  EXPECT_TRUE(read_mesh_file(dir.file("out.ply")).attributes.empty());
+
+  // A face flipped to agree with its neighbours (ReadOptions::orient_faces) keeps each corner's
+  // texture coordinate with its vertex.
+  std::string text = read_bytes(dir.file("out.obj"));
+  const std::string face = "f 1/6 2/2 5/5\n";
+  ASSERT_NE(text.find(face), std::string::npos) << text;
+  text.replace(text.find(face), face.size(), "f 1/6 5/5 2/2\n");
+  write_bytes(dir.file("flipped.obj"), text);
+  ReadOptions ro;
+  ro.orient_faces = true;
+  const MeshFile h = read_mesh_file(dir.file("flipped.obj"), ro);
+  EXPECT_EQ(h.flipped_faces, 1);
+  EXPECT_EQ(h.mesh.faces, f.mesh.faces);
+  EXPECT_EQ(h.attributes.corner_uv_index, a.corner_uv_index);
+}
+
 TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {
   test::ScratchDir dir{"strata_mesh_io"};
   const std::string faces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
@@ -1712,7 +1762,7 @@ TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {
                                    {dir.file("bad.obj"), "line 5", "cannot parse 'zero'"}));
   // Attributes that do not fit the mesh are refused before anything is written.
   const TriMesh m = awkward_octahedron();
-  VertexAttributes a = random_attributes(m.vertices.size() - 1, false, false, false, 3);
+  MeshAttributes a = random_attributes(m.vertices.size() - 1, false, false, false, 3);
   EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, a, dir.file("w.ply")); },
                                         {dir.file("w.ply"), "6 vertex colours for 7 vertices"}));
   a = random_attributes(m.vertices.size(), false, false, true, 3);
@@ -1726,9 +1776,12 @@ TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {
 TEST(MeshIoAttributes, StlStoresNone) {
   test::ScratchDir dir{"strata_mesh_io"};
   const TriMesh m = without_unreferenced(awkward_octahedron());
-  EXPECT_FALSE(format_stores_vertex_attributes("x.stl"));
-  for (const char* name : {"x.obj", "x.OFF", "x.ply"}) EXPECT_TRUE(format_stores_vertex_attributes(name));
-  write_mesh(m, random_attributes(m.vertices.size(), true, false, true, 5), dir.file("a.stl"));
+  const MeshAttributes a = random_attributes(m.vertices.size(), true, false, true, 5);
+  EXPECT_EQ(attributes_not_stored(a, "x.stl"),
+            (std::vector<std::string>{"vertex colours", "texture coordinates"}));
+  for (const char* name : {"x.obj", "x.OFF", "x.ply"})
+    EXPECT_TRUE(attributes_not_stored(a, name).empty()) << name;
+  write_mesh(m, a, dir.file("a.stl"));
   write_mesh(m, dir.file("b.stl"));
   EXPECT_EQ(read_bytes(dir.file("a.stl")), read_bytes(dir.file("b.stl")));
   EXPECT_TRUE(read_mesh_file(dir.file("a.stl")).attributes.empty());

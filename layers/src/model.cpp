@@ -384,13 +384,13 @@ LayeredModel& LayeredModel::operator=(LayeredModel&&) noexcept = default;
 int LayeredModel::num_bands() const {
   return impl_->n();
 }
-void LayeredModel::set_vertex_attributes(int k, VertexAttributes attributes) {
-  if (impl_->drag) throw InvalidInput("set_vertex_attributes() during a drag: end or cancel the drag first");
+void LayeredModel::set_attributes(int k, MeshAttributes attributes) {
+  if (impl_->drag) throw InvalidInput("set_attributes() during a drag: end or cancel the drag first");
   if (k < 1 || k >= impl_->n())
     throw InvalidInput("band " + std::to_string(k) + " out of range (vertex attributes go on bands 1 .. " +
                        std::to_string(impl_->n() - 1) + "; band 0 is the cage)");
   Band& b = impl_->bands[k];
-  check_vertex_attributes(attributes, b.mesh.vertices.size(), "band " + std::to_string(k));
+  check_mesh_attributes(attributes, b.mesh, "band " + std::to_string(k));
   b.attributes = std::move(attributes);
 }
 
@@ -608,7 +608,7 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
     const int nv = b.mesh.num_vertices();
     if (e.num_detail_vertices() != nv || e.detail_faces != b.mesh.faces)
       throw InvalidInput(name + ": the encoding does not match the band's mesh");
-    check_vertex_attributes(b.attributes, b.mesh.vertices.size(), name);
+    check_mesh_attributes(b.attributes, b.mesh, name);
     // Its arrays fit together (a short offsets array was read past by detail_magnitude()).
     try {
       check_encoding(e);

@@ -386,17 +386,33 @@ void write_model(const LayeredModel& model, const std::string& path) {
                        {"max_tangential_offset", e.report.max_tangential_offset}}}});
     // Colours (RGBA) and texture coordinates: a key and sections only where the band has them, so
     // that a model without them is written as before.
-    const VertexAttributes& va = b.attributes;
+    const MeshAttributes& va = b.attributes;
     if (!va.empty()) {
-      bands.back()["attributes"] = {{"colors", !va.colors.empty()},
-                                    {"alpha", va.colors_have_alpha},
-                                    {"texcoords", !va.texcoords.empty()}};
+      bands.back()["attributes"] = {
+          {"colors", !va.colors.empty()},
+          {"alpha", va.colors_have_alpha},
+          {"texcoords", !va.texcoords.empty()},
+          {"corner_texcoords", va.corner_uv_index.empty() ? 0 : va.corner_uv.size()},
+          {"materials", !va.face_materials.empty()},
+          {"material_library", va.material_library},
+          {"material_names", va.material_names}};
       std::vector<double> values;
       for (const auto& col : va.colors) values.insert(values.end(), col.begin(), col.end());
       if (!va.colors.empty()) c.sections.push_back({p + "colors", pack_f64(values)});
       values.clear();
       for (const auto& t : va.texcoords) values.insert(values.end(), t.begin(), t.end());
       if (!va.texcoords.empty()) c.sections.push_back({p + "texcoords", pack_f64(values)});
+      if (!va.corner_uv_index.empty()) {
+        values.clear();
+        for (const auto& t : va.corner_uv) values.insert(values.end(), t.begin(), t.end());
+        c.sections.push_back({p + "corner_texcoords", pack_f64(values)});
+        std::vector<std::int32_t> index;
+        for (const auto& t : va.corner_uv_index) index.insert(index.end(), t.begin(), t.end());
+        c.sections.push_back({p + "corner_texcoord_indices", pack_i32(index)});
+      }
+      if (!va.face_materials.empty())
+        c.sections.push_back(
+            {p + "face_materials", pack_i32({va.face_materials.begin(), va.face_materials.end()})});
     }
     c.sections.push_back({p + "faces", pack_i32(flatten(b.mesh.faces))});
     c.sections.push_back({p + "rest", pack_f64(flatten(e.detail_rest))});
@@ -587,7 +603,7 @@ LayeredModel read_model(const std::string& path) {
     if (b.contains("attributes")) {  // files written before 2026-11-29 have none
       const json& at = h.at(b, "attributes", w);
       const std::string wa = w + "'s attributes";
-      VertexAttributes& va = band.attributes;
+      MeshAttributes& va = band.attributes;
       if (h.boolean(at, "colors", wa)) {
         const std::vector<double> v = unpack_f64(section(p + "colors"), 4 * nv, what(p + "colors"));
         va.colors.resize(nv);
@@ -598,6 +614,30 @@ LayeredModel read_model(const std::string& path) {
         const std::vector<double> v = unpack_f64(section(p + "texcoords"), 2 * nv, what(p + "texcoords"));
         va.texcoords.resize(nv);
         for (long long i = 0; i < nv; ++i) va.texcoords[i] = {v[2 * i], v[2 * i + 1]};
+      }
+      const long long nuv = h.integer(at, "corner_texcoords", wa, 0, kMaxCount);
+      if (nuv > 0) {
+        const std::vector<double> v =
+            unpack_f64(section(p + "corner_texcoords"), 2 * nuv, what(p + "corner_texcoords"));
+        va.corner_uv.resize(nuv);
+        for (long long i = 0; i < nuv; ++i) va.corner_uv[i] = {v[2 * i], v[2 * i + 1]};
+        const std::vector<std::int32_t> index =
+            unpack_i32(section(p + "corner_texcoord_indices"), 3 * nf, what(p + "corner_texcoord_indices"));
+        va.corner_uv_index.resize(nf);
+        for (long long j = 0; j < nf; ++j)
+          va.corner_uv_index[j] = {index[3 * j], index[3 * j + 1], index[3 * j + 2]};
+      }
+      if (h.boolean(at, "materials", wa)) {
+        const std::vector<std::int32_t> m =
+            unpack_i32(section(p + "face_materials"), nf, what(p + "face_materials"));
+        va.face_materials.assign(m.begin(), m.end());
+      }
+      va.material_library = h.text(at, "material_library", wa);
+      const json& names = h.at(at, "material_names", wa);
+      if (!names.is_array()) h.fail("'material_names' in " + wa + " is not an array");
+      for (const json& n : names) {
+        if (!n.is_string()) h.fail("'material_names' in " + wa + " holds a value that is not a string");
+        va.material_names.push_back(n.get<std::string>());
       }
     }
     band.mesh.faces = rest.faces;

@@ -23,20 +23,51 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
-void check_vertex_attributes(const VertexAttributes& attributes, std::size_t num_vertices,
-                             const std::string& what) {
+void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh, const std::string& what) {
   auto check = [&](const auto& values, const char* name, const char* plural) {
     if (values.empty()) return;
-    if (values.size() != num_vertices)
+    if (values.size() != mesh.vertices.size())
       throw InvalidInput(what + ": " + std::to_string(values.size()) + " vertex " + plural + " for " +
-                         std::to_string(num_vertices) + " vertices");
+                         std::to_string(mesh.vertices.size()) + " vertices");
     for (std::size_t i = 0; i < values.size(); ++i)
       for (double x : values[i])
         if (!std::isfinite(x))
           throw InvalidInput(what + ": vertex " + std::to_string(i) + " has a non-finite " + name);
   };
-  check(attributes.colors, "colour", "colours");
-  check(attributes.texcoords, "texture coordinate", "texture coordinates");
+  const MeshAttributes& a = attributes;
+  check(a.colors, "colour", "colours");
+  check(a.texcoords, "texture coordinate", "texture coordinates");
+  if (!a.texcoords.empty() && !a.corner_uv_index.empty())
+    throw InvalidInput(what + ": texture coordinates both per vertex and per face corner");
+  if (!a.corner_uv_index.empty() && a.corner_uv_index.size() != mesh.faces.size())
+    throw InvalidInput(what + ": " + std::to_string(a.corner_uv_index.size()) +
+                       " faces of texture coordinate indices for " + std::to_string(mesh.faces.size()) +
+                       " faces");
+  for (std::size_t i = 0; i < a.corner_uv.size(); ++i)
+    if (!std::isfinite(a.corner_uv[i][0]) || !std::isfinite(a.corner_uv[i][1]))
+      throw InvalidInput(what + ": texture coordinate " + std::to_string(i) + " is not finite");
+  for (std::size_t f = 0; f < a.corner_uv_index.size(); ++f)
+    for (int t : a.corner_uv_index[f])
+      if (t < 0 || static_cast<std::size_t>(t) >= a.corner_uv.size())
+        throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture coordinate index " +
+                           std::to_string(t) + " is out of range (" + std::to_string(a.corner_uv.size()) +
+                           " texture coordinates)");
+  if (!a.face_materials.empty() && a.face_materials.size() != mesh.faces.size())
+    throw InvalidInput(what + ": " + std::to_string(a.face_materials.size()) + " face materials for " +
+                       std::to_string(mesh.faces.size()) + " faces");
+  for (std::size_t f = 0; f < a.face_materials.size(); ++f)
+    if (a.face_materials[f] < -1 || a.face_materials[f] >= static_cast<int>(a.material_names.size()))
+      throw InvalidInput(what + ": face " + std::to_string(f) + "'s material " +
+                         std::to_string(a.face_materials[f]) + " is out of range (" +
+                         std::to_string(a.material_names.size()) + " materials)");
+  // Names go into OBJ lines: one token each, nothing that would end the line.
+  auto check_name = [&](const std::string& name, const std::string& which) {
+    if (name.empty() || name.find_first_of("\n\r") != std::string::npos ||
+        name.find('\0') != std::string::npos)
+      throw InvalidInput(what + ": " + which + " '" + name + "' is empty or holds a line break or NUL");
+  };
+  if (!a.material_library.empty()) check_name(a.material_library, "material library");
+  for (const std::string& n : a.material_names) check_name(n, "material name");
 }
 
 void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what) {

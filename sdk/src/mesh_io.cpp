@@ -284,7 +284,7 @@ struct FaceRecord {
   std::vector<Cut> cuts;
   //! If given, the per-vertex colours and texture coordinates the file holds, and notes on the
   //! data of that kind that could not be kept (read_mesh_file()).
-  VertexAttributes* attributes = nullptr;
+  MeshAttributes* attributes = nullptr;
   std::vector<std::string>* dropped = nullptr;
 };
 
@@ -513,6 +513,20 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
   long long corners_with_vt = 0, corners_without_vt = 0;
   bool vt_by_index = true;  // every corner uses the vt of its vertex's number (as write_mesh writes)
   std::vector<char> seam(vt_of.size(), 0);
+  // Per polygon, in file order: its corners' vertices and vt (-1: none), and its material.
+  std::vector<int> poly_sizes, poly_vertices, poly_vts, poly_materials;
+  std::vector<std::string> material_names;
+  std::unordered_map<std::string, int> material_index;
+  std::string material_library;
+  bool materials_seen = false;
+  int material = -1;
+  // The rest of a line's tokens, joined by single spaces (a material or library name).
+  auto rest_of_line = [](LineTokens& t) {
+    std::string out;
+    std::string_view w;
+    while (t.next(w)) out += (out.empty() ? "" : " ") + std::string(w);
+    return out;
+  };
   while (lines.next(raw)) {
     LineTokens tok(strip_comment(raw));
     std::string_view key;
@@ -525,8 +539,31 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
       ++texcoords_so_far;
       continue;
     }
+    if (want_attributes && key == "mtllib") {
+      const std::string lib = rest_of_line(tok);
+      if (material_library.empty())
+        material_library = lib;
+      else if (lib != material_library)
+        record->dropped->push_back("material library '" + lib + "' (" + lines.where() +
+                                   "): only the first, '" + material_library + "', is kept");
+      materials_seen = true;
+      continue;
+    }
+    if (want_attributes && key == "usemtl") {
+      const std::string m = rest_of_line(tok);
+      materials_seen = true;
+      if (m.empty()) {
+        material = -1;
+      } else {
+        const auto [it, fresh] = material_index.emplace(m, static_cast<int>(material_names.size()));
+        if (fresh) material_names.push_back(m);
+        material = it->second;
+      }
+      continue;
+    }
     if (key != "f") continue;
     corners.clear();
+    const std::size_t poly_start = poly_vts.size();
     std::string_view corner;
     while (tok.next(corner)) {
       const std::size_t slash = corner.find('/');
@@ -537,6 +574,7 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
         long long ti = 0;
         if (t.empty()) {
           ++corners_without_vt;
+          poly_vts.push_back(-1);
         } else if (parse_int(t, ti) != Parsed::Ok || ti == 0 || ti > texcoords_so_far ||
                    -ti > texcoords_so_far) {
           fail_input(name, lines.where() + ": face corner " + quote_token(corner) +
@@ -545,6 +583,7 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
         } else {
           ++corners_with_vt;
           ti = ti > 0 ? ti - 1 : texcoords_so_far + ti;
+          poly_vts.push_back(static_cast<int>(ti));
           long long vi = 0;
           if (parse_int(index_text, vi) == Parsed::Ok && vi != 0) {
             vi = vi > 0 ? vi - 1 : vertices_so_far + vi;
@@ -575,10 +614,26 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
       }
     }
     faces.add_checked(corners, [&] { return lines.where(); });
+    if (want_attributes) {
+      poly_sizes.push_back(static_cast<int>(corners.size()));
+      for (long long c : corners) poly_vertices.push_back(static_cast<int>(c));
+      if (vt_of.empty()) poly_vts.resize(poly_start + corners.size(), -1);
+      poly_materials.push_back(material);
+    }
   }
   mesh.faces = faces.finish(mesh.vertices);
+  // Each polygon of n corners became n - 2 consecutive triangles of its corners: a per-polygon
+  // value goes to each, a per-corner one by the corner's vertex.
+  auto for_each_triangle = [&](const auto& f) {
+    std::size_t tri = 0, corner = 0;
+    for (std::size_t p = 0; p < poly_sizes.size(); ++p) {
+      const int n = poly_sizes[p];
+      for (int k = 0; k + 2 < n && tri < mesh.faces.size(); ++k, ++tri) f(tri, p, corner, n);
+      corner += static_cast<std::size_t>(n);
+    }
+  };
   if (want_attributes) {
-    VertexAttributes& a = *record->attributes;
+    MeshAttributes& a = *record->attributes;
     const long long nv = mesh.num_vertices();
     if (colored == nv && nv > 0) {
       a.colors = std::move(colors);
@@ -593,14 +648,31 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
                                  std::to_string(corners_with_vt + corners_without_vt) +
                                  " face corners have none");
     } else if (seams > 0) {
-      record->dropped->push_back("texture coordinates: " + std::to_string(seams) +
-                                 " vertices have more than one (texture seams; Strata keeps one per vertex)");
+      // Per face corner: the file's vt list, each triangle corner's entry by its vertex.
+      a.corner_uv = std::move(texcoords);
+      a.corner_uv_index.assign(mesh.faces.size(), {0, 0, 0});
+      for_each_triangle([&](std::size_t tri, std::size_t, std::size_t corner, int n) {
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < n; ++k)
+            if (poly_vertices[corner + k] == mesh.faces[tri][c]) {
+              a.corner_uv_index[tri][c] = poly_vts[corner + k];
+              break;
+            }
+      });
     } else if (corners_with_vt > 0 && vt_by_index && texcoords.size() == mesh.vertices.size()) {
       a.texcoords = std::move(texcoords);  // vertices in no face keep theirs too
     } else if (corners_with_vt > 0) {
       a.texcoords.assign(mesh.vertices.size(), {0.0, 0.0});  // (0, 0) for vertices in no face
       for (std::size_t v = 0; v < vt_of.size(); ++v)
         if (vt_of[v] >= 0) a.texcoords[v] = texcoords[static_cast<std::size_t>(vt_of[v])];
+    }
+    if (materials_seen) {
+      a.material_library = std::move(material_library);
+      a.material_names = std::move(material_names);
+      a.face_materials.assign(mesh.faces.size(), -1);
+      for_each_triangle([&](std::size_t tri, std::size_t p, std::size_t, int) {
+        a.face_materials[tri] = poly_materials[p];
+      });
     }
   }
   return mesh;
@@ -728,7 +800,7 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
     if (want_attributes && (has_color || has_st)) read_off_vertex_extras(t, v, lines.where());
   }
   if (want_attributes) {
-    VertexAttributes& a = *record->attributes;
+    MeshAttributes& a = *record->attributes;
     if (has_color && colors_ok && nv > 0) {
       a.colors = std::move(colors);
       a.colors_have_alpha = alpha;
@@ -1052,7 +1124,7 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   std::vector<long long> corners;
   PlyValue value;
   const bool want_attributes = record && record->attributes;
-  VertexAttributes attrs;
+  MeshAttributes attrs;
   for (const PlyElement& e : h.elements) {
     // An element without properties holds no data, whatever its count; but vertices must have
     // coordinates (faces are checked against the vertex count).
@@ -1535,7 +1607,7 @@ void float_token(ChunkedWriter& w, double x) {
 }
 
 // The colour channels written: RGB, or RGBA if the colours came with alpha.
-int color_channels(const VertexAttributes& a) {
+int color_channels(const MeshAttributes& a) {
   return a.colors_have_alpha ? 4 : 3;
 }
 
@@ -1543,10 +1615,14 @@ int color_channels(const VertexAttributes& a) {
 // \p a: the vertices' colours and texture coordinates, or null.
 template <class F>
 void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
-               const VertexAttributes* a = nullptr) {
+               const MeshAttributes* a = nullptr) {
   const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
+  // Per face corner (texture seams) only for triangles, whose corners the indices follow.
+  const bool corner_uv = a && !a->corner_uv_index.empty() && a->corner_uv_index.size() == faces.size();
+  const bool materials = a && a->face_materials.size() == faces.size();
   // The count comment lets read_mesh detect truncation (OBJ has no counts of its own).
   w.text("# " + std::to_string(vertices.size()) + " vertices, " + std::to_string(faces.size()) + " faces\n");
+  if (a && !a->material_library.empty()) w.text("mtllib " + a->material_library + "\n");
   for (std::size_t v = 0; v < vertices.size(); ++v) {
     w.text("v ");
     write_vec(w, vertices[v]);
@@ -1558,8 +1634,8 @@ void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
     w.text("\n");
     w.maybe_flush();
   }
-  if (uv)
-    for (const auto& t : a->texcoords) {
+  if (uv || corner_uv)
+    for (const auto& t : uv ? a->texcoords : a->corner_uv) {
       w.text("vt ");
       w.number(t[0]);
       w.text(" ");
@@ -1567,14 +1643,23 @@ void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
       w.text("\n");
       w.maybe_flush();
     }
-  for (const F& f : faces) {
+  int material = -1;
+  for (std::size_t j = 0; j < faces.size(); ++j) {
+    const F& f = faces[j];
+    if (materials && a->face_materials[j] != material) {
+      material = a->face_materials[j];
+      w.text(material < 0 ? std::string("usemtl\n") : "usemtl " + a->material_names[material] + "\n");
+    }
     w.text("f");
-    for (int i : f) {
+    for (std::size_t c = 0; c < f.size(); ++c) {
       w.text(" ");
-      w.integer(i + 1ll);
+      w.integer(f[c] + 1ll);
       if (uv) {
         w.text("/");
-        w.integer(i + 1ll);
+        w.integer(f[c] + 1ll);
+      } else if (corner_uv) {
+        w.text("/");
+        w.integer(a->corner_uv_index[j][c] + 1ll);
       }
     }
     w.text("\n");
@@ -1595,7 +1680,7 @@ void write_face_line(ChunkedWriter& w, const F& f) {
 
 template <class F>
 void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w,
-               const VertexAttributes* a = nullptr) {
+               const MeshAttributes* a = nullptr) {
   const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
   w.text(std::string(uv ? "ST" : "") + (colors ? "C" : "") + "OFF\n" + std::to_string(vertices.size()) + " " +
          std::to_string(faces.size()) + " 0\n");
@@ -1623,7 +1708,7 @@ void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
 
 // Whether every colour channel is k / 255 for an integer k in [0, 255], as 8-bit colours read:
 // then they are written as uchar, which every PLY reader takes.
-bool colors_are_8_bit(const VertexAttributes& a) {
+bool colors_are_8_bit(const MeshAttributes& a) {
   for (const auto& c : a.colors)
     for (double x : c) {
       if (!(x >= 0.0 && x <= 1.0)) return false;
@@ -1634,7 +1719,7 @@ bool colors_are_8_bit(const VertexAttributes& a) {
 
 template <class F>
 void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, ChunkedWriter& w, bool binary,
-               const VertexAttributes* a = nullptr) {
+               const MeshAttributes* a = nullptr) {
   const bool colors = a && !a->colors.empty(), uv = a && !a->texcoords.empty();
   const bool uchar = colors && colors_are_8_bit(*a);
   const int channels = colors ? color_channels(*a) : 0;
@@ -1774,7 +1859,7 @@ namespace {
 
 TriMesh read_mesh_impl(const std::string& path, const ReadOptions& options,
                        std::vector<std::vector<int>>* polygons, int* flipped_faces,
-                       VertexAttributes* attributes, std::vector<std::string>* dropped) {
+                       MeshAttributes* attributes, std::vector<std::string>* dropped) {
   if (flipped_faces) *flipped_faces = 0;
   const Format format = format_of(path);
   const std::string file = internal::read_whole_file(path);
@@ -1805,7 +1890,8 @@ TriMesh read_mesh_impl(const std::string& path, const ReadOptions& options,
       break;
   }
   if (options.orient_faces) {
-    const std::vector<Face> before = polygons ? mesh.faces : std::vector<Face>{};
+    const bool corner_data = attributes && !attributes->corner_uv_index.empty();
+    const std::vector<Face> before = polygons || corner_data ? mesh.faces : std::vector<Face>{};
     int flipped = 0;
     try {
       flipped = orient_faces(mesh);
@@ -1813,6 +1899,12 @@ TriMesh read_mesh_impl(const std::string& path, const ReadOptions& options,
       fail_input(path, e.what());
     }
     if (flipped_faces) *flipped_faces = flipped;
+    // A flipped triangle's last two corners swapped places (orient_faces()): so do their texture
+    // coordinates.
+    if (corner_data && flipped > 0)
+      for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+        if (mesh.faces[f] != before[f])
+          std::swap(attributes->corner_uv_index[f][1], attributes->corner_uv_index[f][2]);
     // A flipped triangle's polygon runs the other way too (all of its triangles flip together in
     // a consistent part, the polygon's fan or clipping being oriented as the polygon).
     if (polygons && flipped > 0) {
@@ -1847,23 +1939,33 @@ TriMesh read_mesh(const std::string& path, const ReadOptions& options,
 MeshFile read_mesh_file(const std::string& path, const ReadOptions& options) {
   MeshFile f;
   f.mesh = read_mesh_impl(path, options, &f.polygons, &f.flipped_faces, &f.attributes, &f.dropped);
-  check_vertex_attributes(f.attributes, f.mesh.vertices.size(), path);
+  check_mesh_attributes(f.attributes, f.mesh, path);
   return f;
 }
 
-bool format_stores_vertex_attributes(const std::string& path) {
-  return format_of(path) != Format::Stl;
+std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {
+  const Format format = format_of(path);
+  std::vector<std::string> lost;
+  if (format == Format::Obj) return lost;
+  const MeshAttributes& a = attributes;
+  if (format == Format::Stl) {
+    if (!a.colors.empty()) lost.push_back("vertex colours");
+    if (!a.texcoords.empty()) lost.push_back("texture coordinates");
+  }
+  if (!a.corner_uv_index.empty()) lost.push_back("texture coordinates per face corner (texture seams)");
+  if (!a.face_materials.empty() || !a.material_library.empty()) lost.push_back("materials");
+  return lost;
 }
 
 void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding) {
-  write_mesh(mesh, VertexAttributes{}, path, encoding);
+  write_mesh(mesh, MeshAttributes{}, path, encoding);
 }
 
-void write_mesh(const TriMesh& mesh, const VertexAttributes& attributes, const std::string& path,
+void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std::string& path,
                 MeshEncoding encoding) {
   const Format format = format_of(path);
-  check_vertex_attributes(attributes, mesh.vertices.size(), path);
-  const VertexAttributes* a = attributes.empty() ? nullptr : &attributes;
+  check_mesh_attributes(attributes, mesh, path);
+  const MeshAttributes* a = attributes.empty() ? nullptr : &attributes;
   if (encoding == MeshEncoding::Binary && (format == Format::Obj || format == Format::Off))
     fail_input(path, "OBJ and OFF have no binary encoding");
   validate_mesh(mesh, path);

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # A scan's vertex colours and texture coordinates through the CLI: `stats` reports them; `deform`,
 # `reconstruct`, `build` + `edit` + `export` write the result's moved vertices with the scan's
-# values, exactly, in PLY, OBJ and OFF; STL, which stores none, gets a warning; and what a file
-# holds that cannot be kept (texture seams) is a note naming the file.
+# values, exactly, in PLY, OBJ and OFF; STL, which stores none, gets a warning; a textured OBJ
+# keeps its seams and materials; and what a file holds that cannot be kept is a note naming it.
 # Usage: bash attributes.sh <path-to-strata> <tests/data dir>
 set -euo pipefail
 STRATA=${1:?usage: attributes.sh <path-to-strata> <tests/data dir>}
@@ -115,7 +115,7 @@ done
 python3 "$TMP/mesh.py" same "$SCAN" "$TMP/vectors.ply"
 # STL stores none: written, with a warning.
 "$STRATA" deform "$SCAN" --edit "$TMP/bend.json" -o "$TMP/deformed.stl" -q >/dev/null 2>"$TMP/stl.err"
-grep -q "deformed.stl: STL stores no vertex colours or texture coordinates" "$TMP/stl.err" ||
+grep -q "deformed.stl: this format does not store vertex colours and texture coordinates" "$TMP/stl.err" ||
   { echo "FAIL: no STL warning: $(cat "$TMP/stl.err")" >&2; exit 1; }
 
 # reconstruct: the detail's values go with the reconstructed vertices.
@@ -136,29 +136,67 @@ import json, sys
 s = json.load(sys.stdin)
 if s['vertex_colors'] != 'none': sys.exit('FAIL: band 1 exported with colours')"
 
-# Texture coordinates with seams cannot be kept per vertex: a note naming the file, and the rest
-# of the edit goes on.
+# A textured OBJ as photogrammetry writes it: texture coordinates per face corner with seams (the
+# first face's corners use other vt than their vertices'), a material library and two
+# materials. deform keeps all of it (the faces' vt and usemtl as in the input); PLY cannot, and
+# says so; an output away from the library gets a note.
 python3 - "$TMP/case/detail.obj" "$TMP/seams.obj" <<'PY'
 import sys
 lines = open(sys.argv[1]).read().splitlines()
-out, nv = [], 0
+out, nv = ["mtllib scan.mtl"], 0
 for l in lines:
     if l.startswith("v "): nv += 1
     if not l.startswith("f "): out.append(l)
-out += ["vt %d 0" % k for k in range(nv + 1)]
-first = True
+out += ["vt %d 0.5" % k for k in range(nv + 1)]
+k = 0
 for l in lines:
     if l.startswith("f "):
-        idx = l.split()[1:]
-        shift = 1 if first else 0  # the first face's corners use other vt than their vertices'
-        out.append("f " + " ".join("%s/%d" % (i, int(i) + shift) for i in idx))
-        first = False
+        if k % 1000 == 0: out.append("usemtl %s" % ("skin", "eyes")[(k // 1000) % 2])
+        shift = 1 if k == 0 else 0
+        out.append("f " + " ".join("%s/%d" % (i, int(i) + shift) for i in l.split()[1:]))
+        k += 1
 open(sys.argv[2], "w").write("\n".join(out) + "\n")
 PY
+printf 'newmtl skin\nnewmtl eyes\n' >"$TMP/scan.mtl"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.obj" -q >/dev/null 2>"$TMP/seams.err"
-grep -q "seams.obj: not kept: texture coordinates: 3 vertices have more than one" "$TMP/seams.err" ||
-  { echo "FAIL: no note on the seams: $(cat "$TMP/seams.err")" >&2; exit 1; }
-if grep -q "^vt" "$TMP/seams_out.obj"; then echo "FAIL: seams written as per-vertex vt" >&2; exit 1; fi
+[ ! -s "$TMP/seams.err" ] || { echo "FAIL: notes on a textured OBJ: $(cat "$TMP/seams.err")" >&2; exit 1; }
+cat >"$TMP/compare_textured.py" <<'PY'
+import sys
+def parts(path):
+    vt, corners, mtl, lib, v = [], [], [], [], []
+    for l in open(path):
+        t = l.split()
+        if not t: continue
+        if t[0] == "vt": vt.append(tuple(float(x) for x in t[1:3]))
+        if t[0] == "f": corners.append(tuple(c for c in t[1:])); mtl.append(cur)
+        if t[0] == "usemtl": cur = t[1]
+        if t[0] == "mtllib": lib.append(t[1])
+        if t[0] == "v": v.append(tuple(float(x) for x in t[1:4]))
+    return vt, corners, mtl, lib, v
+a, b = parts(sys.argv[1]), parts(sys.argv[2])
+names = ("texture coordinates", "face corners (vertex/vt)", "face materials", "material library")
+errors = [n for n, x, y in zip(names, a, b) if x != y]
+if a[4] == b[4]: errors.append("no vertex moved")
+if errors: sys.exit("FAIL: textured OBJ %s: %s differ" % (sys.argv[2], ", ".join(errors)))
+PY
+python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
+# The same through a layered model: build, edit band 0, export the finest band.
+"$STRATA" build "$TMP/seams.obj" -o "$TMP/seams.strata" -q >/dev/null
+"$STRATA" edit "$TMP/seams.strata" --band 0 --edit "$TMP/bend.json" -o "$TMP/seams_edited.strata" -q >/dev/null 2>"$TMP/edit.err"
+"$STRATA" export "$TMP/seams_edited.strata" -o "$TMP/seams_out.obj" >/dev/null
+python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
+"$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.ply" -q >/dev/null 2>"$TMP/seams_ply.err"
+grep -q "seams_out.ply: this format does not store texture coordinates per face corner (texture seams) and materials" \
+  "$TMP/seams_ply.err" || { echo "FAIL: no warning for PLY: $(cat "$TMP/seams_ply.err")" >&2; exit 1; }
+mkdir "$TMP/elsewhere"
+"$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/elsewhere/out.obj" -q >/dev/null 2>"$TMP/lib.err"
+grep -q "out.obj refers to the material library 'scan.mtl', which is not in its directory" "$TMP/lib.err" ||
+  { echo "FAIL: no note on the material library: $(cat "$TMP/lib.err")" >&2; exit 1; }
+# Texture coordinates on only some face corners cannot be kept: a note naming the file.
+sed '0,/^f /s|^f \([0-9]*\)/[0-9]* |f \1 |' "$TMP/seams.obj" >"$TMP/partial.obj"
+"$STRATA" deform "$TMP/partial.obj" --edit "$TMP/bend.json" -o "$TMP/partial_out.obj" -q >/dev/null 2>"$TMP/partial.err"
+grep -q "partial.obj: not kept: texture coordinates: 1 of the 23940 face corners have none" "$TMP/partial.err" ||
+  { echo "FAIL: no note on partial texture coordinates: $(cat "$TMP/partial.err")" >&2; exit 1; }
 
 # A colour of NaN is an error naming the file; nothing is written.
 sed '0,/^v /s/^v \(.*\)$/v \1 nan 0 0/' "$TMP/case/detail.obj" >"$TMP/nan.obj"

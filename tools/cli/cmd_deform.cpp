@@ -235,7 +235,7 @@ int run_deform(const DeformCmdOptions& o) {
   StagedOutputs staged;  // the outputs land together, or none does
   validate_result(current, "the mesh edited by " + o.edit, o.output);
   warn_stl_drops_vertices(current, o.output);
-  warn_stl_drops_attributes(input.attributes, o.output);
+  warn_attributes_not_stored(input.attributes, o.output);
   staged.write(o.output, [&](const std::string& p) { write_mesh(current, input.attributes, p); });
   if (!o.base_output.empty()) {
     if (subdiv)

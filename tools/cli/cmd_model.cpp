@@ -143,7 +143,7 @@ int run_build(const BuildCmdOptions& o) {
           throw SolverError(scan.name + ": " + e.what());
         }
       }();
-      model.set_vertex_attributes(model.num_bands() - 1, scan.attributes);
+      model.set_attributes(model.num_bands() - 1, scan.attributes);
       const double build_seconds = sw.seconds();
       std::string written = out;
       if (o.output.empty())
@@ -472,10 +472,10 @@ int run_export(const ExportCmdOptions& o) {
                        e.what());
   }
   // A triangle band's colours and texture coordinates (the scan's, on the finest band).
-  const VertexAttributes none;
-  const VertexAttributes& attributes = k >= 1 ? model.band(k).attributes : none;
+  const MeshAttributes none;
+  const MeshAttributes& attributes = k >= 1 ? model.band(k).attributes : none;
   warn_stl_drops_vertices(mesh, o.output);
-  warn_stl_drops_attributes(attributes, o.output);
+  warn_attributes_not_stored(attributes, o.output);
   validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault
   write_mesh(mesh, attributes, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "

@@ -98,7 +98,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   StagedOutputs staged;  // the mesh lands only with its report
   validate_result(result, "the reconstructed detail", o.output);
   warn_stl_drops_vertices(result, o.output);
-  warn_stl_drops_attributes(detail.attributes, o.output);
+  warn_attributes_not_stored(detail.attributes, o.output);
   staged.write(o.output, [&](const std::string& p) { write_mesh(result, detail.attributes, p); });
   times.write = sw.seconds();
 

@@ -118,13 +118,23 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
               << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
 }
 
-void warn_stl_drops_attributes(const VertexAttributes& attributes, const std::string& path) {
-  if (attributes.empty() || format_stores_vertex_attributes(path)) return;
-  std::cerr << "strata: warning: " << path << ": STL stores no vertex "
-            << (attributes.colors.empty()      ? "texture coordinates"
-                : attributes.texcoords.empty() ? "colours"
-                                               : "colours or texture coordinates")
-            << "; they are not written (OBJ, OFF and PLY keep them)" << std::endl;
+void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {
+  const std::vector<std::string> lost = attributes_not_stored(attributes, path);
+  if (!lost.empty()) {
+    std::string what;
+    for (std::size_t i = 0; i < lost.size(); ++i)
+      what += (i == 0 ? "" : i + 1 == lost.size() ? " and " : ", ") + lost[i];
+    std::cerr << "strata: warning: " << path << ": this format does not store " << what
+              << "; not written (OBJ keeps them)" << std::endl;
+  }
+  if (!attributes.material_library.empty() && lower_extension(path) == ".obj") {
+    const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::exists(dir / attributes.material_library, ec))
+      std::cerr << "strata: note: " << path << " refers to the material library '"
+                << attributes.material_library
+                << "', which is not in its directory: copy it (and its textures) there" << std::endl;
+  }
 }
 
 void require_numbers(CLI::App& app) {

@@ -100,7 +100,7 @@ struct NamedMesh {
   int reoriented_faces = 0;  //!< read_scan(): faces flipped to agree with their neighbours
   //! The file's vertex colours and texture coordinates (read_mesh_file()), written with the
   //! command's result mesh, which keeps the vertex numbering.
-  VertexAttributes attributes{};
+  MeshAttributes attributes{};
 };
 
 //! read_mesh_file(path) with the path in the name; what the file holds that cannot be kept
@@ -119,9 +119,10 @@ std::string lower_extension(const std::string& path);
 //! in no face: STL holds triangles only, so they would be lost without a word.
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
-//! Warns on stderr when \p attributes (colours, texture coordinates) are to be written to an STL
-//! \p path, which stores none.
-void warn_stl_drops_attributes(const VertexAttributes& attributes, const std::string& path);
+//! Warns on stderr about what of \p attributes (colours, texture coordinates, materials) the
+//! format of \p path cannot store (attributes_not_stored()), and notes an OBJ's material library
+//! that is not beside \p path (the file names it relative to its own directory).
+void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
 
 //! Checks a computed mesh (validate_mesh) before it is written to \p output: an error names the
 //! result (\p what) and says that \p output was not written, where the writer's own check names

@@ -35,7 +35,7 @@ std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
   return colors;
 }
 
-std::vector<Rgb> vertex_colors(const VertexAttributes& attributes) {
+std::vector<Rgb> vertex_colors(const MeshAttributes& attributes) {
   std::vector<Rgb> colors;
   colors.reserve(attributes.colors.size());
   for (const auto& c : attributes.colors)

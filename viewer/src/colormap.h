@@ -27,7 +27,7 @@ ColorMode parse_color_mode(const std::string& name);
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale);
 
 //! Per-vertex colours of \p attributes (their RGB), or none (empty) if they have no colours.
-std::vector<Rgb> vertex_colors(const VertexAttributes& attributes);
+std::vector<Rgb> vertex_colors(const MeshAttributes& attributes);
 
 //! Per-face colours marking the faces of intersecting non-adjacent triangle pairs (exact test,
 //! find_self_intersections), the rest in the surface colour. \p pairs receives the pair count.

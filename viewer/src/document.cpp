@@ -42,7 +42,7 @@ Document build_layers(const Document& document, int bands) {
   layers::BuildOptions options;
   options.bands = bands;
   layers::LayeredModel model = layers::LayeredModel::build(document.mesh(), options);
-  model.set_vertex_attributes(model.num_bands() - 1, document.attributes(0));  // the scan's, on its band
+  model.set_attributes(model.num_bands() - 1, document.attributes(0));  // the scan's, on its band
   return Document::from_model(std::move(model), document.name());
 }
 
@@ -63,10 +63,10 @@ Document Document::from_model(layers::LayeredModel model, const std::string& nam
   return d;
 }
 
-Document Document::from_mesh(TriMesh mesh, const std::string& name, VertexAttributes attributes) {
+Document Document::from_mesh(TriMesh mesh, const std::string& name, MeshAttributes attributes) {
   Document d;
   d.name_ = name;
-  check_vertex_attributes(attributes, mesh.vertices.size(), name);
+  check_mesh_attributes(attributes, mesh, name);
   d.mesh_ = std::move(mesh);
   d.attributes_ = std::move(attributes);
   d.mesh_errors_.assign(d.mesh_.faces.size(), kNaN);
@@ -99,9 +99,9 @@ TriMesh Document::band_mesh(int k) const {
   return model_ ? model_->band_mesh(k) : mesh_;
 }
 
-const VertexAttributes& Document::attributes(int k) const {
+const MeshAttributes& Document::attributes(int k) const {
   check_band(k);
-  static const VertexAttributes none;
+  static const MeshAttributes none;
   if (!model_) return attributes_;
   return k == 0 ? none : model_->band(k).attributes;
 }

@@ -31,7 +31,7 @@ class Document {
   int reoriented_faces() const { return reoriented_faces_; }
   //! Wraps an existing model or mesh (with its vertex colours and texture coordinates, if any).
   static Document from_model(layers::LayeredModel model, const std::string& name);
-  static Document from_mesh(TriMesh mesh, const std::string& name, VertexAttributes attributes = {});
+  static Document from_mesh(TriMesh mesh, const std::string& name, MeshAttributes attributes = {});
   //! The plain mesh. \pre !is_model().
   const TriMesh& mesh() const { return mesh_; }
 
@@ -50,7 +50,7 @@ class Document {
   //! The vertex colours and texture coordinates of band_mesh(k): a plain mesh's (from its file), a
   //! model's triangle band's (Band::attributes: the scan's on the finest band); none for band 0
   //! of a model.
-  const VertexAttributes& attributes(int k) const;
+  const MeshAttributes& attributes(int k) const;
   //! Where selections of band k are evaluated: cage points for band 0 of a model, else vertices.
   const std::vector<Vec3>& band_points(int k) const;
   //! Band 0's control net as pairs of segment end points (empty for a plain mesh).
@@ -83,8 +83,8 @@ class Document {
  private:
   std::string name_;
   std::optional<layers::LayeredModel> model_;
-  TriMesh mesh_;                 // plain mesh
-  VertexAttributes attributes_;  // plain mesh: its file's colours and texture coordinates
+  TriMesh mesh_;               // plain mesh
+  MeshAttributes attributes_;  // plain mesh: its file's colours and texture coordinates
   int reoriented_faces_ = 0;
   std::vector<double> mesh_errors_;         // plain mesh: per face, NaN outside the last edit's region
   std::vector<Vec3> mesh_vectors_;          // plain mesh: the last edit by displacement vectors

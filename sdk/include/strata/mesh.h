@@ -23,12 +23,14 @@ struct TriMesh {
   int num_faces() const { return static_cast<int>(faces.size()); }
 };
 
-//! Per-vertex data a scan may carry besides its positions: colours and texture coordinates. Read
+//! What a scan's file may hold besides its geometry that Strata carries along: vertex colours,
+//! texture coordinates (per vertex, or per face corner at texture seams) and OBJ materials. Read
 //! and written with the mesh (read_mesh_file(), write_mesh() in mesh_io.h), kept by a layered
-//! model with its finest band, and carried unchanged through edits and reconstructions, which move
-//! vertices but keep their numbering. Each array is empty (the file has no such data) or holds
-//! one entry per vertex.
-struct VertexAttributes {
+//! model with its finest band, and carried unchanged through edits and reconstructions, which
+//! move vertices but keep the numbering of vertices and faces. Each per-vertex array is empty
+//! (the file has no such data) or has one entry per vertex; each per-face array is empty or has
+//! one entry per face (the triangles, in order).
+struct MeshAttributes {
   //! RGBA per vertex. Integer channels in a file are scaled to [0, 1] (PLY: by the type's
   //! largest value, 255 for uchar; OFF: integers by 255); floating-point ones are kept as the
   //! file gives them. Alpha is 1 where the file gives none.
@@ -36,17 +38,31 @@ struct VertexAttributes {
   //! Whether the colours came with an alpha channel (and are written with one).
   bool colors_have_alpha = false;
   //! (u, v) per vertex: PLY u/v, s/t or texture_u/texture_v; OFF's ST values; OBJ's vt where each
-  //! vertex's corners use one (read_mesh_file() lists seams as dropped).
+  //! vertex's corners use one.
   std::vector<std::array<double, 2>> texcoords;
+  //! Texture coordinates per face corner, where a vertex has several (texture seams: OBJ's vt):
+  //! a list of (u, v) and, per face, its three corners' indices into it. Never given together
+  //! with per-vertex texcoords.
+  std::vector<std::array<double, 2>> corner_uv;
+  std::vector<std::array<int, 3>> corner_uv_index;
+  //! OBJ materials: the material library as the file names it (mtllib, relative to the file),
+  //! the usemtl names, and per face the index of its material in material_names (-1: none).
+  std::string material_library;
+  std::vector<std::string> material_names;
+  std::vector<int> face_materials;
 
-  bool empty() const { return colors.empty() && texcoords.empty(); }
+  bool empty() const {
+    return colors.empty() && texcoords.empty() && corner_uv_index.empty() && face_materials.empty() &&
+           material_library.empty();
+  }
 };
 
-//! Checks that each non-empty array of \p attributes has \p num_vertices entries, all finite.
-//! \throw InvalidInput "<what>: N vertex colours for M vertices" or "<what>: vertex I has a
-//!        non-finite colour" (texture coordinate).
-void check_vertex_attributes(const VertexAttributes& attributes, std::size_t num_vertices,
-                             const std::string& what);
+//! Checks \p attributes against \p mesh: each non-empty per-vertex array has one entry per
+//! vertex and each per-face one one per face; values are finite; corner indices lie in corner_uv
+//! and material indices in material_names (or are -1); not both texcoords and corner_uv_index.
+//! \throw InvalidInput "<what>: N vertex colours for M vertices", "<what>: vertex I has a
+//!        non-finite colour", "<what>: face F's texture coordinate index ... out of range", ...
+void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh, const std::string& what);
 
 //! Checks that every corner of \p faces indexes one of \p num_vertices vertices: what the
 //! functions over a mesh's faces below need before they index its vertices.

@@ -82,21 +82,23 @@ struct MeshFile {
   TriMesh mesh;  //!< as read_mesh(path, options, ...) returns it
   //! The faces as the file lists them, before triangulation (read_mesh(path, polygons)).
   std::vector<std::vector<int>> polygons;
-  //! The file's per-vertex colours and texture coordinates (VertexAttributes), checked finite:
+  //! The file's colours, texture coordinates and materials (MeshAttributes), checked
+  //! (check_mesh_attributes()):
   //! - OBJ: "v x y z r g b [a]" on every vertex (MeshLab's extension; a single extra number is the
-  //!   weight w, ignored); vt, when each vertex's corners use one (a vertex in no face gets the vt
-  //!   of its own number if every corner's vt is its vertex's number and the counts match, as
-  //!   write_mesh() writes them; else (0, 0)).
+  //!   weight w, ignored); vt per vertex when each vertex's corners use one (a vertex in no face
+  //!   gets the vt of its own number if every corner's vt is its vertex's number and the counts
+  //!   match, as write_mesh() writes them; else (0, 0)), per face corner where a vertex has
+  //!   several (seams: corner_uv is the file's vt list); mtllib (the first) and usemtl.
   //! - OFF: the C and ST prefixes' values (integer colours on a 0-255 scale, floats on 0-1).
   //! - PLY: vertex properties red, green, blue [alpha] (or diffuse_*), any type, integer types
   //!   scaled by their largest value; u v, s t, texture_u texture_v or texture_s texture_t.
   //! - STL: none.
-  VertexAttributes attributes;
+  MeshAttributes attributes;
   int flipped_faces = 0;  //!< faces ReadOptions::orient_faces flipped (their polygons reversed too)
-  //! Colours or texture coordinates the file holds that VertexAttributes cannot represent, each
-  //! a note for the user (e.g. "texture coordinates: 12 vertices have more than one (texture
-  //! seams; ...)", or colours on only some vertices). Normals, materials and face colours are not
-  //! kept and not listed: normals are recomputed from the geometry.
+  //! Colours or texture coordinates the file holds that MeshAttributes cannot represent, each
+  //! a note for the user (e.g. "vertex colours: only 2 of the 4 vertices have one", texture
+  //! coordinates on only some face corners, PLY's per-corner texcoord lists). Normals and face
+  //! colours are not kept and not listed: normals are recomputed from the geometry.
   std::vector<std::string> dropped;
 };
 
@@ -124,21 +126,25 @@ enum class MeshEncoding {
 //! \throw IoError if the extension is not supported or the file cannot be written.
 void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encoding = MeshEncoding::Default);
 
-//! As write_mesh(mesh, path, encoding), with the vertices' colours and texture coordinates, so
-//! that read_mesh_file() gives back the same values:
-//! - OBJ: "v x y z r g b [a]", and one "vt u v" per vertex with "f i/i j/j k/k" faces;
+//! As write_mesh(mesh, path, encoding), with \p attributes, so that read_mesh_file() gives back
+//! the same values:
+//! - OBJ: "v x y z r g b [a]"; one "vt u v" per vertex with "f i/i j/j k/k" faces, or the
+//!   corner_uv list with each corner's index; "mtllib" and a "usemtl" wherever the face's
+//!   material changes (a bare "usemtl" for none);
 //! - OFF: [ST]COFF, colours as floats (always written with a decimal point or an exponent);
 //! - PLY: red green blue [alpha] as uchar when every channel is k / 255 exactly (as 8-bit
 //!   colours read), else as double; texture_u texture_v as double;
-//! - STL stores no vertex data: \p attributes are not written (format_stores_vertex_attributes()).
-//! \throw as write_mesh(mesh, path, encoding), and InvalidInput if \p attributes fails
-//!        check_vertex_attributes() for the mesh's vertex count.
-void write_mesh(const TriMesh& mesh, const VertexAttributes& attributes, const std::string& path,
+//! - what a format cannot store is not written (attributes_not_stored()).
+//! \throw as write_mesh(mesh, path, encoding), and InvalidInput if \p attributes fail
+//!        check_mesh_attributes() for \p mesh.
+void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std::string& path,
                 MeshEncoding encoding = MeshEncoding::Default);
 
-//! Whether the format of \p path (by its extension) stores VertexAttributes: OBJ, OFF and PLY
-//! do, STL does not. \throw IoError if the extension is not supported.
-bool format_stores_vertex_attributes(const std::string& path);
+//! What of \p attributes the format of \p path (by its extension) cannot store, for a warning:
+//! OBJ stores everything; OFF and PLY all but "texture coordinates per face corner (texture
+//! seams)" and "materials"; STL also not "vertex colours" nor "texture coordinates". Empty if
+//! nothing is lost. \throw IoError if the extension is not supported.
+std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
 
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)

@@ -92,9 +92,9 @@ struct Band {
   DetailEncoding encoding;      //!< band k >= 1: over band k-1 at rest (detail_rest: rest positions)
   std::vector<Vec3> base_rest;  //!< band k >= 1: band k-1's vertices (cage points for k = 1) at encoding
   double amplitude = 1.0;       //!< band k >= 1: scales the target volumes
-  //! Band k >= 1: per-vertex colours and texture coordinates carried with the band's vertices
-  //! through every edit (the finest band: the scan's, set_vertex_attributes()); empty for none.
-  VertexAttributes attributes;
+  //! Band k >= 1: colours, texture coordinates and materials carried with the band's vertices
+  //! and faces through every edit (the finest band: the scan's, set_attributes()); empty for none.
+  MeshAttributes attributes;
 };
 
 //! Detail magnitude of a band at rest: |p_i - q_i| over its vertices (q_i on band k-1).
@@ -173,12 +173,12 @@ class LayeredModel {
   //! has "op" and "strata", the version of the SDK that ran it (strata::version(); entries of
   //! files written before 2026-11-29 have none).
   const std::vector<std::string>& history() const;
-  //! Sets band k's per-vertex colours and texture coordinates (Band::attributes; typically the
+  //! Sets band k's colours, texture coordinates and materials (Band::attributes; typically the
   //! scan's, from read_mesh_file(), on the finest band). Edits move the vertices and leave these
   //! as they are; write_model() stores them and `strata export` writes them.
   //! \throw InvalidInput if k is 0 or out of range, during a drag, or if \p attributes fail
-  //!        check_vertex_attributes() for the band's vertex count.
-  void set_vertex_attributes(int k, VertexAttributes attributes);
+  //!        check_mesh_attributes() for the band's mesh.
+  void set_attributes(int k, MeshAttributes attributes);
 
   //! Edits band k with one edit step (selections on band_points(k)). Band 0: the transform is
   //! blended over the region's cage vertices (cage_blend_field). Band k >= 1: RegionEditor on the
