@@ -28,6 +28,7 @@
 #include "strata/intersections.h"
 #include "strata/mesh_io.h"
 #include "test_files.h"
+#include "test_meshes.h"
 
 namespace fs = std::filesystem;
 using namespace strata;
@@ -1373,6 +1374,7 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
   for (const Case& c : cases) {
     write_mesh(m, attributes, dir.file(c.name), c.enc);
     const TriMesh whole = read_mesh(dir.file(c.name));
+    const MeshAttributes whole_attributes = read_mesh_file(dir.file(c.name)).attributes;
     const std::string full = read_bytes(dir.file(c.name));
     const std::string cut = dir.file("cut_" + c.name);
     int accepted = 0;
@@ -1390,10 +1392,52 @@ TEST(MeshIoFuzz, EveryPrefixFailsOrReadsTheWholeMesh) {
         // Only losing trailing whitespace or a name may go unnoticed; never part of the mesh.
         ++accepted;
         EXPECT_TRUE(identical(r, whole)) << c.name << " length " << len;
+        EXPECT_TRUE(same_attributes(read_mesh_file(cut).attributes, whole_attributes))
+            << c.name << " length " << len;
       }
     }
     EXPECT_LT(accepted, 20) << c.name;
   }
+}
+
+// A textured OBJ of two-digit indices (vertices, vt, materials), cut at every byte: a prefix is an
+// error or reads the whole mesh with all its attributes. ("f 2/2 3/3 4/12" cut to "... 4/1" read
+// as a valid last line before the writer's count comment asked for a final line break.)
+TEST(MeshIoFuzz, EveryPrefixOfATexturedObjFailsOrReadsItWhole) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const TriMesh m = test::icosphere(1);
+  MeshAttributes a = random_attributes(m.vertices.size(), false, true, false, 8);
+  std::mt19937 rng(5);
+  for (int k = 0; k < 30; ++k) a.corner_uv.push_back({(rng() % 1000) / 999.0, (rng() % 1000) / 999.0});
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    a.corner_uv_index.push_back(
+        {static_cast<int>(rng() % 30), static_cast<int>(rng() % 30), static_cast<int>(rng() % 30)});
+    a.face_materials.push_back(static_cast<int>(f / 7 % 3) - 1);
+  }
+  a.material_library = "scan textures.mtl";
+  a.material_names = {"m1", "skin tone", "unused"};
+  const std::string path = dir.file("t.obj");
+  write_mesh(m, a, path);
+  const MeshFile whole = read_mesh_file(path);
+  ASSERT_TRUE(same_attributes(whole.attributes, a));
+  EXPECT_EQ(whole.attributes.corner_uv_index, a.corner_uv_index);
+  EXPECT_EQ(whole.attributes.face_materials, a.face_materials);
+  EXPECT_EQ(whole.attributes.material_names, a.material_names);  // the unused one too, in order
+  EXPECT_EQ(whole.attributes.material_library, a.material_library);
+  const std::string full = read_bytes(path), cut = dir.file("cut.obj");
+  int accepted = 0;
+  for (size_t len = 0; len < full.size(); ++len) {
+    write_bytes(cut, full.substr(0, len));
+    TriMesh r;
+    ASSERT_TRUE(error_or_valid(cut, &r)) << "length " << len;
+    if (r.num_faces() == 0) continue;
+    ++accepted;
+    const MeshFile f = read_mesh_file(cut);
+    EXPECT_TRUE(identical(f.mesh, whole.mesh)) << "length " << len;
+    EXPECT_EQ(f.attributes.corner_uv_index, a.corner_uv_index) << "length " << len;
+    EXPECT_EQ(f.attributes.face_materials, a.face_materials) << "length " << len;
+  }
+  EXPECT_EQ(accepted, 0);  // the final line break is the last byte
 }
 
 TEST(MeshIoFuzz, ByteFlipsInValidFiles) {
@@ -1736,6 +1780,74 @@ TEST(MeshIoAttributes, TextureSeamsAndMaterialsOfAnObjAreKept) {
   EXPECT_EQ(h.flipped_faces, 1);
   EXPECT_EQ(h.mesh.faces, f.mesh.faces);
   EXPECT_EQ(h.attributes.corner_uv_index, a.corner_uv_index);
+}
+
+TEST(MeshIoAttributes, ObjFacesMayNameTextureCoordinatesListedAfterThem) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  // As vertices may be listed after the faces that use them (OBJ allows both orders).
+  write_bytes(
+      dir.file("fwd.obj"),
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1/1 3/3 2/2\nf 1/1 2/2 4/4\nf 1/1 4/4 3/3\nf 2/2 3/3 4/4\n"
+      "vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n");
+  const MeshFile f = read_mesh_file(dir.file("fwd.obj"));
+  EXPECT_EQ(f.attributes.texcoords, (std::vector<std::array<double, 2>>{{0, 0}, {1, 0}, {0, 1}, {1, 1}}));
+  // A relative index counts back from the vt lines before the face: none here.
+  write_bytes(dir.file("rel.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1/-1 3/3 2/2\nf 1 2 4\nvt 0 0\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh_file(dir.file("rel.obj")); },
+                                        {dir.file("rel.obj"), "line 5", "'1/-1'", "(0 precede it)"}));
+  write_bytes(dir.file("far.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/5\nvt 0 0\nvt 1 0\nvt 0 1\n");
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { read_mesh_file(dir.file("far.obj")); },
+                                        {"line 4", "'3/5'", "(the file has 3)"}));
+}
+
+TEST(MeshIoAttributes, WhatAnObjCannotHoldIsRefusedBeforeWriting) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  for (const std::string& name : {std::string("mat#2"), std::string(" lead"), std::string("x\ty"),
+                                  std::string("a  b"), std::string("")}) {
+    MeshAttributes a;
+    a.material_names = {name};
+    a.face_materials.assign(m.faces.size(), 0);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, a, dir.file("n.obj")); },
+                                          {"material name", "cannot be written to OBJ as it is"}))
+        << name;
+  }
+  MeshAttributes lib;
+  lib.material_library = "lib#1.mtl";
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { write_mesh(m, lib, dir.file("n.obj")); }, {"material library"}));
+  // Alpha other than 1 without an alpha channel would be lost.
+  MeshAttributes c = random_attributes(m.vertices.size(), false, true, false, 2);
+  c.colors[3][3] = 0.5;
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(m, c, dir.file("n.ply")); },
+                                        {"vertex 3 has alpha 0.5", "no alpha channel"}));
+  EXPECT_FALSE(fs::exists(dir.file("n.obj")));
+  EXPECT_FALSE(fs::exists(dir.file("n.ply")));
+  // Names of words between single spaces, and several libraries, come back as they were.
+  MeshAttributes ok;
+  ok.material_library = "a.mtl b.mtl";
+  ok.material_names = {"dark skin", "eyes"};
+  ok.face_materials.assign(m.faces.size(), 1);
+  ok.face_materials[5] = -1;
+  write_mesh(m, ok, dir.file("ok.obj"));
+  const MeshAttributes back = read_mesh_file(dir.file("ok.obj")).attributes;
+  EXPECT_EQ(back.material_library, ok.material_library);
+  EXPECT_EQ(back.material_names, ok.material_names);
+  EXPECT_EQ(back.face_materials, ok.face_materials);
+}
+
+TEST(MeshIoAttributes, APlyTextureCoordinateWithoutItsPartnerIsListed) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  write_bytes(
+      dir.file("u.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+      "property float texture_u\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 1\n1 0 0 2\n0 1 0 3\n0 0 1 4\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  const MeshFile f = read_mesh_file(dir.file("u.ply"));
+  EXPECT_TRUE(f.attributes.empty());
+  EXPECT_EQ(f.dropped, (std::vector<std::string>{
+                           "texture coordinates: the vertex element has texture_u without its partner "
+                           "(or as a list)"}));
 }
 
 TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {

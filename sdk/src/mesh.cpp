@@ -23,6 +23,17 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
+namespace {
+
+// At most 64 characters of \p s, control bytes as '?', for a message.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (char c : s.substr(0, 64)) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+  return s.size() > 64 ? out + "..." : out;
+}
+
+}  // namespace
+
 void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh, const std::string& what) {
   auto check = [&](const auto& values, const char* name, const char* plural) {
     if (values.empty()) return;
@@ -60,12 +71,23 @@ void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh
       throw InvalidInput(what + ": face " + std::to_string(f) + "'s material " +
                          std::to_string(a.face_materials[f]) + " is out of range (" +
                          std::to_string(a.material_names.size()) + " materials)");
-  // Names go into OBJ lines: one token each, nothing that would end the line.
+  // Names go into OBJ lines, which the reader splits at whitespace and cuts at '#': words
+  // joined by single spaces come back as they were, nothing else does.
   auto check_name = [&](const std::string& name, const std::string& which) {
-    if (name.empty() || name.find_first_of("\n\r") != std::string::npos ||
-        name.find('\0') != std::string::npos)
-      throw InvalidInput(what + ": " + which + " '" + name + "' is empty or holds a line break or NUL");
+    bool ok =
+        !name.empty() && name.front() != ' ' && name.back() != ' ' && name.find("  ") == std::string::npos;
+    for (char c : name) ok = ok && c != '#' && c != 0x7f && (static_cast<unsigned char>(c) >= 0x20);
+    if (!ok)
+      throw InvalidInput(what + ": " + which + " '" + printable(name) +
+                         "' cannot be written to OBJ as it is (empty, or with '#', a control character, "
+                         "or spaces other than single ones between words)");
   };
+  if (!a.colors_have_alpha)
+    for (std::size_t i = 0; i < a.colors.size(); ++i)
+      if (a.colors[i][3] != 1.0)
+        throw InvalidInput(what + ": vertex " + std::to_string(i) + " has alpha " +
+                           std::to_string(a.colors[i][3]) +
+                           ", but the colours have no alpha channel (colors_have_alpha): it would be lost");
   if (!a.material_library.empty()) check_name(a.material_library, "material library");
   for (const std::string& n : a.material_names) check_name(n, "material name");
 }

@@ -492,6 +492,11 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
       }
     }
   }
+  // A file whose count comment says it was written whole ends with a line break: a last line
+  // cut short ("f 2/2 3/3 4/1" of "... 4/12") would read as another valid line.
+  if (declared.present && !text.empty() && text.back() != '\n')
+    fail_io(name, "truncated: the last line has no line break, and the header comment (line " +
+                      std::to_string(declared.line) + ") says the file was written whole");
   if (declared.present && (declared.vertices != mesh.num_vertices() || declared.faces != face_lines)) {
     const bool fewer = declared.vertices >= mesh.num_vertices() && declared.faces >= face_lines;
     fail_io(name, std::string(fewer ? "truncated: " : "") + "header comment (line " +
@@ -575,11 +580,15 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
         if (t.empty()) {
           ++corners_without_vt;
           poly_vts.push_back(-1);
-        } else if (parse_int(t, ti) != Parsed::Ok || ti == 0 || ti > texcoords_so_far ||
-                   -ti > texcoords_so_far) {
+        } else if (parse_int(t, ti) != Parsed::Ok || ti == 0 ||
+                   ti > static_cast<long long>(texcoords.size()) || -ti > texcoords_so_far) {
+          // As vertex indices: positive ones count from the file's first vt (which may follow the
+          // face), negative ones back from the last vt before the face.
           fail_input(name, lines.where() + ": face corner " + quote_token(corner) +
                                " has a texture coordinate index out of range (" +
-                               std::to_string(texcoords_so_far) + " precede it)");
+                               (ti < 0 ? std::to_string(texcoords_so_far) + " precede it"
+                                       : "the file has " + std::to_string(texcoords.size())) +
+                               ")");
         } else {
           ++corners_with_vt;
           ti = ti > 0 ? ti - 1 : texcoords_so_far + ti;
@@ -1175,11 +1184,17 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
       if (rgba[0] < 0) rgba[3] = -1;
       const std::array<std::array<const char*, 2>, 4> pairs{
           {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}}};
+      std::string half;  // a property of a pair whose partner is missing (or a list)
       for (const auto& pair : pairs) {
         uv = {find({pair[0]}), find({pair[1]})};
         if (uv[0] >= 0 && uv[1] >= 0) break;
         uv = {-1, -1};
+        for (const PlyProperty& p : e.props)
+          if (half.empty() && (p.name == pair[0] || p.name == pair[1])) half = p.name;
       }
+      if (uv[0] < 0 && !half.empty())
+        record->dropped->push_back("texture coordinates: the vertex element has " + half +
+                                   " without its partner (or as a list)");
       if (rgba[0] >= 0) {
         attrs.colors.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
         attrs.colors_have_alpha = rgba[3] >= 0;
@@ -1644,6 +1659,21 @@ void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
       w.maybe_flush();
     }
   int material = -1;
+  if (materials) {
+    // The reader numbers materials by first mention: where the faces' first uses would number
+    // them otherwise (or leave one out), every name is mentioned first, in order.
+    std::vector<int> first_use;
+    std::vector<char> seen(a->material_names.size(), 0);
+    for (int m : a->face_materials)
+      if (m >= 0 && !seen[m]) seen[m] = 1, first_use.push_back(m);
+    bool in_order = first_use.size() == a->material_names.size();
+    for (std::size_t k = 0; in_order && k < first_use.size(); ++k)
+      in_order = first_use[k] == static_cast<int>(k);
+    if (!in_order) {
+      for (const std::string& n : a->material_names) w.text("usemtl " + n + "\n");
+      material = static_cast<int>(a->material_names.size()) - 1;
+    }
+  }
   for (std::size_t j = 0; j < faces.size(); ++j) {
     const F& f = faces[j];
     if (materials && a->face_materials[j] != material) {

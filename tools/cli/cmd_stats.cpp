@@ -57,7 +57,11 @@ int run_stats(const StatsCmdOptions& o) {
                {"vertex_colors", m.attributes.colors.empty()      ? "none"
                                  : m.attributes.colors_have_alpha ? "rgba"
                                                                   : "rgb"},
-               {"texture_coordinates", !m.attributes.texcoords.empty()}};
+               {"texture_coordinates", !m.attributes.texcoords.empty()         ? "per_vertex"
+                                       : !m.attributes.corner_uv_index.empty() ? "per_corner"
+                                                                               : "none"},
+               {"materials", m.attributes.material_names.size()},
+               {"material_library", m.attributes.material_library}};
   if (o.json) {
     std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
     return 0;
@@ -72,7 +76,14 @@ int run_stats(const StatsCmdOptions& o) {
             << "self-intersecting pairs  " << (isect.truncated ? "at least " : "") << isect.num_pairs
             << " (non-adjacent triangles, found in " << fixed(isect_seconds, 3) << " s)\n"
             << "vertex colours           " << r["vertex_colors"].get<std::string>() << "\n"
-            << "texture coordinates      " << (m.attributes.texcoords.empty() ? "none" : "per vertex")
+            << "texture coordinates      "
+            << (!m.attributes.texcoords.empty()         ? "per vertex"
+                : !m.attributes.corner_uv_index.empty() ? "per face corner (texture seams)"
+                                                        : "none")
+            << "\n"
+            << "materials                " << m.attributes.material_names.size()
+            << (m.attributes.material_library.empty() ? ""
+                                                      : " (library " + m.attributes.material_library + ")")
             << std::endl;
   return 0;
 }

@@ -128,12 +128,16 @@ void warn_attributes_not_stored(const MeshAttributes& attributes, const std::str
               << "; not written (OBJ keeps them)" << std::endl;
   }
   if (!attributes.material_library.empty() && lower_extension(path) == ".obj") {
+    // mtllib may name several files, separated by spaces.
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-    std::error_code ec;
-    if (!std::filesystem::exists(dir / attributes.material_library, ec))
-      std::cerr << "strata: note: " << path << " refers to the material library '"
-                << attributes.material_library
-                << "', which is not in its directory: copy it (and its textures) there" << std::endl;
+    std::istringstream names(attributes.material_library);
+    std::string lib;
+    while (names >> lib) {
+      std::error_code ec;
+      if (!std::filesystem::exists(dir / lib, ec))
+        std::cerr << "strata: note: " << path << " refers to the material library '" << lib
+                  << "', which is not in its directory: copy it (and its textures) there" << std::endl;
+    }
   }
 }
 

@@ -273,7 +273,8 @@ void App::take_snapshot() {
     if (same && p.scene.colors.empty())
       p.mesh.update_positions(p.scene.mesh.vertices, p.scene.mesh.faces);
     else
-      p.mesh.upload(p.scene.mesh.vertices, p.scene.mesh.faces, p.scene.colors, surface_color());
+      p.mesh.upload(p.scene.mesh.vertices, p.scene.mesh.faces, p.scene.colors, surface_color(),
+                    p.scene.vertex_colors);
     if (!p.scene.net.empty())
       p.net.upload(p.scene.net, std::vector<Rgb>(p.scene.net.size(), Rgb(0.95f, 0.5f, 0.05f)));
     else

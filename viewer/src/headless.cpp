@@ -135,7 +135,9 @@ std::string run_headless(const Options& options) {
   const SceneData scene = make_scene(document, settings);
   report["scene_s"] = seconds_since(t_scene);
   if (!options.save.empty()) layers::write_model(document.model(), options.save);
-  if (!options.export_mesh.empty()) write_mesh(scene.mesh, options.export_mesh);
+  // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
+  if (!options.export_mesh.empty())
+    write_mesh(scene.mesh, document.attributes(scene.shown_band), options.export_mesh);
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();
@@ -154,7 +156,7 @@ std::string run_headless(const Options& options) {
     Offscreen target(options.width, options.height, options.samples);
     const auto t_upload = Clock::now();
     GpuMesh mesh;
-    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, surface_color());
+    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, surface_color(), scene.vertex_colors);
     GpuLines net;
     if (!scene.net.empty())
       net.upload(scene.net, std::vector<Rgb>(scene.net.size(), Rgb(0.85f, 0.45f, 0.05f)));

@@ -100,12 +100,12 @@ void set_matrices(GLuint program, const Mat4& view, const Mat4& projection) {
 }  // namespace
 
 void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                     const std::vector<Rgb>& colors, const Rgb& color) {
+                     const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex) {
   color_ = color;
-  color_mode_ = colors.empty()                     ? 0
-                : colors.size() == faces.size()    ? 2
-                : colors.size() == vertices.size() ? 1
-                                                   : 0;
+  color_mode_ = colors.empty()                                   ? 0
+                : per_vertex && colors.size() == vertices.size() ? 1
+                : !per_vertex && colors.size() == faces.size()   ? 2
+                                                                 : 0;
   if (!vao_) {
     vao_ = make_vertex_array();
     positions_ = make_buffer();

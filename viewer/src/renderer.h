@@ -22,11 +22,11 @@ using Rgb = Eigen::Vector3f;
 //! the corners stored apart.
 class GpuMesh {
  public:
-  //! Uploads \p vertices / \p faces. \p colors: empty (all \p color), one per face or one per
-  //! vertex (per face wins when the counts are equal).
-  //! \pre face indices are in range.
+  //! Uploads \p vertices / \p faces. \p colors: empty (all \p color), or one per face, or one
+  //! per vertex if \p per_vertex (a tetrahedron has as many of each); any other count draws
+  //! \p color. \pre face indices are in range.
   void upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-              const std::vector<Rgb>& colors, const Rgb& color);
+              const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex = false);
   //! New positions for the same vertices and faces (normals recomputed).
   //! \pre vertices.size() is the uploaded vertex count.
   void update_positions(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);

@@ -19,6 +19,7 @@ SceneData make_scene(const Document& document, const SceneSettings& settings) {
     s.colors = intersection_colors(s.mesh, s.intersection_pairs);
   } else if (settings.color == ColorMode::Scan) {
     s.colors = vertex_colors(document.attributes(s.shown_band));
+    s.vertex_colors = true;
   }
   if (settings.cage || s.shown_band == 0) s.net = document.control_net();
   return s;

@@ -42,7 +42,7 @@ struct MeshAttributes {
   std::vector<std::array<double, 2>> texcoords;
   //! Texture coordinates per face corner, where a vertex has several (texture seams: OBJ's vt):
   //! a list of (u, v) and, per face, its three corners' indices into it. Never given together
-  //! with per-vertex texcoords.
+  //! with per-vertex texcoords. (Written to OBJ without seams, they read back per vertex.)
   std::vector<std::array<double, 2>> corner_uv;
   std::vector<std::array<int, 3>> corner_uv_index;
   //! OBJ materials: the material library as the file names it (mtllib, relative to the file),
