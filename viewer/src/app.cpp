@@ -146,6 +146,10 @@ int App::run() {
     if (scripted) {
       frame_ms_.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
       frame_in_drag_.push_back(dragging_ ? 1 : 0);
+      bool coloured = false;
+      for (const auto& p : panels_) coloured = coloured || p->mesh.color_mode() == 1;
+      frame_scan_colours_.push_back(coloured ? 1 : 0);
+      frame_drag_step_.push_back(showing_drag_step_ ? 1 : 0);
       if (script_done_) break;
     }
   }
@@ -169,6 +173,15 @@ int App::run() {
     };
     r["frames"] = stats(all);
     r["drag_frames"] = stats(drag_ms);
+    // Frames that showed a drag step's preview, and of those the ones that drew the scan's own
+    // colours (--color scan keeps them on during drags).
+    long long previews = 0, coloured = 0;
+    for (std::size_t i = 0; i < frame_ms_.size(); ++i) {
+      previews += frame_drag_step_[i];
+      coloured += frame_drag_step_[i] && frame_scan_colours_[i];
+    }
+    r["preview_frames"] = previews;
+    r["preview_frames_scan_colours"] = coloured;
     r["drag_steps_solved"] = worker_->drag_steps();
     r["drag_step_mean_s"] =
         worker_->drag_seconds() / static_cast<double>(std::max(1LL, worker_->drag_steps()));
@@ -241,6 +254,7 @@ void App::take_snapshot() {
   std::optional<Snapshot> s = worker_->take(version_);
   if (!s) return;
   version_ = s->version;
+  showing_drag_step_ = s->drag_step;
   if (!s->message.empty()) {
     status_ = s->message;
     status_error_ = s->error;
@@ -261,6 +275,8 @@ void App::take_snapshot() {
                                         a.mesh.faces.size() == b->scene.mesh.faces.size() &&
                                         a.mesh.vertices.size() == b->scene.mesh.vertices.size() &&
                                         a.colors.empty() == (b->mesh.color_mode() == 0) &&
+                                        a.vertex_colors == b->scene.vertex_colors &&
+                                        (!a.vertex_colors || a.colors == b->scene.colors) &&
                                         (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
                                });
   if (!same) panels_.clear();
@@ -270,7 +286,8 @@ void App::take_snapshot() {
     p.scene = std::move(s->panels[i]);
     p.band = p.scene.shown_band;
     p.vectors = view_.compare && i + 1 == s->panels.size() && !view_.vectors && s->panels.size() > 1;
-    if (same && p.scene.colors.empty())
+    // The scan's colours (per vertex) are already on the GPU when they are the same: positions only.
+    if (same && (p.scene.colors.empty() || p.scene.vertex_colors))
       p.mesh.update_positions(p.scene.mesh.vertices, p.scene.mesh.faces);
     else
       p.mesh.upload(p.scene.mesh.vertices, p.scene.mesh.faces, p.scene.colors, surface_color(),

@@ -159,6 +159,9 @@ class App {
   std::vector<double> frame_ms_;
   std::array<double, 5> phase_s_{};  // snapshot, ui, scene, imgui draw, swap (benchmark)
   std::vector<char> frame_in_drag_;
+  std::vector<char> frame_scan_colours_;  // per scripted frame: a panel drew per-vertex colours
+  std::vector<char> frame_drag_step_;     // per scripted frame: the panels showed a drag step's preview
+  bool showing_drag_step_ = false;
   long long frames_ = 0;
 };
 

@@ -96,14 +96,16 @@ void Worker::publish(bool commit, std::string message, bool error) {
   bool any = false;
   for (char v : visible) any = any || v;
   if (!any) visible[static_cast<std::size_t>(n - 1)] = 1;
-  // Colour maps cost a solve-sized pass (intersections: a BVH search): not during drag steps.
+  // Colour maps cost a solve-sized pass (intersections: a BVH search): not during drag steps. The
+  // scan's own colours cost nothing and do not change with the positions: they stay.
   const bool dragging = (doc_.is_model() && doc_.model().dragging()) || mesh_dragging_;
+  const ColorMode drag_color = view_.color == ColorMode::Scan ? ColorMode::Scan : ColorMode::None;
   for (int k = 0; k < n; ++k) {
     if (!visible[static_cast<std::size_t>(k)]) continue;
     SceneSettings settings;
     settings.show = k;
     settings.vectors = view_.vectors;
-    settings.color = dragging ? ColorMode::None : view_.color;
+    settings.color = dragging ? drag_color : view_.color;
     settings.error_scale = view_.error_scale;
     settings.cage = view_.cage && k == 0;
     s.panels.push_back(make_scene(doc_, settings));
@@ -112,11 +114,12 @@ void Worker::publish(bool commit, std::string message, bool error) {
     SceneSettings settings;
     settings.show = n - 1;
     settings.vectors = true;
-    settings.color = dragging ? ColorMode::None : view_.color;
+    settings.color = dragging ? drag_color : view_.color;
     settings.error_scale = view_.error_scale;
     s.panels.push_back(make_scene(doc_, settings));
   }
   if (commit) s.committed = std::make_shared<const Document>(doc_);
+  s.drag_step = dragging;
   s.message = std::move(message);
   s.error = error;
   std::lock_guard<std::mutex> lock(mutex_);

@@ -30,6 +30,7 @@ struct Snapshot {
   std::shared_ptr<const Document> committed;
   std::string message;  //!< the last operation's outcome or error ("" if none)
   bool error = false;
+  bool drag_step = false;  //!< the panels show a drag step's preview
 };
 
 //! What the panels show (the UI's settings, applied by the worker).

@@ -31,6 +31,21 @@ assert d['count'] >= 19, 'drag frames missing'
 assert r['drag_steps_solved'] >= 1, 'no drag step solved'
 assert r['status'].startswith('exact solve'), 'the exact solve did not finish: ' + r['status']
 "
+# The scan's own colours stay on during the drag (--color scan): every drag frame draws them.
+awk '/^v / {print $0, 0.9, 0.05, 0.05; next} {print}' "$ROOT/assets/bumps-75/detail.obj" >"$T/red.obj"
+"$VIEWER" "$T/red.obj" --layers 3 --save "$T/red.strata" --screenshot "$T/red_rest.png" --size 320x240 >/dev/null
+# (60 frames: the previews arrive as the worker solves drag steps, about 0.1 s each.)
+json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$T/red.strata" --band 0 --script-drag "$T/bend.json" \
+  --frames 60 --benchmark --size 800x600 --color scan --screenshot "$T/red_window.png")
+echo "$json" | python3 -c "
+import json, sys
+r = json.loads(sys.stdin.read())
+print('window, scan colours: %d of %d frames that showed a drag preview drew them'
+      % (r['preview_frames_scan_colours'], r['preview_frames']))
+assert r['gl_errors'] == 0, 'GL errors'
+assert r['preview_frames'] > 0, 'no drag preview was shown'
+assert r['preview_frames_scan_colours'] == r['preview_frames'], 'the scan colours went off during the drag'
+"
 s=$(python3 "$(dirname "$0")/png_stats.py" "$T/window.png")
 python3 -c "
 import json, sys
