@@ -125,6 +125,13 @@ python3 "$TMP/mesh.py" same "$SCAN" "$TMP/reconstructed.ply"
 
 # build, export (at rest), edit band 0, export again: the finest band keeps the scan's values.
 "$STRATA" build "$SCAN" -o "$TMP/m.strata" -q >/dev/null
+"$STRATA" info "$TMP/m.strata" --json | python3 -c "
+import json, sys
+b = json.load(sys.stdin)['bands']
+a = b[-1].get('attributes')
+if a != {'vertex_colors': 'rgb', 'texture_coordinates': 'per_vertex', 'materials': 0, 'material_library': ''}:
+    sys.exit('FAIL: info: the finest band carries %s' % a)
+if any('attributes' in x for x in b[:-1]): sys.exit('FAIL: info: attributes on a coarser band')"
 "$STRATA" export "$TMP/m.strata" -o "$TMP/rest.ply" >/dev/null
 python3 "$TMP/mesh.py" same "$SCAN" "$TMP/rest.ply" --rest
 "$STRATA" edit "$TMP/m.strata" --band 0 --edit "$TMP/bend.json" -o "$TMP/edited.strata" -q >/dev/null
@@ -197,6 +204,8 @@ python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 # The same through a layered model: build, edit band 0, export the finest band.
 "$STRATA" build "$TMP/seams.obj" -o "$TMP/seams.strata" -q >/dev/null 2>"$TMP/build.err"
 "$STRATA" edit "$TMP/seams.strata" --band 0 --edit "$TMP/bend.json" -o "$TMP/seams_edited.strata" -q >/dev/null 2>"$TMP/edit.err"
+"$STRATA" info "$TMP/seams_edited.strata" | grep -q "band 2 carries vertex colours none, texture coordinates per_corner, 2 materials" ||
+  { echo "FAIL: info does not show the textured band: $("$STRATA" info "$TMP/seams_edited.strata")" >&2; exit 1; }
 "$STRATA" export "$TMP/seams_edited.strata" -o "$TMP/seams_out.obj" >/dev/null
 python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.ply" -q >/dev/null 2>"$TMP/seams_ply.err"

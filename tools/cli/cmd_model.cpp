@@ -77,6 +77,7 @@ json band_summary_json(const LayeredModel& model) {
       j["detail_rms"] = m.rms;
       j["detail_max"] = m.max;
       j["encoding"] = encoding_json(b.encoding.report);
+      if (!b.attributes.empty()) j["attributes"] = attributes_json(b.attributes);
     }
     bands.push_back(j);
   }
@@ -242,6 +243,15 @@ int run_info(const InfoCmdOptions& o) {
                "band k-1. Detail magnitudes are |p - q| at rest (finest band bbox diagonal "
             << sci(diag) << ").\n"
             << "history: " << model.history().size() << " operations\n";
+  // Colours, texture coordinates and materials (the scan's, on the finest band).
+  for (const json& b : bands)
+    if (b.contains("attributes")) {
+      const json& a = b["attributes"];
+      std::cout << "band " << b["band"].get<int>() << " carries vertex colours "
+                << a["vertex_colors"].get<std::string>() << ", texture coordinates "
+                << a["texture_coordinates"].get<std::string>() << ", " << a["materials"].get<std::size_t>()
+                << " materials\n";
+    }
   // Control characters escaped: a history entry is the file's text, and raw newlines or terminal
   // escapes in it could fake lines of this output ("strata: error: ...").
   for (const std::string& e : model.history()) {

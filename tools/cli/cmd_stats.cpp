@@ -43,25 +43,18 @@ int run_stats(const StatsCmdOptions& o) {
                                                            bounded_intersection_options(m.mesh.faces.size()));
   const double isect_seconds = sw.seconds();
   if (isect.truncated) std::cerr << "strata: warning: " << cut_short_text(isect, m.name) << std::endl;
-  const json r{{"mesh", m.name},
-               {"vertices", m.mesh.num_vertices()},
-               {"faces", m.mesh.num_faces()},
-               {"boundary_edges", boundary},
-               {"closed", boundary == 0},
-               {"bbox_diagonal", bbox_diagonal(m.mesh.vertices)},
-               {"signed_volume", signed_volume(m.mesh)},
-               {"self_intersecting_pairs", isect.num_pairs},
-               {"self_intersections_cut_short", isect.truncated},
-               {"self_intersection_tests", isect.num_tests},
-               {"intersection_seconds", isect_seconds},
-               {"vertex_colors", m.attributes.colors.empty()      ? "none"
-                                 : m.attributes.colors_have_alpha ? "rgba"
-                                                                  : "rgb"},
-               {"texture_coordinates", !m.attributes.texcoords.empty()         ? "per_vertex"
-                                       : !m.attributes.corner_uv_index.empty() ? "per_corner"
-                                                                               : "none"},
-               {"materials", m.attributes.material_names.size()},
-               {"material_library", m.attributes.material_library}};
+  json r{{"mesh", m.name},
+         {"vertices", m.mesh.num_vertices()},
+         {"faces", m.mesh.num_faces()},
+         {"boundary_edges", boundary},
+         {"closed", boundary == 0},
+         {"bbox_diagonal", bbox_diagonal(m.mesh.vertices)},
+         {"signed_volume", signed_volume(m.mesh)},
+         {"self_intersecting_pairs", isect.num_pairs},
+         {"self_intersections_cut_short", isect.truncated},
+         {"self_intersection_tests", isect.num_tests},
+         {"intersection_seconds", isect_seconds}};
+  r.update(attributes_json(m.attributes));
   if (o.json) {
     std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
     return 0;

@@ -118,6 +118,17 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
               << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
 }
 
+json attributes_json(const MeshAttributes& a) {
+  return {{"vertex_colors", a.colors.empty()      ? "none"
+                            : a.colors_have_alpha ? "rgba"
+                                                  : "rgb"},
+          {"texture_coordinates", !a.texcoords.empty()         ? "per_vertex"
+                                  : !a.corner_uv_index.empty() ? "per_corner"
+                                                               : "none"},
+          {"materials", a.material_names.size()},
+          {"material_library", a.material_library}};
+}
+
 void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {
   const std::vector<std::string> lost = attributes_not_stored(attributes, path);
   if (!lost.empty()) {

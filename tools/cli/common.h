@@ -119,6 +119,11 @@ std::string lower_extension(const std::string& path);
 //! in no face: STL holds triangles only, so they would be lost without a word.
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
+//! What \p attributes hold, as `stats` and the model reports give it: vertex_colors ("none", "rgb"
+//! or "rgba"), texture_coordinates ("none", "per_vertex" or "per_corner"), materials (how many)
+//! and material_library.
+json attributes_json(const MeshAttributes& attributes);
+
 //! Warns on stderr about what of \p attributes (colours, texture coordinates, materials) the
 //! format of \p path cannot store (attributes_not_stored()), and notes an OBJ's material library
 //! that is not beside \p path (the file names it relative to its own directory).
