@@ -196,10 +196,12 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   t.corner_uv = {{0.0, 0.0}, {1.0, 0.0}, {0.5, 1.0}, {0.25, 0.75}};
   t.material_library = "bear textures.mtl";
   t.material_names = {"fur", "claws"};
+  t.texture_files = {"bear.png"};
   for (std::size_t f = 0; f < nf; ++f) {
     t.corner_uv_index.push_back(
         {static_cast<int>(f % 4), static_cast<int>((f + 1) % 4), static_cast<int>((f + 3) % 4)});
     t.face_materials.push_back(f % 7 == 0 ? 1 : f % 5 == 0 ? -1 : 0);
+    t.face_textures.push_back(f % 3 == 0 ? -1 : 0);
   }
   LayeredModel textured = model;
   textured.set_attributes(finest, t);
@@ -211,6 +213,8 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   EXPECT_EQ(tb.face_materials, t.face_materials);
   EXPECT_EQ(tb.material_names, t.material_names);
   EXPECT_EQ(tb.material_library, t.material_library);
+  EXPECT_EQ(tb.texture_files, t.texture_files);
+  EXPECT_EQ(tb.face_textures, t.face_textures);
 
   // Misuse is refused, the model unchanged.
   t.face_materials[3] = 2;
@@ -772,7 +776,9 @@ nlohmann::json attribute_keys(bool colors, bool alpha, bool texcoords) {
           {"corner_texcoords", 0},
           {"materials", false},
           {"material_library", ""},
-          {"material_names", nlohmann::json::array()}};
+          {"material_names", nlohmann::json::array()},
+          {"texture_files", nlohmann::json::array()},
+          {"textures", false}};
 }
 
 TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {

@@ -1721,8 +1721,7 @@ TEST(MeshIoAttributes, WhatCannotBeKeptIsListedAsDropped) {
   EXPECT_EQ(f.dropped,
             (std::vector<std::string>{
                 "vertex colours: the vertex element has only 1 of the red, green and blue properties",
-                "texture coordinates per face corner (face property texcoord; Strata keeps one per "
-                "vertex)"}));
+                "texture coordinates: face 1's texcoord list has 0 values for 3 corners"}));
 }
 
 // A textured OBJ as photogrammetry writes it: a material library, materials per group of faces,
@@ -1762,10 +1761,21 @@ TEST(MeshIoAttributes, TextureSeamsAndMaterialsOfAnObjAreKept) {
   write_mesh(g.mesh, g.attributes, dir.file("again.obj"));
   EXPECT_EQ(read_bytes(dir.file("out.obj")), read_bytes(dir.file("again.obj")));
   // Formats that cannot store them say so, and write the rest.
-  EXPECT_EQ(attributes_not_stored(a, "x.ply"),
+  EXPECT_EQ(attributes_not_stored(a, "x.ply"), (std::vector<std::string>{"materials"}));
+  EXPECT_EQ(attributes_not_stored(a, "x.off"),
             (std::vector<std::string>{"texture coordinates per face corner (texture seams)", "materials"}));
+  write_mesh(f.mesh, a, dir.file("out.off"));
+  EXPECT_TRUE(read_mesh_file(dir.file("out.off")).attributes.empty());
+  // PLY keeps the seams, as MeshLab writes them (a texcoord list per face).
   write_mesh(f.mesh, a, dir.file("out.ply"));
-  EXPECT_TRUE(read_mesh_file(dir.file("out.ply")).attributes.empty());
+  const MeshFile p = read_mesh_file(dir.file("out.ply"));
+  ASSERT_EQ(p.attributes.corner_uv_index.size(), f.mesh.faces.size());
+  for (std::size_t t = 0; t < f.mesh.faces.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(p.attributes.corner_uv[p.attributes.corner_uv_index[t][c]],
+                a.corner_uv[a.corner_uv_index[t][c]])
+          << "face " << t << " corner " << c;
+  EXPECT_TRUE(p.attributes.face_materials.empty());
 
   // A face flipped to agree with its neighbours (ReadOptions::orient_faces) keeps each corner's
   // texture coordinate with its vertex.
@@ -1848,6 +1858,77 @@ TEST(MeshIoAttributes, APlyTextureCoordinateWithoutItsPartnerIsListed) {
   EXPECT_EQ(f.dropped, (std::vector<std::string>{
                            "texture coordinates: the vertex element has texture_u without its partner "
                            "(or as a list)"}));
+}
+
+// A textured PLY as MeshLab writes it: "comment TextureFile" lines, and per face a texcoord list
+// of 2n numbers and a texnumber; a quad among the faces, vertex 0 on a seam.
+TEST(MeshIoAttributes, TexturedPlyAsMeshLabWritesIt) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::string head =
+      "ply\nformat ascii 1.0\ncomment VCGLIB generated\ncomment TextureFile skin.png\ncomment TextureFile "
+      "eye map.png\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nelement face 5\n"
+      "property list uchar int vertex_indices\nproperty list uchar float texcoord\nproperty int texnumber\n"
+      "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n";
+  write_bytes(dir.file("ml.ply"), head +
+                                      "4 0 3 2 1 8 0 0 0 1 1 1 1 0 0\n"
+                                      "3 0 1 4 6 0.9 0.1 1 0 0.5 0.5 1\n"
+                                      "3 1 2 4 6 1 0 1 1 0.5 0.5 1\n"
+                                      "3 2 3 4 6 1 1 0 1 0.5 0.5 0\n"
+                                      "3 3 0 4 6 0 1 0 0 0.5 0.5 -1\n");
+  const MeshFile f = read_mesh_file(dir.file("ml.ply"));
+  ASSERT_EQ(f.mesh.num_faces(), 6);
+  const MeshAttributes& a = f.attributes;
+  EXPECT_TRUE(f.dropped.empty());
+  EXPECT_EQ(a.texture_files, (std::vector<std::string>{"skin.png", "eye map.png"}));
+  EXPECT_EQ(a.face_textures, (std::vector<int>{0, 0, 1, 1, 0, -1}));
+  ASSERT_EQ(a.corner_uv_index.size(), 6u);
+  const std::array<double, 2> expected[5] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
+  for (std::size_t t = 0; t < f.mesh.faces.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int v = f.mesh.faces[t][c];
+      const std::array<double, 2> uv = a.corner_uv[a.corner_uv_index[t][c]];
+      if (v == 0 && t == 2)
+        EXPECT_EQ(uv, (std::array<double, 2>{0.9, 0.1}));  // an ascii value as written
+      else
+        EXPECT_EQ(uv, expected[v]) << "face " << t << " corner " << c;
+    }
+  // Written and read back in both encodings: the same values per corner, the same images.
+  for (const auto enc : {MeshEncoding::Ascii, MeshEncoding::Binary}) {
+    write_mesh(f.mesh, a, dir.file("out.ply"), enc);
+    const MeshFile g = read_mesh_file(dir.file("out.ply"));
+    EXPECT_EQ(g.attributes.texture_files, a.texture_files);
+    EXPECT_EQ(g.attributes.face_textures, a.face_textures);
+    ASSERT_EQ(g.attributes.corner_uv_index.size(), 6u);
+    for (std::size_t t = 0; t < 6; ++t)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_EQ(g.attributes.corner_uv[g.attributes.corner_uv_index[t][c]],
+                  a.corner_uv[a.corner_uv_index[t][c]]);
+  }
+  EXPECT_EQ(attributes_not_stored(a, "x.obj"),
+            (std::vector<std::string>{"texture images (PLY's TextureFile)"}));
+  // Corners that agree at every vertex are per-vertex texture coordinates.
+  write_bytes(dir.file("pv.ply"), head +
+                                      "4 0 3 2 1 8 0 0 0 1 1 1 1 0 0\n"
+                                      "3 0 1 4 6 0 0 1 0 0.5 0.5 0\n"
+                                      "3 1 2 4 6 1 0 1 1 0.5 0.5 0\n"
+                                      "3 2 3 4 6 1 1 0 1 0.5 0.5 0\n"
+                                      "3 3 0 4 6 0 1 0 0 0.5 0.5 0\n");
+  const MeshFile pv = read_mesh_file(dir.file("pv.ply"));
+  EXPECT_TRUE(pv.attributes.corner_uv_index.empty());
+  EXPECT_EQ(pv.attributes.texcoords,
+            (std::vector<std::array<double, 2>>(std::begin(expected), std::end(expected))));
+  // A texnumber past the TextureFile lines cannot be kept: listed.
+  write_bytes(dir.file("tn.ply"), head +
+                                      "4 0 3 2 1 8 0 0 0 1 1 1 1 0 0\n"
+                                      "3 0 1 4 6 0 0 1 0 0.5 0.5 7\n"
+                                      "3 1 2 4 6 1 0 1 1 0.5 0.5 0\n"
+                                      "3 2 3 4 6 1 1 0 1 0.5 0.5 0\n"
+                                      "3 3 0 4 6 0 1 0 0 0.5 0.5 0\n");
+  const MeshFile tn = read_mesh_file(dir.file("tn.ply"));
+  EXPECT_TRUE(tn.attributes.face_textures.empty());
+  ASSERT_EQ(tn.dropped.size(), 1u);
+  EXPECT_NE(tn.dropped[0].find("texnumber 7 names no TextureFile comment (2 in the header)"),
+            std::string::npos);
 }
 
 TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {

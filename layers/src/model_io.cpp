@@ -395,7 +395,9 @@ void write_model(const LayeredModel& model, const std::string& path) {
           {"corner_texcoords", va.corner_uv_index.empty() ? 0 : va.corner_uv.size()},
           {"materials", !va.face_materials.empty()},
           {"material_library", va.material_library},
-          {"material_names", va.material_names}};
+          {"material_names", va.material_names},
+          {"texture_files", va.texture_files},
+          {"textures", !va.face_textures.empty()}};
       std::vector<double> values;
       for (const auto& col : va.colors) values.insert(values.end(), col.begin(), col.end());
       if (!va.colors.empty()) c.sections.push_back({p + "colors", pack_f64(values)});
@@ -410,6 +412,9 @@ void write_model(const LayeredModel& model, const std::string& path) {
         for (const auto& t : va.corner_uv_index) index.insert(index.end(), t.begin(), t.end());
         c.sections.push_back({p + "corner_texcoord_indices", pack_i32(index)});
       }
+      if (!va.face_textures.empty())
+        c.sections.push_back(
+            {p + "face_textures", pack_i32({va.face_textures.begin(), va.face_textures.end()})});
       if (!va.face_materials.empty())
         c.sections.push_back(
             {p + "face_materials", pack_i32({va.face_materials.begin(), va.face_materials.end()})});
@@ -638,6 +643,17 @@ LayeredModel read_model(const std::string& path) {
       for (const json& n : names) {
         if (!n.is_string()) h.fail("'material_names' in " + wa + " holds a value that is not a string");
         va.material_names.push_back(n.get<std::string>());
+      }
+      const json& files = h.at(at, "texture_files", wa);
+      if (!files.is_array()) h.fail("'texture_files' in " + wa + " is not an array");
+      for (const json& n : files) {
+        if (!n.is_string()) h.fail("'texture_files' in " + wa + " holds a value that is not a string");
+        va.texture_files.push_back(n.get<std::string>());
+      }
+      if (h.boolean(at, "textures", wa)) {
+        const std::vector<std::int32_t> t =
+            unpack_i32(section(p + "face_textures"), nf, what(p + "face_textures"));
+        va.face_textures.assign(t.begin(), t.end());
       }
     }
     band.mesh.faces = rest.faces;

@@ -88,6 +88,15 @@ void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh
         throw InvalidInput(what + ": vertex " + std::to_string(i) + " has alpha " +
                            std::to_string(a.colors[i][3]) +
                            ", but the colours have no alpha channel (colors_have_alpha): it would be lost");
+  if (!a.face_textures.empty() && a.face_textures.size() != mesh.faces.size())
+    throw InvalidInput(what + ": " + std::to_string(a.face_textures.size()) + " face textures for " +
+                       std::to_string(mesh.faces.size()) + " faces");
+  for (std::size_t f = 0; f < a.face_textures.size(); ++f)
+    if (a.face_textures[f] < -1 || a.face_textures[f] >= static_cast<int>(a.texture_files.size()))
+      throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture " +
+                         std::to_string(a.face_textures[f]) + " is out of range (" +
+                         std::to_string(a.texture_files.size()) + " texture files)");
+  for (const std::string& n : a.texture_files) check_name(n, "texture file");
   if (!a.material_library.empty()) check_name(a.material_library, "material library");
   for (const std::string& n : a.material_names) check_name(n, "material name");
 }

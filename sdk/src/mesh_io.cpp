@@ -16,6 +16,7 @@
 #include <cassert>
 #include <cctype>
 #include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -951,6 +952,7 @@ enum class PlyEncoding { Ascii, BinaryLE, BinaryBE };
 struct PlyHeader {
   PlyEncoding encoding = PlyEncoding::Ascii;
   std::vector<PlyElement> elements;
+  std::vector<std::string> texture_files;  // "comment TextureFile NAME" (MeshLab), in order
   size_t body_offset = 0;
   long long body_first_line = 1;
 };
@@ -970,6 +972,12 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
     LineTokens t(line);
     std::string_view key, a, b, c, d;
     if (!t.next(key)) continue;
+    if (key == "comment" && t.next(a) && a == "TextureFile") {
+      std::string file;
+      while (t.next(b)) file += (file.empty() ? "" : " ") + std::string(b);
+      h.texture_files.push_back(file);
+      continue;
+    }
     if (key == "comment" || key == "obj_info") continue;
     if (key == "end_header") {
       ended = true;
@@ -1134,6 +1142,11 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   PlyValue value;
   const bool want_attributes = record && record->attributes;
   MeshAttributes attrs;
+  // Per face (polygon) in file order: its corners, their (u, v) (texcoord lists) and its image.
+  std::vector<int> poly_sizes, poly_vertices, poly_textures;
+  std::vector<std::array<double, 2>> poly_uv;
+  std::vector<double> face_uv;
+  std::string uv_problem;
   for (const PlyElement& e : h.elements) {
     // An element without properties holds no data, whatever its count; but vertices must have
     // coordinates (faces are checked against the vertex count).
@@ -1201,11 +1214,15 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
       }
       if (uv[0] >= 0) attrs.texcoords.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
     }
+    // MeshLab's texture coordinates per face corner (a list of 2n numbers) and image per face.
+    int texcoord_prop = -1, texnumber_prop = -1;
     if (is_face && want_attributes)
-      for (const PlyProperty& p : e.props)
-        if (p.is_list && (p.name == "texcoord" || p.name == "texcoords"))
-          record->dropped->push_back("texture coordinates per face corner (face property " + p.name +
-                                     "; Strata keeps one per vertex)");
+      for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
+        const PlyProperty& p = e.props[k];
+        if (p.is_list && (p.name == "texcoord" || p.name == "texcoords") && texcoord_prop < 0)
+          texcoord_prop = k;
+        if (!p.is_list && p.name == "texnumber" && ply_is_integer(p.type)) texnumber_prop = k;
+      }
     if (is_face && index_prop < 0) fail_io(name, "face element has no list property vertex_indices");
     if (is_vertex) mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
 
@@ -1215,12 +1232,14 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
     };
     for (long long i = 0; i < e.count; ++i) {
       Vec3 p = Vec3::Zero();
+      long long texnumber = -1;
       std::array<double, 4> color{0.0, 0.0, 0.0, 1.0};
       std::array<double, 2> tex{0.0, 0.0};
       for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
         const PlyProperty& prop = e.props[k];
         if (!prop.is_list) {
           if (!src.read(prop.type, value)) truncated(i);
+          if (k == texnumber_prop) texnumber = value.i;
           for (int c = 0; c < 3; ++c)
             if (k == xyz[c]) p[c] = value.d;
           for (int c = 0; c < 4; ++c)
@@ -1232,13 +1251,31 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
         if (!src.read(prop.count_type, value)) truncated(i);
         const long long n = value.i;
         if (n < 0) fail_io(name, plural_element(e) + " " + std::to_string(i) + ": negative list length");
-        const bool keep = k == index_prop;
+        const bool keep = k == index_prop, keep_uv = k == texcoord_prop;
         if (keep) corners.clear();
+        if (keep_uv) face_uv.clear();
         for (long long j = 0; j < n; ++j) {  // each item consumes input, so this is bounded by the file size
           if (!src.read(prop.type, value)) truncated(i);
           if (keep) corners.push_back(value.i);
+          if (keep_uv) face_uv.push_back(value.d);
         }
         if (keep) faces.add_checked(corners, [&] { return "face " + std::to_string(i); });
+      }
+      if (is_face && want_attributes) {
+        poly_sizes.push_back(static_cast<int>(corners.size()));
+        for (long long c : corners) poly_vertices.push_back(static_cast<int>(c));
+        if (texcoord_prop >= 0) {
+          if (face_uv.size() == 2 * corners.size()) {
+            for (std::size_t c = 0; c < corners.size(); ++c)
+              poly_uv.push_back({face_uv[2 * c], face_uv[2 * c + 1]});
+          } else if (uv_problem.empty()) {
+            uv_problem = "texture coordinates: face " + std::to_string(i) + "'s texcoord list has " +
+                         std::to_string(face_uv.size()) + " values for " + std::to_string(corners.size()) +
+                         " corners";
+          }
+        }
+        if (texnumber_prop >= 0)
+          poly_textures.push_back(static_cast<int>(std::clamp<long long>(texnumber, -1, INT_MAX)));
       }
       if (is_vertex) {
         mesh.vertices.push_back(p);
@@ -1253,7 +1290,60 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   // header names one vertex element, and one with a count has coordinates.
   assert(static_cast<long long>(mesh.vertices.size()) == num_vertices);
   mesh.faces = faces.finish(mesh.vertices);
-  if (want_attributes) *record->attributes = std::move(attrs);
+  if (want_attributes) {
+    if (!uv_problem.empty()) {
+      record->dropped->push_back(uv_problem);
+    } else if (!poly_uv.empty() && attrs.texcoords.empty()) {
+      // One (u, v) per polygon corner: per vertex where each vertex's corners agree, else per
+      // triangle corner (seams), mapped through the triangulation by the corners' vertices.
+      std::vector<int> first(mesh.vertices.size(), -1);
+      bool seams = false;
+      for (std::size_t c = 0; c < poly_vertices.size(); ++c) {
+        int& f = first[static_cast<std::size_t>(poly_vertices[c])];
+        if (f < 0)
+          f = static_cast<int>(c);
+        else
+          seams = seams || poly_uv[static_cast<std::size_t>(f)] != poly_uv[c];
+      }
+      if (!seams) {
+        attrs.texcoords.assign(mesh.vertices.size(), {0.0, 0.0});
+        for (std::size_t v = 0; v < first.size(); ++v)
+          if (first[v] >= 0) attrs.texcoords[v] = poly_uv[static_cast<std::size_t>(first[v])];
+      } else {
+        attrs.corner_uv = poly_uv;
+        attrs.corner_uv_index.assign(mesh.faces.size(), {0, 0, 0});
+      }
+    }
+    // Per triangle: its polygon's image, and (seams) its corners' entries.
+    std::size_t tri = 0, corner = 0;
+    if (!poly_textures.empty() && poly_textures.size() == poly_sizes.size())
+      attrs.face_textures.assign(mesh.faces.size(), -1);
+    for (std::size_t p = 0; p < poly_sizes.size(); ++p) {
+      const int n = poly_sizes[p];
+      for (int k = 0; k + 2 < n && tri < mesh.faces.size(); ++k, ++tri) {
+        if (!attrs.face_textures.empty()) attrs.face_textures[tri] = poly_textures[p];
+        if (!attrs.corner_uv_index.empty())
+          for (int c = 0; c < 3; ++c)
+            for (int q = 0; q < n; ++q)
+              if (poly_vertices[corner + static_cast<std::size_t>(q)] == mesh.faces[tri][c]) {
+                attrs.corner_uv_index[tri][c] = static_cast<int>(corner) + q;
+                break;
+              }
+      }
+      corner += static_cast<std::size_t>(n);
+    }
+    attrs.texture_files = h.texture_files;
+    // An image number past the named files (or below -1) is the file's fault: named below.
+    for (int& t : attrs.face_textures)
+      if (t >= static_cast<int>(attrs.texture_files.size())) {
+        record->dropped->push_back("texture images per face: a face's texnumber " + std::to_string(t) +
+                                   " names no TextureFile comment (" +
+                                   std::to_string(attrs.texture_files.size()) + " in the header)");
+        attrs.face_textures.clear();
+        break;
+      }
+    *record->attributes = std::move(attrs);
+  }
   return mesh;
 }
 
@@ -1758,10 +1848,18 @@ void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
   for (int c = 0; c < channels; ++c)
     props += std::string("property ") + (uchar ? "uchar " : "double ") + kChannel[c] + "\n";
   if (uv) props += "property double texture_u\nproperty double texture_v\n";
-  w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
-         " 1.0\ncomment written by Strata\nelement vertex " + std::to_string(vertices.size()) + "\n" + props +
-         "element face " + std::to_string(faces.size()) +
-         "\nproperty list uchar int vertex_indices\nend_header\n");
+  // MeshLab's layout for texture seams and images: per face a list of 2n numbers and an image.
+  const bool corner_uv = a && !a->corner_uv_index.empty() && a->corner_uv_index.size() == faces.size();
+  const bool textures = a && a->face_textures.size() == faces.size();
+  std::string comments = "comment written by Strata\n";
+  if (a)
+    for (const std::string& t : a->texture_files) comments += "comment TextureFile " + t + "\n";
+  std::string face_props = "property list uchar int vertex_indices\n";
+  if (corner_uv) face_props += "property list uchar double texcoord\n";
+  if (textures) face_props += "property int texnumber\n";
+  w.text(std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") + " 1.0\n" + comments +
+         "element vertex " + std::to_string(vertices.size()) + "\n" + props + "element face " +
+         std::to_string(faces.size()) + "\n" + face_props + "end_header\n");
   for (std::size_t v = 0; v < vertices.size(); ++v) {
     const Vec3& p = vertices[v];
     if (binary) {
@@ -1797,12 +1895,41 @@ void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
     }
     w.maybe_flush();
   }
-  for (const F& f : faces) {
+  for (std::size_t j = 0; j < faces.size(); ++j) {
+    const F& f = faces[j];
     if (binary) {
       w.binary_le(static_cast<uint8_t>(f.size()));  // at most 255 corners: checked by the caller
       for (int i : f) w.binary_le(static_cast<int32_t>(i));
-    } else {
+      if (corner_uv) {
+        w.binary_le(static_cast<uint8_t>(6));
+        for (int c = 0; c < 3; ++c) {
+          w.binary_le(a->corner_uv[a->corner_uv_index[j][c]][0]);
+          w.binary_le(a->corner_uv[a->corner_uv_index[j][c]][1]);
+        }
+      }
+      if (textures) w.binary_le(static_cast<int32_t>(a->face_textures[j]));
+    } else if (!corner_uv && !textures) {
       write_face_line(w, f);
+    } else {
+      w.integer(static_cast<long long>(f.size()));
+      for (int i : f) {
+        w.text(" ");
+        w.integer(i);
+      }
+      if (corner_uv) {
+        w.text(" 6");
+        for (int c = 0; c < 3; ++c) {
+          w.text(" ");
+          w.number(a->corner_uv[a->corner_uv_index[j][c]][0]);
+          w.text(" ");
+          w.number(a->corner_uv[a->corner_uv_index[j][c]][1]);
+        }
+      }
+      if (textures) {
+        w.text(" ");
+        w.integer(a->face_textures[j]);
+      }
+      w.text("\n");
     }
     w.maybe_flush();
   }
@@ -1975,15 +2102,19 @@ MeshFile read_mesh_file(const std::string& path, const ReadOptions& options) {
 
 std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {
   const Format format = format_of(path);
-  std::vector<std::string> lost;
-  if (format == Format::Obj) return lost;
   const MeshAttributes& a = attributes;
+  const bool seams = !a.corner_uv_index.empty(),
+             materials = !a.face_materials.empty() || !a.material_library.empty(),
+             images = !a.texture_files.empty() || !a.face_textures.empty();
+  std::vector<std::string> lost;
   if (format == Format::Stl) {
     if (!a.colors.empty()) lost.push_back("vertex colours");
     if (!a.texcoords.empty()) lost.push_back("texture coordinates");
   }
-  if (!a.corner_uv_index.empty()) lost.push_back("texture coordinates per face corner (texture seams)");
-  if (!a.face_materials.empty() || !a.material_library.empty()) lost.push_back("materials");
+  if (seams && (format == Format::Off || format == Format::Stl))
+    lost.push_back("texture coordinates per face corner (texture seams)");
+  if (materials && format != Format::Obj) lost.push_back("materials");
+  if (images && format != Format::Ply) lost.push_back("texture images (PLY's TextureFile)");
   return lost;
 }
 

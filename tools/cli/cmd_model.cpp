@@ -250,7 +250,7 @@ int run_info(const InfoCmdOptions& o) {
       std::cout << "band " << b["band"].get<int>() << " carries vertex colours "
                 << a["vertex_colors"].get<std::string>() << ", texture coordinates "
                 << a["texture_coordinates"].get<std::string>() << ", " << a["materials"].get<std::size_t>()
-                << " materials\n";
+                << " materials, " << a["texture_files"].size() << " texture images\n";
     }
   // Control characters escaped: a history entry is the file's text, and raw newlines or terminal
   // escapes in it could fake lines of this output ("strata: error: ...").

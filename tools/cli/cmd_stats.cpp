@@ -77,7 +77,8 @@ int run_stats(const StatsCmdOptions& o) {
             << "materials                " << m.attributes.material_names.size()
             << (m.attributes.material_library.empty() ? ""
                                                       : " (library " + m.attributes.material_library + ")")
-            << std::endl;
+            << "\n"
+            << "texture images           " << m.attributes.texture_files.size() << std::endl;
   return 0;
 }
 

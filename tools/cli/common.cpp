@@ -126,7 +126,8 @@ json attributes_json(const MeshAttributes& a) {
                                   : !a.corner_uv_index.empty() ? "per_corner"
                                                                : "none"},
           {"materials", a.material_names.size()},
-          {"material_library", a.material_library}};
+          {"material_library", a.material_library},
+          {"texture_files", a.texture_files}};
 }
 
 void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {

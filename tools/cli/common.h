@@ -120,8 +120,8 @@ std::string lower_extension(const std::string& path);
 void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
 //! What \p attributes hold, as `stats` and the model reports give it: vertex_colors ("none", "rgb"
-//! or "rgba"), texture_coordinates ("none", "per_vertex" or "per_corner"), materials (how many)
-//! and material_library.
+//! or "rgba"), texture_coordinates ("none", "per_vertex" or "per_corner"), materials (how many),
+//! material_library and texture_files.
 json attributes_json(const MeshAttributes& attributes);
 
 //! Warns on stderr about what of \p attributes (colours, texture coordinates, materials) the

@@ -50,10 +50,15 @@ struct MeshAttributes {
   std::string material_library;
   std::vector<std::string> material_names;
   std::vector<int> face_materials;
+  //! Texture images as a PLY names them (MeshLab's "comment TextureFile", relative to the file),
+  //! and per face the index of its image in texture_files (PLY's texnumber; -1: none). An OBJ
+  //! names its images in its material library instead.
+  std::vector<std::string> texture_files;
+  std::vector<int> face_textures;
 
   bool empty() const {
     return colors.empty() && texcoords.empty() && corner_uv_index.empty() && face_materials.empty() &&
-           material_library.empty();
+           material_library.empty() && texture_files.empty() && face_textures.empty();
   }
 };
 

@@ -91,14 +91,16 @@ struct MeshFile {
   //!   several (seams: corner_uv is the file's vt list); mtllib (the first) and usemtl.
   //! - OFF: the C and ST prefixes' values (integer colours on a 0-255 scale, floats on 0-1).
   //! - PLY: vertex properties red, green, blue [alpha] (or diffuse_*), any type, integer types
-  //!   scaled by their largest value; u v, s t, texture_u texture_v or texture_s texture_t.
+  //!   scaled by their largest value; u v, s t, texture_u texture_v or texture_s texture_t;
+  //!   MeshLab's face list texcoord (2n numbers: per vertex where each vertex's corners agree,
+  //!   else per face corner), face texnumber and "comment TextureFile" lines.
   //! - STL: none.
   MeshAttributes attributes;
   int flipped_faces = 0;  //!< faces ReadOptions::orient_faces flipped (their polygons reversed too)
   //! Colours or texture coordinates the file holds that MeshAttributes cannot represent, each
   //! a note for the user (e.g. "vertex colours: only 2 of the 4 vertices have one", texture
-  //! coordinates on only some face corners, PLY's per-corner texcoord lists). Normals and face
-  //! colours are not kept and not listed: normals are recomputed from the geometry.
+  //! coordinates on only some face corners, a PLY texcoord list of the wrong length). Normals and
+  //! face colours are not kept and not listed: normals are recomputed from the geometry.
   std::vector<std::string> dropped;
 };
 
@@ -133,7 +135,8 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
 //!   material changes (a bare "usemtl" for none);
 //! - OFF: [ST]COFF, colours as floats (always written with a decimal point or an exponent);
 //! - PLY: red green blue [alpha] as uchar when every channel is k / 255 exactly (as 8-bit
-//!   colours read), else as double; texture_u texture_v as double;
+//!   colours read), else as double; texture_u texture_v as double; per face corner, MeshLab's
+//!   face list texcoord (as double), its texnumber and "comment TextureFile" lines;
 //! - what a format cannot store is not written (attributes_not_stored()).
 //! \throw as write_mesh(mesh, path, encoding), and InvalidInput if \p attributes fail
 //!        check_mesh_attributes() for \p mesh.
@@ -141,9 +144,10 @@ void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std
                 MeshEncoding encoding = MeshEncoding::Default);
 
 //! What of \p attributes the format of \p path (by its extension) cannot store, for a warning:
-//! OBJ stores everything; OFF and PLY all but "texture coordinates per face corner (texture
-//! seams)" and "materials"; STL also not "vertex colours" nor "texture coordinates". Empty if
-//! nothing is lost. \throw IoError if the extension is not supported.
+//! "materials" (all but OBJ), "texture images (PLY's TextureFile)" (all but PLY), "texture
+//! coordinates per face corner (texture seams)" (OFF, STL), and for STL also "vertex colours" and
+//! "texture coordinates". Empty if nothing is lost. \throw IoError if the extension is not
+//! supported.
 std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
 
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
