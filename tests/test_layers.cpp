@@ -216,6 +216,20 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   EXPECT_EQ(tb.texture_files, t.texture_files);
   EXPECT_EQ(tb.face_textures, t.face_textures);
 
+  // Files of f6fed3b have no texture_files / textures keys: they read as without images.
+  {
+    layers::StrataContainer c = layers::read_strata_container(tmp.file("c.strata"));
+    nlohmann::json m = nlohmann::json::parse(c.model_json);
+    ASSERT_TRUE(m["bands"][finest]["attributes"].contains("texture_files"));
+    m["bands"][finest]["attributes"].erase("texture_files");
+    m["bands"][finest]["attributes"].erase("textures");
+    c.model_json = m.dump();
+    layers::write_strata_container(c, tmp.file("older.strata"));
+    const LayeredModel older = layers::read_model(tmp.file("older.strata"));
+    EXPECT_EQ(older.band(finest).attributes.colors, a.colors);
+    EXPECT_TRUE(older.band(finest).attributes.texture_files.empty());
+  }
+
   // Misuse is refused, the model unchanged.
   t.face_materials[3] = 2;
   EXPECT_THROW(textured.set_attributes(finest, t), InvalidInput);

@@ -644,13 +644,16 @@ LayeredModel read_model(const std::string& path) {
         if (!n.is_string()) h.fail("'material_names' in " + wa + " holds a value that is not a string");
         va.material_names.push_back(n.get<std::string>());
       }
-      const json& files = h.at(at, "texture_files", wa);
-      if (!files.is_array()) h.fail("'texture_files' in " + wa + " is not an array");
-      for (const json& n : files) {
-        if (!n.is_string()) h.fail("'texture_files' in " + wa + " holds a value that is not a string");
-        va.texture_files.push_back(n.get<std::string>());
+      // texture_files and textures came later the same day (f6fed3b wrote files without them).
+      if (at.contains("texture_files")) {
+        const json& files = h.at(at, "texture_files", wa);
+        if (!files.is_array()) h.fail("'texture_files' in " + wa + " is not an array");
+        for (const json& n : files) {
+          if (!n.is_string()) h.fail("'texture_files' in " + wa + " holds a value that is not a string");
+          va.texture_files.push_back(n.get<std::string>());
+        }
       }
-      if (h.boolean(at, "textures", wa)) {
+      if (at.contains("textures") && h.boolean(at, "textures", wa)) {
         const std::vector<std::int32_t> t =
             unpack_i32(section(p + "face_textures"), nf, what(p + "face_textures"));
         va.face_textures.assign(t.begin(), t.end());
