@@ -1931,6 +1931,96 @@ TEST(MeshIoAttributes, TexturedPlyAsMeshLabWritesIt) {
             std::string::npos);
 }
 
+// From the review of the textured PLY reader: names kept as written, numbers that name no image
+// and lists that disagree with the vertices' u v listed, and a polygon of many corners mapped in
+// linear time (every corner of its 1,998 triangles checked).
+TEST(MeshIoAttributes, TexturedPlyOddities) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::string faces =
+      "element face 2\nproperty list uchar int vertex_indices\nproperty list uchar float "
+      "texcoord\nproperty TYPE texnumber\nend_header\n";
+  const std::string verts = "element vertex 4\nproperty double x\nproperty double y\nproperty double z\n";
+  auto ply = [&](const std::string& comments, const std::string& type, const std::string& body) {
+    std::string f = faces;
+    f.replace(f.find("TYPE"), 4, type);
+    return "ply\nformat ascii 1.0\n" + comments + verts + f + "0 0 0\n1 0 0\n0 1 0\n1 1 0\n" + body;
+  };
+  const std::string body = "3 0 1 2 6 0 0 1 0 0 1 NUM\n3 1 3 2 6 1 0 1 1 0 1 0\n";
+  auto with = [&](const std::string& n) {
+    std::string b = body;
+    b.replace(b.find("NUM"), 3, n);
+    return b;
+  };
+  write_bytes(
+      dir.file("names.ply"),
+      ply("comment TextureFile tex#1.png\ncomment TextureFile   my    tex.png  \ncomment TextureFile\n",
+          "int", with("1")));
+  MeshFile f = read_mesh_file(dir.file("names.ply"));
+  EXPECT_EQ(f.attributes.texture_files, (std::vector<std::string>{"tex#1.png", "my    tex.png"}));
+  EXPECT_EQ(f.attributes.face_textures, (std::vector<int>{1, 0}));
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_NE(f.dropped[0].find("a TextureFile comment without a name"), std::string::npos) << f.dropped[0];
+  write_mesh(f.mesh, f.attributes, dir.file("names_out.ply"));
+  EXPECT_EQ(read_mesh_file(dir.file("names_out.ply")).attributes.texture_files, f.attributes.texture_files);
+
+  for (const auto& [type, number, shown] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"int", "-5", "texnumber -5 names no TextureFile"},
+           {"uint", "4000000000", "texnumber 4000000000 names no TextureFile"},
+           {"float", "0", "the face property texnumber is not an integer"}}) {
+    write_bytes(dir.file("n.ply"), ply("comment TextureFile a.png\n", type, with(number)));
+    f = read_mesh_file(dir.file("n.ply"));
+    EXPECT_TRUE(f.attributes.face_textures.empty()) << type << " " << number;
+    ASSERT_EQ(f.dropped.size(), 1u) << type << " " << number;
+    EXPECT_NE(f.dropped[0].find(shown), std::string::npos) << f.dropped[0];
+  }
+
+  // Vertices with u v, and texcoord lists that disagree (a seam): the lists are kept, noted.
+  write_bytes(
+      dir.file("both.ply"),
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+      "property float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\n"
+      "property list uchar float texcoord\nend_header\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n1 1 0 1 1\n"
+      "3 0 1 2 6 0 0 1 0 0 1\n3 1 3 2 6 0.5 0.5 1 1 0 1\n");
+  f = read_mesh_file(dir.file("both.ply"));
+  EXPECT_TRUE(f.attributes.texcoords.empty());
+  ASSERT_EQ(f.attributes.corner_uv_index.size(), 2u);
+  EXPECT_EQ(f.attributes.corner_uv[f.attributes.corner_uv_index[1][0]], (std::array<double, 2>{0.5, 0.5}));
+  ASSERT_EQ(f.dropped.size(), 1u);
+  EXPECT_NE(f.dropped[0].find("the faces' texcoord lists differ from them and are kept instead"),
+            std::string::npos);
+
+  // One convex polygon of 2,000 corners (u, v its corner's position) and a triangle that puts a
+  // seam at vertex 0.
+  const int n = 2000;
+  std::string big =
+      "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n + 1) +
+      "\nproperty double x\nproperty double y\nproperty double z\nelement face 2\nproperty list "
+      "uint int vertex_indices\nproperty list uint double texcoord\nend_header\n";
+  std::vector<std::array<double, 2>> at(n + 1);
+  for (int k = 0; k < n; ++k) {
+    const double a = 2 * kPi * k / n;
+    at[k] = {std::cos(a), std::sin(a)};
+    big += std::to_string(at[k][0]) + " " + std::to_string(at[k][1]) + " 0\n";
+  }
+  big += "0 0 1\n" + std::to_string(n);
+  for (int k = 0; k < n; ++k) big += " " + std::to_string(k);
+  big += " " + std::to_string(2 * n);
+  for (int k = 0; k < n; ++k) big += " " + std::to_string(k) + " " + std::to_string(-k);
+  big += "\n3 0 " + std::to_string(n) + " 1 6 9 9 0.5 0.5 1 -1\n";
+  write_bytes(dir.file("big.ply"), big);
+  f = read_mesh_file(dir.file("big.ply"));
+  ASSERT_EQ(f.mesh.num_faces(), n - 1);
+  ASSERT_EQ(f.attributes.corner_uv_index.size(), static_cast<std::size_t>(n - 1));
+  for (int t = 0; t < n - 2; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int v = f.mesh.faces[t][c];
+      ASSERT_EQ(f.attributes.corner_uv[f.attributes.corner_uv_index[t][c]],
+                (std::array<double, 2>{1.0 * v, -1.0 * v}))
+          << "triangle " << t << " corner " << c;
+    }
+  EXPECT_EQ(f.attributes.corner_uv[f.attributes.corner_uv_index[n - 2][0]], (std::array<double, 2>{9, 9}));
+}
+
 TEST(MeshIoAttributes, BadValuesAreErrorsNamingTheFile) {
   test::ScratchDir dir{"strata_mesh_io"};
   const std::string faces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";

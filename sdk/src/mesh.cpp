@@ -96,7 +96,16 @@ void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh
       throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture " +
                          std::to_string(a.face_textures[f]) + " is out of range (" +
                          std::to_string(a.texture_files.size()) + " texture files)");
-  for (const std::string& n : a.texture_files) check_name(n, "texture file");
+  // Image names go into PLY comment lines, read back trimmed: no control characters (tabs,
+  // line breaks), no spaces at the ends.
+  for (const std::string& n : a.texture_files) {
+    bool ok = !n.empty() && n.front() != ' ' && n.back() != ' ';
+    for (char c : n) ok = ok && c != 0x7f && static_cast<unsigned char>(c) >= 0x20;
+    if (!ok)
+      throw InvalidInput(
+          what + ": texture file '" + printable(n) +
+          "' cannot be written to PLY as it is (empty, a control character, or spaces at an end)");
+  }
   if (!a.material_library.empty()) check_name(a.material_library, "material library");
   for (const std::string& n : a.material_names) check_name(n, "material name");
 }

@@ -426,6 +426,29 @@ bool parse_obj_count_comment(std::string_view line, ObjCountComment& out) {
   return out.present;
 }
 
+// The polygons of a file as its reader saw them, in file order: poly_sizes[p] corners each, their
+// vertices back to back in poly_vertices. Polygon p became poly_sizes[p] - 2 consecutive
+// triangles of its corners (FaceBuilder). Returns, per triangle, each corner's offset in
+// poly_vertices (found by its vertex through a map reset per polygon: linear in the corners, where
+// a search of each triangle's polygon took 3.7 s for one polygon of 100k corners).
+std::vector<std::array<int, 3>> triangle_corner_offsets(const std::vector<Face>& triangles,
+                                                        std::size_t num_vertices,
+                                                        const std::vector<int>& poly_sizes,
+                                                        const std::vector<int>& poly_vertices) {
+  std::vector<std::array<int, 3>> out(triangles.size(), {0, 0, 0});
+  std::vector<int> at(num_vertices, -1);
+  std::size_t tri = 0, corner = 0;
+  for (const int n : poly_sizes) {
+    for (int q = n - 1; q >= 0; --q)
+      at[static_cast<std::size_t>(poly_vertices[corner + q])] = static_cast<int>(corner) + q;
+    for (int k = 0; k + 2 < n && tri < triangles.size(); ++k, ++tri)
+      for (int c = 0; c < 3; ++c) out[tri][c] = std::max(0, at[static_cast<std::size_t>(triangles[tri][c])]);
+    for (int q = 0; q < n; ++q) at[static_cast<std::size_t>(poly_vertices[corner + q])] = -1;
+    corner += static_cast<std::size_t>(n);
+  }
+  return out;
+}
+
 TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OBJ");
   TriMesh mesh;
@@ -660,15 +683,10 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
     } else if (seams > 0) {
       // Per face corner: the file's vt list, each triangle corner's entry by its vertex.
       a.corner_uv = std::move(texcoords);
-      a.corner_uv_index.assign(mesh.faces.size(), {0, 0, 0});
-      for_each_triangle([&](std::size_t tri, std::size_t, std::size_t corner, int n) {
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < n; ++k)
-            if (poly_vertices[corner + k] == mesh.faces[tri][c]) {
-              a.corner_uv_index[tri][c] = poly_vts[corner + k];
-              break;
-            }
-      });
+      a.corner_uv_index =
+          triangle_corner_offsets(mesh.faces, mesh.vertices.size(), poly_sizes, poly_vertices);
+      for (auto& t : a.corner_uv_index)
+        for (int& c : t) c = poly_vts[static_cast<std::size_t>(c)];
     } else if (corners_with_vt > 0 && vt_by_index && texcoords.size() == mesh.vertices.size()) {
       a.texcoords = std::move(texcoords);  // vertices in no face keep theirs too
     } else if (corners_with_vt > 0) {
@@ -952,7 +970,8 @@ enum class PlyEncoding { Ascii, BinaryLE, BinaryBE };
 struct PlyHeader {
   PlyEncoding encoding = PlyEncoding::Ascii;
   std::vector<PlyElement> elements;
-  std::vector<std::string> texture_files;  // "comment TextureFile NAME" (MeshLab), in order
+  std::vector<std::string> texture_files;     // "comment TextureFile NAME" (MeshLab), in order
+  std::vector<std::string> texture_problems;  // TextureFile lines that name nothing usable
   size_t body_offset = 0;
   long long body_first_line = 1;
 };
@@ -973,9 +992,18 @@ PlyHeader parse_ply_header(const std::string& name, std::string_view data) {
     std::string_view key, a, b, c, d;
     if (!t.next(key)) continue;
     if (key == "comment" && t.next(a) && a == "TextureFile") {
-      std::string file;
-      while (t.next(b)) file += (file.empty() ? "" : " ") + std::string(b);
-      h.texture_files.push_back(file);
+      // The rest of the line as it is (a name may hold spaces or '#'), trimmed at the ends.
+      std::string_view file = line.substr(line.find("TextureFile") + 11);
+      while (!file.empty() && is_blank(file.front())) file.remove_prefix(1);
+      while (!file.empty() && is_blank(file.back())) file.remove_suffix(1);
+      const bool printable = std::all_of(file.begin(), file.end(), [](char c) {
+        return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+      });
+      if (!file.empty() && printable)
+        h.texture_files.emplace_back(file);
+      else
+        h.texture_problems.push_back("texture image: " + where + ": a TextureFile comment " +
+                                     (file.empty() ? "without a name" : "with a control character"));
       continue;
     }
     if (key == "comment" || key == "obj_info") continue;
@@ -1143,7 +1171,8 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   const bool want_attributes = record && record->attributes;
   MeshAttributes attrs;
   // Per face (polygon) in file order: its corners, their (u, v) (texcoord lists) and its image.
-  std::vector<int> poly_sizes, poly_vertices, poly_textures;
+  std::vector<int> poly_sizes, poly_vertices;
+  std::vector<long long> poly_textures;
   std::vector<std::array<double, 2>> poly_uv;
   std::vector<double> face_uv;
   std::string uv_problem;
@@ -1221,7 +1250,13 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
         const PlyProperty& p = e.props[k];
         if (p.is_list && (p.name == "texcoord" || p.name == "texcoords") && texcoord_prop < 0)
           texcoord_prop = k;
-        if (!p.is_list && p.name == "texnumber" && ply_is_integer(p.type)) texnumber_prop = k;
+        if (p.name == "texnumber") {
+          if (!p.is_list && ply_is_integer(p.type))
+            texnumber_prop = k;
+          else
+            record->dropped->push_back(
+                "texture images per face: the face property texnumber is not an integer");
+        }
       }
     if (is_face && index_prop < 0) fail_io(name, "face element has no list property vertex_indices");
     if (is_vertex) mesh.vertices.reserve(static_cast<size_t>(std::min<long long>(e.count, 1 << 20)));
@@ -1274,8 +1309,7 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
                          " corners";
           }
         }
-        if (texnumber_prop >= 0)
-          poly_textures.push_back(static_cast<int>(std::clamp<long long>(texnumber, -1, INT_MAX)));
+        if (texnumber_prop >= 0) poly_textures.push_back(texnumber);
       }
       if (is_vertex) {
         mesh.vertices.push_back(p);
@@ -1293,7 +1327,7 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
   if (want_attributes) {
     if (!uv_problem.empty()) {
       record->dropped->push_back(uv_problem);
-    } else if (!poly_uv.empty() && attrs.texcoords.empty()) {
+    } else if (!poly_uv.empty()) {
       // One (u, v) per polygon corner: per vertex where each vertex's corners agree, else per
       // triangle corner (seams), mapped through the triangulation by the corners' vertices.
       std::vector<int> first(mesh.vertices.size(), -1);
@@ -1305,43 +1339,44 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
         else
           seams = seams || poly_uv[static_cast<std::size_t>(f)] != poly_uv[c];
       }
-      if (!seams) {
+      // Vertices with u v too: the lists win where they say more (seams) or otherwise, noted.
+      bool differ = false;
+      for (std::size_t v = 0; v < first.size() && !attrs.texcoords.empty(); ++v)
+        differ =
+            differ || (first[v] >= 0 && attrs.texcoords[v] != poly_uv[static_cast<std::size_t>(first[v])]);
+      if (differ || (seams && !attrs.texcoords.empty()))
+        record->dropped->push_back(
+            "texture coordinates per vertex (u v): the faces' texcoord lists differ from them and are kept "
+            "instead");
+      if (!seams && (attrs.texcoords.empty() || differ)) {
         attrs.texcoords.assign(mesh.vertices.size(), {0.0, 0.0});
         for (std::size_t v = 0; v < first.size(); ++v)
           if (first[v] >= 0) attrs.texcoords[v] = poly_uv[static_cast<std::size_t>(first[v])];
-      } else {
+      } else if (seams) {
+        attrs.texcoords.clear();
         attrs.corner_uv = poly_uv;
-        attrs.corner_uv_index.assign(mesh.faces.size(), {0, 0, 0});
+        attrs.corner_uv_index =
+            triangle_corner_offsets(mesh.faces, mesh.vertices.size(), poly_sizes, poly_vertices);
       }
     }
-    // Per triangle: its polygon's image, and (seams) its corners' entries.
-    std::size_t tri = 0, corner = 0;
-    if (!poly_textures.empty() && poly_textures.size() == poly_sizes.size())
-      attrs.face_textures.assign(mesh.faces.size(), -1);
-    for (std::size_t p = 0; p < poly_sizes.size(); ++p) {
-      const int n = poly_sizes[p];
-      for (int k = 0; k + 2 < n && tri < mesh.faces.size(); ++k, ++tri) {
-        if (!attrs.face_textures.empty()) attrs.face_textures[tri] = poly_textures[p];
-        if (!attrs.corner_uv_index.empty())
-          for (int c = 0; c < 3; ++c)
-            for (int q = 0; q < n; ++q)
-              if (poly_vertices[corner + static_cast<std::size_t>(q)] == mesh.faces[tri][c]) {
-                attrs.corner_uv_index[tri][c] = static_cast<int>(corner) + q;
-                break;
-              }
-      }
-      corner += static_cast<std::size_t>(n);
-    }
+    // Per triangle, its polygon's image; a number naming no image (beyond the TextureFile lines,
+    // or below -1) cannot be kept.
     attrs.texture_files = h.texture_files;
-    // An image number past the named files (or below -1) is the file's fault: named below.
-    for (int& t : attrs.face_textures)
-      if (t >= static_cast<int>(attrs.texture_files.size())) {
-        record->dropped->push_back("texture images per face: a face's texnumber " + std::to_string(t) +
-                                   " names no TextureFile comment (" +
-                                   std::to_string(attrs.texture_files.size()) + " in the header)");
-        attrs.face_textures.clear();
-        break;
-      }
+    for (const std::string& d : h.texture_problems) record->dropped->push_back(d);
+    const long long images = static_cast<long long>(attrs.texture_files.size());
+    const auto bad = std::find_if(poly_textures.begin(), poly_textures.end(),
+                                  [&](long long t) { return t < -1 || t >= images; });
+    if (bad != poly_textures.end()) {
+      record->dropped->push_back("texture images per face: a face's texnumber " + std::to_string(*bad) +
+                                 " names no TextureFile comment (" + std::to_string(images) +
+                                 " in the header)");
+    } else if (!poly_textures.empty() && poly_textures.size() == poly_sizes.size()) {
+      attrs.face_textures.assign(mesh.faces.size(), -1);
+      std::size_t tri = 0;
+      for (std::size_t p = 0; p < poly_sizes.size(); ++p)
+        for (int k = 0; k + 2 < poly_sizes[p] && tri < mesh.faces.size(); ++k, ++tri)
+          attrs.face_textures[tri] = static_cast<int>(poly_textures[p]);
+    }
     *record->attributes = std::move(attrs);
   }
   return mesh;
