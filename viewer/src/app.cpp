@@ -117,6 +117,7 @@ App::App(const Options& options, GLFWwindow* window) : options_(options), window
     view_.visible[static_cast<std::size_t>(options.show)] = 1;
   }
   if (!options.script_drag.empty()) script_ = read_edit_script(options.script_drag);
+  if (!options.color_given) view_.color = initial_color_mode(document);
   copy_to(open_path_, options.input);
   worker_ = std::make_unique<Worker>(std::move(document));
   push_view();
@@ -266,6 +267,14 @@ void App::take_snapshot() {
       amplitudes_[static_cast<std::size_t>(k)] = static_cast<float>(committed_->amplitude(k));
     edit_band_ = std::clamp(edit_band_, 0, committed_->num_bands() - 1);
     update_selection_points();
+    if (recolor_on_load_ && committed_->name() == open_path_.data()) {
+      recolor_on_load_ = false;
+      const ColorMode initial = initial_color_mode(*committed_);
+      if (initial == ColorMode::Scan || view_.color == ColorMode::Scan) {
+        view_.color = initial;
+        push_view();
+      }
+    }
   }
   // Same panels and connectivity: move the vertices only; else upload anew.
   const bool same = s->panels.size() == panels_.size() &&
@@ -889,6 +898,7 @@ void App::on_drop(const std::string& path) {
   selection_points_ = GpuLines();
   view_.visible.clear();
   fitted_ = false;
+  recolor_on_load_ = true;  // the new document's own colours, if any (take_snapshot())
   worker_->load(path);
 }
 

@@ -109,6 +109,7 @@ class App {
   std::vector<std::shared_ptr<const Document>> undo_, redo_;
   Camera camera_;
   bool fitted_ = false;
+  bool recolor_on_load_ = false;  // a dropped file is loading: show its own colours once it is in
   ViewSettings view_;
   MeshStyle style_;
   std::string status_;

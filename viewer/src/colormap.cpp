@@ -35,6 +35,10 @@ std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
   return colors;
 }
 
+ColorMode initial_color_mode(const Document& document) {
+  return document.attributes(document.finest_band()).colors.empty() ? ColorMode::None : ColorMode::Scan;
+}
+
 std::vector<Rgb> vertex_colors(const MeshAttributes& attributes) {
   std::vector<Rgb> colors;
   colors.reserve(attributes.colors.size());

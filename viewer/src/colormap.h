@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "document.h"
 #include "renderer.h"
 #include "strata/mesh.h"
 
@@ -25,6 +26,10 @@ ColorMode parse_color_mode(const std::string& name);
 //! Per-face colours of relative errors: surface colour at 0, through yellow at scale/2, to red at
 //! \p scale and above; NaN (not measured) keeps the surface colour.
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale);
+
+//! The colour map a document opens with when none was asked for: its own colours (Scan) if its
+//! finest band has vertex colours, as a viewer of coloured scans is expected to show them; else None.
+ColorMode initial_color_mode(const Document& document);
 
 //! Per-vertex colours of \p attributes (their RGB), or none (empty) if they have no colours.
 std::vector<Rgb> vertex_colors(const MeshAttributes& attributes);

@@ -129,7 +129,7 @@ std::string run_headless(const Options& options) {
   SceneSettings settings;
   settings.show = options.show;
   settings.vectors = options.vectors;
-  settings.color = options.color;
+  settings.color = options.color_given ? options.color : initial_color_mode(document);
   settings.error_scale = options.error_scale;
   settings.cage = options.cage;
   const SceneData scene = make_scene(document, settings);

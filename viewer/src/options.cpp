@@ -45,7 +45,8 @@ Without --screenshot: the interactive window (GLFW + Dear ImGui; press F1 for th
   --vectors                draw the shown band rebuilt by displacement vectors (compare)
   --color error|intersections|scan|none
                            prism volume error of the shown band, intersecting triangles, or
-                           the scan's own vertex colours (from its file)
+                           the scan's own vertex colours (from its file; the default when the
+                           finest band has them, else none)
   --error-scale S          relative prism volume error drawn full red (default 0.05)
   --layers N               build an N-band layered model (2 .. 8) from a scan first
   --edit EDIT.json         apply an edit script to --band (repeatable; in order)
@@ -103,6 +104,7 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--color") {
       try {
         o.color = parse_color_mode(value());
+        o.color_given = true;
       } catch (const std::invalid_argument& e) {
         throw UsageError(std::string("--color: ") + e.what());
       }

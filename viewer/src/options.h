@@ -29,10 +29,13 @@ struct Options {
   bool wireframe = false;             //!< --wireframe
   bool cage = false;                  //!< --cage: draw band 0's control net
   bool vectors = false;               //!< --vectors: band shown rebuilt by displacement vectors
-  ColorMode color = ColorMode::None;  //!< --color error|intersections|none
-  double error_scale = 0.05;          //!< --error-scale S: relative prism error drawn full red
-  int build_bands = 0;                //!< --layers N: build an N-band model from a scan first (0: no)
-  std::vector<std::string> edits;     //!< --edit EDIT.json (repeatable), applied in order
+  ColorMode color = ColorMode::None;  //!< --color error|intersections|scan|none
+  //! --color was given; without it a document whose finest band has vertex colours (a coloured
+  //! scan) shows them (initial_color_mode()).
+  bool color_given = false;
+  double error_scale = 0.05;       //!< --error-scale S: relative prism error drawn full red
+  int build_bands = 0;             //!< --layers N: build an N-band model from a scan first (0: no)
+  std::vector<std::string> edits;  //!< --edit EDIT.json (repeatable), applied in order
   std::vector<std::pair<int, double>> amplitudes;  //!< --amplitude K=A ..., after the edits
   std::string save;         //!< --save OUT.strata: the model after edits and amplitudes
   std::string export_mesh;  //!< --export OUT.(obj|ply|off|stl): the mesh drawn

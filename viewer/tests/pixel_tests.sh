@@ -105,6 +105,13 @@ awk '/^v / {print $0, 0.9, 0.05, 0.05; next} {print}' "$MESH" >"$T/red.obj"
 r=$("$VIEWER" "$T/red.obj" --screenshot "$T/red.png" "${COMMON[@]}" --color scan)
 s=$($STATS "$T/red.png")
 check "scan colours drawn" "s['reddish'] > 0.6 * s['foreground'] > 0.03 and r['gl_errors'] == 0" "$s" "$r"
+# Without --color a coloured scan shows its colours; --color none turns them off.
+r=$("$VIEWER" "$T/red.obj" --screenshot "$T/red_default.png" "${COMMON[@]}")
+s=$($STATS "$T/red_default.png" "$T/red.png")
+check "a coloured scan shows its colours without --color" "s['changed'] == 0" "$s"
+r=$("$VIEWER" "$T/red.obj" --screenshot "$T/red_none.png" "${COMMON[@]}" --color none)
+s=$($STATS "$T/red_none.png" "$T/scan.png")
+check "--color none draws it in the surface colour" "s['changed'] == 0 and s['reddish'] == 0" "$s"
 r=$("$VIEWER" "$T/red.obj" --layers 3 --save "$T/red.strata" --screenshot "$T/red_built.png" "${COMMON[@]}")
 r=$("$VIEWER" "$T/red.strata" --screenshot "$T/red_model.png" "${COMMON[@]}" --color scan)
 s=$($STATS "$T/red_model.png" "$T/red.png")
