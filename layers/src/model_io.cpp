@@ -384,8 +384,8 @@ void write_model(const LayeredModel& model, const std::string& path) {
                        {"fallback", e.report.num_fallback},
                        {"ambiguous", e.report.num_ambiguous},
                        {"max_tangential_offset", e.report.max_tangential_offset}}}});
-    // Colours (RGBA) and texture coordinates: a key and sections only where the band has them, so
-    // that a model without them is written as before.
+    // Colours, texture coordinates, materials and images: a key and sections only where the band
+    // has them, so that a model without them is written as before.
     const MeshAttributes& va = b.attributes;
     if (!va.empty()) {
       bands.back()["attributes"] = {

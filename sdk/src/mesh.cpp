@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 
 namespace strata {
 
@@ -23,19 +24,9 @@ void check_coordinates(const std::vector<Vec3>& points, const std::string& what)
   }
 }
 
-namespace {
-
-// At most 64 characters of \p s, control bytes as '?', for a message.
-std::string printable(const std::string& s) {
-  std::string out;
-  for (char c : s.substr(0, 64)) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
-  return s.size() > 64 ? out + "..." : out;
-}
-
-}  // namespace
-
 void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh, const std::string& what) {
-  auto check = [&](const auto& values, const char* name, const char* plural) {
+  const MeshAttributes& a = attributes;
+  auto per_vertex = [&](const auto& values, const char* name, const char* plural) {
     if (values.empty()) return;
     if (values.size() != mesh.vertices.size())
       throw InvalidInput(what + ": " + std::to_string(values.size()) + " vertex " + plural + " for " +
@@ -45,69 +36,57 @@ void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh
         if (!std::isfinite(x))
           throw InvalidInput(what + ": vertex " + std::to_string(i) + " has a non-finite " + name);
   };
-  const MeshAttributes& a = attributes;
-  check(a.colors, "colour", "colours");
-  check(a.texcoords, "texture coordinate", "texture coordinates");
-  if (!a.texcoords.empty() && !a.corner_uv_index.empty())
-    throw InvalidInput(what + ": texture coordinates both per vertex and per face corner");
-  if (!a.corner_uv_index.empty() && a.corner_uv_index.size() != mesh.faces.size())
-    throw InvalidInput(what + ": " + std::to_string(a.corner_uv_index.size()) +
-                       " faces of texture coordinate indices for " + std::to_string(mesh.faces.size()) +
-                       " faces");
-  for (std::size_t i = 0; i < a.corner_uv.size(); ++i)
-    if (!std::isfinite(a.corner_uv[i][0]) || !std::isfinite(a.corner_uv[i][1]))
-      throw InvalidInput(what + ": texture coordinate " + std::to_string(i) + " is not finite");
-  for (std::size_t f = 0; f < a.corner_uv_index.size(); ++f)
-    for (int t : a.corner_uv_index[f])
-      if (t < 0 || static_cast<std::size_t>(t) >= a.corner_uv.size())
-        throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture coordinate index " +
-                           std::to_string(t) + " is out of range (" + std::to_string(a.corner_uv.size()) +
-                           " texture coordinates)");
-  if (!a.face_materials.empty() && a.face_materials.size() != mesh.faces.size())
-    throw InvalidInput(what + ": " + std::to_string(a.face_materials.size()) + " face materials for " +
-                       std::to_string(mesh.faces.size()) + " faces");
-  for (std::size_t f = 0; f < a.face_materials.size(); ++f)
-    if (a.face_materials[f] < -1 || a.face_materials[f] >= static_cast<int>(a.material_names.size()))
-      throw InvalidInput(what + ": face " + std::to_string(f) + "'s material " +
-                         std::to_string(a.face_materials[f]) + " is out of range (" +
-                         std::to_string(a.material_names.size()) + " materials)");
-  // Names go into OBJ lines, which the reader splits at whitespace and cuts at '#': words
-  // joined by single spaces come back as they were, nothing else does.
-  auto check_name = [&](const std::string& name, const std::string& which) {
-    bool ok =
-        !name.empty() && name.front() != ' ' && name.back() != ' ' && name.find("  ") == std::string::npos;
-    for (char c : name) ok = ok && c != '#' && c != 0x7f && (static_cast<unsigned char>(c) >= 0x20);
-    if (!ok)
-      throw InvalidInput(what + ": " + which + " '" + printable(name) +
-                         "' cannot be written to OBJ as it is (empty, or with '#', a control character, "
-                         "or spaces other than single ones between words)");
-  };
+  per_vertex(a.colors, "colour", "colours");
+  per_vertex(a.texcoords, "texture coordinate", "texture coordinates");
   if (!a.colors_have_alpha)
     for (std::size_t i = 0; i < a.colors.size(); ++i)
       if (a.colors[i][3] != 1.0)
         throw InvalidInput(what + ": vertex " + std::to_string(i) + " has alpha " +
                            std::to_string(a.colors[i][3]) +
                            ", but the colours have no alpha channel (colors_have_alpha): it would be lost");
-  if (!a.face_textures.empty() && a.face_textures.size() != mesh.faces.size())
-    throw InvalidInput(what + ": " + std::to_string(a.face_textures.size()) + " face textures for " +
-                       std::to_string(mesh.faces.size()) + " faces");
-  for (std::size_t f = 0; f < a.face_textures.size(); ++f)
-    if (a.face_textures[f] < -1 || a.face_textures[f] >= static_cast<int>(a.texture_files.size()))
-      throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture " +
-                         std::to_string(a.face_textures[f]) + " is out of range (" +
-                         std::to_string(a.texture_files.size()) + " texture files)");
-  // Image names go into PLY comment lines, read back trimmed: no control characters (tabs,
-  // line breaks), no spaces at the ends.
-  for (const std::string& n : a.texture_files) {
-    bool ok = !n.empty() && n.front() != ' ' && n.back() != ' ';
-    for (char c : n) ok = ok && c != 0x7f && static_cast<unsigned char>(c) >= 0x20;
+  if (!a.texcoords.empty() && !a.corner_uv_index.empty())
+    throw InvalidInput(what + ": texture coordinates both per vertex and per face corner");
+  for (std::size_t i = 0; i < a.corner_uv.size(); ++i)
+    if (!std::isfinite(a.corner_uv[i][0]) || !std::isfinite(a.corner_uv[i][1]))
+      throw InvalidInput(what + ": texture coordinate " + std::to_string(i) + " is not finite");
+  // Per face: empty or one entry a face, each an index into a list of \p count, or -1 (none).
+  auto per_face = [&](const std::vector<int>& index, std::size_t count, const char* name, const char* list) {
+    if (!index.empty() && index.size() != mesh.faces.size())
+      throw InvalidInput(what + ": " + std::to_string(index.size()) + " face " + name + "s for " +
+                         std::to_string(mesh.faces.size()) + " faces");
+    for (std::size_t f = 0; f < index.size(); ++f)
+      if (index[f] < -1 || index[f] >= static_cast<long long>(count))
+        throw InvalidInput(what + ": face " + std::to_string(f) + "'s " + name + " " +
+                           std::to_string(index[f]) + " is out of range (" + std::to_string(count) + " " +
+                           list + ")");
+  };
+  if (!a.corner_uv_index.empty() && a.corner_uv_index.size() != mesh.faces.size())
+    throw InvalidInput(what + ": " + std::to_string(a.corner_uv_index.size()) +
+                       " faces of texture coordinate indices for " + std::to_string(mesh.faces.size()) +
+                       " faces");
+  for (std::size_t f = 0; f < a.corner_uv_index.size(); ++f)
+    for (int t : a.corner_uv_index[f])
+      if (t < 0 || static_cast<std::size_t>(t) >= a.corner_uv.size())
+        throw InvalidInput(what + ": face " + std::to_string(f) + "'s texture coordinate index " +
+                           std::to_string(t) + " is out of range (" + std::to_string(a.corner_uv.size()) +
+                           " texture coordinates)");
+  per_face(a.face_materials, a.material_names.size(), "material", "materials");
+  per_face(a.face_textures, a.texture_files.size(), "texture", "texture files");
+  // Names go into OBJ lines (materials) or PLY comment lines (images), which the readers split at
+  // whitespace and trim, and OBJ's cut at '#': what else they hold would not come back as it was.
+  auto check_name = [&](const std::string& name, const std::string& which, bool obj) {
+    bool ok = !name.empty() && name.front() != ' ' && name.back() != ' ' &&
+              (!obj || name.find("  ") == std::string::npos);
+    for (char c : name) ok = ok && !(obj && c == '#') && c != 0x7f && static_cast<unsigned char>(c) >= 0x20;
     if (!ok)
-      throw InvalidInput(
-          what + ": texture file '" + printable(n) +
-          "' cannot be written to PLY as it is (empty, a control character, or spaces at an end)");
-  }
-  if (!a.material_library.empty()) check_name(a.material_library, "material library");
-  for (const std::string& n : a.material_names) check_name(n, "material name");
+      throw InvalidInput(what + ": " + which + " '" + printable_key(name) + "' cannot be written to " +
+                         (obj ? "OBJ as it is (empty, or with '#', a control character, or spaces other than "
+                                "single ones between words)"
+                              : "PLY as it is (empty, a control character, or spaces at an end)"));
+  };
+  if (!a.material_library.empty()) check_name(a.material_library, "material library", true);
+  for (const std::string& n : a.material_names) check_name(n, "material name", true);
+  for (const std::string& n : a.texture_files) check_name(n, "texture file", false);
 }
 
 void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what) {

@@ -16,7 +16,6 @@
 #include <cassert>
 #include <cctype>
 #include <charconv>
-#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -449,6 +448,18 @@ std::vector<std::array<int, 3>> triangle_corner_offsets(const std::vector<Face>&
   return out;
 }
 
+// Per triangle, the index of the polygon it was cut from (polygons as in
+// triangle_corner_offsets()): a per-polygon value (a material, an image) goes to each.
+std::vector<int> triangle_polygons(std::size_t num_triangles, const std::vector<int>& poly_sizes) {
+  std::vector<int> out;
+  out.reserve(num_triangles);
+  for (std::size_t p = 0; p < poly_sizes.size(); ++p)
+    for (int k = 0; k + 2 < poly_sizes[p] && out.size() < num_triangles; ++k)
+      out.push_back(static_cast<int>(p));
+  out.resize(num_triangles, 0);
+  return out;
+}
+
 TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OBJ");
   TriMesh mesh;
@@ -655,16 +666,6 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
     }
   }
   mesh.faces = faces.finish(mesh.vertices);
-  // Each polygon of n corners became n - 2 consecutive triangles of its corners: a per-polygon
-  // value goes to each, a per-corner one by the corner's vertex.
-  auto for_each_triangle = [&](const auto& f) {
-    std::size_t tri = 0, corner = 0;
-    for (std::size_t p = 0; p < poly_sizes.size(); ++p) {
-      const int n = poly_sizes[p];
-      for (int k = 0; k + 2 < n && tri < mesh.faces.size(); ++k, ++tri) f(tri, p, corner, n);
-      corner += static_cast<std::size_t>(n);
-    }
-  };
   if (want_attributes) {
     MeshAttributes& a = *record->attributes;
     const long long nv = mesh.num_vertices();
@@ -697,10 +698,9 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
     if (materials_seen) {
       a.material_library = std::move(material_library);
       a.material_names = std::move(material_names);
-      a.face_materials.assign(mesh.faces.size(), -1);
-      for_each_triangle([&](std::size_t tri, std::size_t p, std::size_t, int) {
-        a.face_materials[tri] = poly_materials[p];
-      });
+      a.face_materials.clear();
+      for (int p : triangle_polygons(mesh.faces.size(), poly_sizes))
+        a.face_materials.push_back(poly_materials[p]);
     }
   }
   return mesh;
@@ -1371,11 +1371,8 @@ TriMesh read_ply_body(const std::string& name, const PlyHeader& h, Source& src, 
                                  " names no TextureFile comment (" + std::to_string(images) +
                                  " in the header)");
     } else if (!poly_textures.empty() && poly_textures.size() == poly_sizes.size()) {
-      attrs.face_textures.assign(mesh.faces.size(), -1);
-      std::size_t tri = 0;
-      for (std::size_t p = 0; p < poly_sizes.size(); ++p)
-        for (int k = 0; k + 2 < poly_sizes[p] && tri < mesh.faces.size(); ++k, ++tri)
-          attrs.face_textures[tri] = static_cast<int>(poly_textures[p]);
+      for (int p : triangle_polygons(mesh.faces.size(), poly_sizes))
+        attrs.face_textures.push_back(static_cast<int>(poly_textures[p]));
     }
     *record->attributes = std::move(attrs);
   }
@@ -1822,15 +1819,14 @@ void write_obj(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
   }
 }
 
-// "n a b c ..\n": a face in OFF's and ASCII PLY's face syntax (0-based).
+// "n a b c ..": a face in OFF's and ASCII PLY's face syntax (0-based), without the line break.
 template <class F>
-void write_face_line(ChunkedWriter& w, const F& f) {
+void write_face_corners(ChunkedWriter& w, const F& f) {
   w.integer(static_cast<long long>(f.size()));
   for (int i : f) {
     w.text(" ");
     w.integer(i);
   }
-  w.text("\n");
 }
 
 template <class F>
@@ -1856,7 +1852,8 @@ void write_off(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
     w.maybe_flush();
   }
   for (const F& f : faces) {
-    write_face_line(w, f);
+    write_face_corners(w, f);
+    w.text("\n");
     w.maybe_flush();
   }
 }
@@ -1943,14 +1940,8 @@ void write_ply(const std::vector<Vec3>& vertices, const std::vector<F>& faces, C
         }
       }
       if (textures) w.binary_le(static_cast<int32_t>(a->face_textures[j]));
-    } else if (!corner_uv && !textures) {
-      write_face_line(w, f);
     } else {
-      w.integer(static_cast<long long>(f.size()));
-      for (int i : f) {
-        w.text(" ");
-        w.integer(i);
-      }
+      write_face_corners(w, f);
       if (corner_uv) {
         w.text(" 6");
         for (int c = 0; c < 3; ++c) {

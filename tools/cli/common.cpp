@@ -136,8 +136,8 @@ void warn_attributes_not_stored(const MeshAttributes& attributes, const std::str
     std::string what;
     for (std::size_t i = 0; i < lost.size(); ++i)
       what += (i == 0 ? "" : i + 1 == lost.size() ? " and " : ", ") + lost[i];
-    std::cerr << "strata: warning: " << path << ": this format does not store " << what
-              << "; not written (OBJ keeps them)" << std::endl;
+    std::cerr << "strata: warning: " << path << ": this format does not store " << what << "; not written"
+              << std::endl;
   }
   if (!attributes.material_library.empty() && lower_extension(path) == ".obj") {
     // mtllib may name several files, separated by spaces.
