@@ -429,7 +429,7 @@ bool parse_obj_count_comment(std::string_view line, ObjCountComment& out) {
 // vertices back to back in poly_vertices. Polygon p became poly_sizes[p] - 2 consecutive
 // triangles of its corners (FaceBuilder). Returns, per triangle, each corner's offset in
 // poly_vertices (found by its vertex through a map reset per polygon: linear in the corners, where
-// a search of each triangle's polygon took 3.7 s for one polygon of 100k corners).
+// a search of each triangle's polygon took 3.7 s for one polygon of 100k corners, review).
 std::vector<std::array<int, 3>> triangle_corner_offsets(const std::vector<Face>& triangles,
                                                         std::size_t num_vertices,
                                                         const std::vector<int>& poly_sizes,
