@@ -2157,3 +2157,121 @@ TEST(MeshIoAtomicFile, WriteMeshIsAtomic) {
 }
 
 }  // namespace
+
+// The files a mesh names (its material libraries, their images, a PLY's images) travel with it:
+// read from beside one mesh, written beside another, byte for byte; what cannot travel is noted.
+std::size_t files_under(const std::string& dir) {
+  std::size_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) n += e.is_regular_file() ? 1 : 0;
+  return n;
+}
+
+TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  fs::create_directories(dir.file("in/tex"));
+  fs::create_directories(dir.file("in/sub"));
+  const std::string png("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);  // bytes, a NUL among them
+  write_bytes(dir.file("in/scan.obj"),
+              "mtllib scan.mtl sub/more.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+              "usemtl skin\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  write_bytes(dir.file("in/scan.mtl"),
+              "newmtl skin\nKd 1 1 1\n"
+              "map_Kd -s 1 1 1 -clamp on -o 0.5 tex/skin colour.png  # a comment\n"
+              "bump -bm 0.5 tex/bump.png\n"
+              "map_Ks missing.png\n"              // not there
+              "map_d /abs/alpha.png\n"            // absolute
+              "refl -type sphere ../above.png\n"  // above the mesh's directory
+              "map_Kd tex/skin colour.png\n");    // named twice
+  write_bytes(dir.file("in/sub/more.mtl"), "newmtl eyes\nMAP_KA ../shared.png\nnorm ./n.png\n");
+  write_bytes(dir.file("in/tex/skin colour.png"), png);
+  write_bytes(dir.file("in/tex/bump.png"), "BUMP");
+  write_bytes(dir.file("in/shared.png"), "SHARED");
+  write_bytes(dir.file("in/sub/n.png"), "NORMALS");
+  write_bytes(dir.file("above.png"), "ABOVE");
+
+  MeshFile f = read_mesh_file(dir.file("in/scan.obj"));
+  EXPECT_TRUE(f.attributes.files.empty());  // read_mesh_file() reads the mesh alone
+  const std::vector<std::string> notes = read_companion_files(f.attributes, dir.file("in/scan.obj"));
+  std::vector<std::string> names;
+  for (const CompanionFile& c : f.attributes.files) names.push_back(c.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"scan.mtl", "tex/skin colour.png", "tex/bump.png",
+                                             "sub/more.mtl", "shared.png", "sub/n.png"}));
+  ASSERT_EQ(f.attributes.files.size(), 6u);
+  EXPECT_EQ(f.attributes.files[1].bytes, png);
+  EXPECT_EQ(f.attributes.files[3].bytes, read_bytes(dir.file("in/sub/more.mtl")));
+  ASSERT_EQ(notes.size(), 3u);
+  EXPECT_NE(notes[0].find("'missing.png' is not there"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("scan.mtl"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[1].find("'/abs/alpha.png'"), std::string::npos) << notes[1];
+  EXPECT_NE(notes[1].find("absolute"), std::string::npos) << notes[1];
+  EXPECT_NE(notes[2].find("'../above.png'"), std::string::npos) << notes[2];
+  EXPECT_NE(notes[2].find("above the mesh file's directory"), std::string::npos) << notes[2];
+
+  // Written beside an OBJ elsewhere: every file at its place, the same bytes; the copy then
+  // finds the same files that were read.
+  fs::create_directories(dir.file("out"));
+  write_mesh(f.mesh, f.attributes, dir.file("out/copy.obj"));
+  EXPECT_TRUE(write_companion_files(f.attributes, dir.file("out/copy.obj")).empty());
+  for (const CompanionFile& c : f.attributes.files)
+    EXPECT_EQ(read_bytes(dir.file("out/" + c.name)), c.bytes) << c.name;
+  MeshFile g = read_mesh_file(dir.file("out/copy.obj"));
+  read_companion_files(g.attributes, dir.file("out/copy.obj"));
+  EXPECT_EQ(g.attributes.files, f.attributes.files);
+  // Again: the files there are the same, and left alone. One that differs is kept, with a note.
+  write_bytes(dir.file("out/tex/bump.png"), "MINE");
+  const std::vector<std::string> again = write_companion_files(f.attributes, dir.file("out/copy.obj"));
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_NE(again[0].find("bump.png is already there and differs"), std::string::npos) << again[0];
+  EXPECT_EQ(read_bytes(dir.file("out/tex/bump.png")), "MINE");
+  // A PLY, an OFF or an STL names no material library: nothing is written beside them.
+  fs::create_directories(dir.file("ply"));
+  for (const char* name : {"ply/x.ply", "ply/x.off", "ply/x.stl"})
+    EXPECT_TRUE(write_companion_files(f.attributes, dir.file(name)).empty());
+  EXPECT_EQ(files_under(dir.file("ply")), 0u);
+
+  // A PLY's images (MeshLab's TextureFile) go beside a PLY, and not beside an OBJ.
+  MeshAttributes p;
+  p.texture_files = {"tex/bump.png", "./shared.png"};
+  EXPECT_TRUE(read_companion_files(p, dir.file("in/scan.ply")).empty());
+  ASSERT_EQ(p.files.size(), 2u);
+  EXPECT_EQ(p.files[1].name, "shared.png");
+  EXPECT_TRUE(write_companion_files(p, dir.file("ply/x.obj")).empty());
+  EXPECT_EQ(files_under(dir.file("ply")), 0u);
+  EXPECT_TRUE(write_companion_files(p, dir.file("ply/x.ply")).empty());
+  EXPECT_EQ(read_bytes(dir.file("ply/tex/bump.png")), "BUMP");
+  EXPECT_EQ(read_bytes(dir.file("ply/shared.png")), "SHARED");
+}
+
+TEST(MeshIoCompanionFiles, BadNamesAndFilesAreRefused) {
+  for (const std::string& name :
+       {std::string(""), std::string("/etc/passwd"), std::string("../x.png"), std::string("a/../../x.png"),
+        std::string("dir/"), std::string("a\nb"), std::string("."), std::string("a/..")})
+    EXPECT_NE(companion_name_problem(name), "") << name;
+  for (const std::string& name : {std::string("x.png"), std::string("a/b/x.png"), std::string("a/../x.png"),
+                                  std::string("./x y.png"), std::string("..x.png")})
+    EXPECT_EQ(companion_name_problem(name), "") << name;
+  const TriMesh m = without_unreferenced(awkward_octahedron());
+  MeshAttributes a;
+  a.files = {{"../up.png", "x"}};
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { check_mesh_attributes(a, m, "scan"); },
+                                        {"scan", "companion file '../up.png'", "above"}));
+  a.files = {{"x.png", "1"}, {"x.png", "2"}};
+  EXPECT_TRUE(
+      throws_with<InvalidInput>([&] { check_mesh_attributes(a, m, "scan"); }, {"'x.png' is given twice"}));
+  a.material_library = "m.mtl";
+  a.files = {{"/abs/m.mtl", "newmtl a\n"}};
+  test::ScratchDir dir{"strata_mesh_io"};
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_companion_files(a, dir.file("o.obj")); },
+                                        {dir.file("o.obj"), "'/abs/m.mtl'", "absolute"}));
+  // An image that is a FIFO is refused (reading it could block), naming it.
+  write_bytes(dir.file("m.mtl"), "map_Kd fifo.png\n");
+  ASSERT_EQ(::mkfifo(dir.file("fifo.png").c_str(), 0600), 0);
+  MeshAttributes b;
+  b.material_library = "m.mtl";
+  EXPECT_TRUE(throws_with<IoError>([&] { read_companion_files(b, dir.file("s.obj")); }, {"fifo.png"}));
+  // A directory where a file is to go is refused, naming it; nothing else is touched.
+  b.files = {{"m.mtl", "newmtl a\nmap_Kd t.png\n"}, {"t.png", "T"}};
+  fs::create_directories(dir.file("o/t.png"));
+  EXPECT_TRUE(throws_with<IoError>([&] { write_companion_files(b, dir.file("o/s.obj")); }, {"t.png"}));
+  EXPECT_TRUE(fs::is_directory(dir.file("o/t.png")));
+}

@@ -1,6 +1,7 @@
 #include "strata/mesh.h"
 
 #include <cmath>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -87,6 +88,35 @@ void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh
   if (!a.material_library.empty()) check_name(a.material_library, "material library", true);
   for (const std::string& n : a.material_names) check_name(n, "material name", true);
   for (const std::string& n : a.texture_files) check_name(n, "texture file", false);
+  std::set<std::string> names;
+  for (const CompanionFile& f : a.files) {
+    const std::string problem = companion_name_problem(f.name);
+    if (!problem.empty())
+      throw InvalidInput(what + ": companion file '" + printable_key(f.name) + "': " + problem);
+    if (!names.insert(f.name).second)
+      throw InvalidInput(what + ": companion file '" + printable_key(f.name) + "' is given twice");
+  }
+}
+
+std::string companion_name_problem(const std::string& name) {
+  if (name.empty()) return "the name is empty";
+  for (char c : name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return "the name holds a control character";
+  if (name.front() == '/') return "the name is absolute";
+  if (name.back() == '/') return "the name ends in '/' (a directory)";
+  // Where the name leads, component by component: above the mesh's directory is out of bounds.
+  int depth = 0;
+  std::istringstream parts(name);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (part == "..")
+      --depth;
+    else if (!part.empty() && part != ".")
+      ++depth;
+    if (depth < 0) return "the name leads above the mesh file's directory";
+  }
+  if (depth == 0) return "the name leads to the mesh file's directory itself";
+  return "";
 }
 
 void check_face_indices(std::size_t num_vertices, const std::vector<Face>& faces, const std::string& what) {

@@ -23,6 +23,23 @@ struct TriMesh {
   int num_faces() const { return static_cast<int>(faces.size()); }
 };
 
+//! A file that a mesh file refers to by name and that has to sit beside it for its materials or
+//! textures to show: an OBJ's material library, an image that library names, a PLY's texture
+//! image. read_companion_files() and write_companion_files() (mesh_io.h) carry them.
+struct CompanionFile {
+  //! Where the file sits relative to the mesh file's directory, '/' between directories, as
+  //! companion_name_problem() allows: relative, and not above that directory.
+  std::string name;
+  std::string bytes;  //!< the file's contents
+
+  bool operator==(const CompanionFile& o) const { return name == o.name && bytes == o.bytes; }
+};
+
+//! Why \p name cannot be a CompanionFile's name, or "" if it can: it is empty, absolute, leads
+//! above the mesh file's directory ("..", also after "a/../.."), ends in '/', or holds a control
+//! character.
+std::string companion_name_problem(const std::string& name);
+
 //! What a scan's file may hold besides its geometry that Strata carries along: vertex colours,
 //! texture coordinates (per vertex, or per face corner at texture seams) and OBJ materials. Read
 //! and written with the mesh (read_mesh_file(), write_mesh() in mesh_io.h), kept by a layered
@@ -55,16 +72,22 @@ struct MeshAttributes {
   //! names its images in its material library instead.
   std::vector<std::string> texture_files;
   std::vector<int> face_textures;
+  //! The contents of the files named above (the material libraries, the images they name, the
+  //! PLY's images), so that they travel with a layered model and are written beside an exported
+  //! mesh. read_companion_files() fills it and write_companion_files() writes it; read_mesh_file()
+  //! leaves it empty and write_mesh() does not write it.
+  std::vector<CompanionFile> files;
 
   bool empty() const {
     return colors.empty() && texcoords.empty() && corner_uv_index.empty() && face_materials.empty() &&
-           material_library.empty() && texture_files.empty() && face_textures.empty();
+           material_library.empty() && texture_files.empty() && face_textures.empty() && files.empty();
   }
 };
 
 //! Checks \p attributes against \p mesh: each non-empty per-vertex array has one entry per
 //! vertex and each per-face one one per face; values are finite; corner indices lie in corner_uv
-//! and material indices in material_names (or are -1); not both texcoords and corner_uv_index.
+//! and material indices in material_names (or are -1); not both texcoords and corner_uv_index;
+//! each of files has a name companion_name_problem() allows, and no name comes twice.
 //! \throw InvalidInput "<what>: N vertex colours for M vertices", "<what>: vertex I has a
 //!        non-finite colour", "<what>: face F's texture coordinate index ... out of range", ...
 void check_mesh_attributes(const MeshAttributes& attributes, const TriMesh& mesh, const std::string& what);

@@ -150,6 +150,35 @@ void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std
 //! supported.
 std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
 
+//! Reads the files that \p attributes of the mesh file \p mesh_path name into attributes.files
+//! (CompanionFile), from beside the mesh, so that its materials and textures can travel with it:
+//! - each material library of material_library (OBJ's mtllib; several are separated by spaces);
+//! - each image a library found names: the file name (the rest of the line, spaces included)
+//!   after the options of map_Ka, map_Kd, map_Ks, map_Ke, map_Ns, map_d, map_bump, map_Pr, map_Pm,
+//!   map_Ps, bump, disp, decal, refl and norm (any other map_* too), relative to the library's
+//!   own directory;
+//! - each of texture_files (PLY's TextureFile).
+//! Each file once, in the order first named; names are kept as given but for "." components and
+//! "dir/.." pairs, which are resolved. attributes.files is replaced.
+//! \return notes on what cannot travel, each naming \p mesh_path (or the library) and the file: a
+//!         file that is not there, or a name that is absolute or leads above the mesh's
+//!         directory (companion_name_problem()). The mesh still names these; they are not read.
+//! \throw IoError "<file>: <problem>" if a file that is there cannot be read, or is not a
+//!        regular file (a FIFO or device is refused: read_file_bytes()).
+std::vector<std::string> read_companion_files(MeshAttributes& attributes, const std::string& mesh_path);
+
+//! Writes the files of attributes.files that the mesh file \p mesh_path names beside it (an OBJ:
+//! its material libraries and the images they name; a PLY: its texture_files; OFF and STL name
+//! none): each at its name relative to the mesh's directory (subdirectories are created),
+//! atomically (write_text_file_atomically). A file
+//! already there with the same bytes is left alone; one with other bytes is left alone too (it may
+//! be the user's own) and a note says so.
+//! \return the notes, each naming the file.
+//! \throw InvalidInput if a name fails companion_name_problem(); IoError if a file or directory
+//!        cannot be written, or what is at a name is not a regular file.
+std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
+                                               const std::string& mesh_path);
+
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
 //! gives back the same vertices and polygons. STL takes triangles only.
