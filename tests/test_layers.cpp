@@ -203,6 +203,9 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
     t.face_materials.push_back(f % 7 == 0 ? 1 : f % 5 == 0 ? -1 : 0);
     t.face_textures.push_back(f % 3 == 0 ? -1 : 0);
   }
+  // The material library and the images, as read_companion_files() found them beside the scan.
+  t.files = {{"bear textures.mtl", "newmtl fur\nmap_Kd bear.png\n"},
+             {"bear.png", std::string("\x89PNG\0\0\xff", 7)}};
   LayeredModel textured = model;
   textured.set_attributes(finest, t);
   layers::write_model(textured, tmp.file("t.strata"));
@@ -215,6 +218,7 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   EXPECT_EQ(tb.material_library, t.material_library);
   EXPECT_EQ(tb.texture_files, t.texture_files);
   EXPECT_EQ(tb.face_textures, t.face_textures);
+  EXPECT_EQ(tb.files, t.files);
 
   // Files of f6fed3b have no texture_files / textures keys: they read as without images.
   {
@@ -231,6 +235,9 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   }
 
   // Misuse is refused, the model unchanged.
+  MeshAttributes escaping = t;
+  escaping.files[1].name = "../bear.png";
+  EXPECT_THROW(textured.set_attributes(finest, escaping), InvalidInput);
   t.face_materials[3] = 2;
   EXPECT_THROW(textured.set_attributes(finest, t), InvalidInput);
   a.colors.pop_back();
@@ -865,6 +872,22 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
             v.sections.push_back({"band1.corner_texcoords", layers::pack_f64({0, 0, 1, 1})});
             v.sections.push_back({"band1.corner_texcoord_indices", layers::pack_i32(index)});
           });
+  // Companion files (a material library, images): names as read_companion_files() gives them.
+  auto with_files = [](nlohmann::json& m, layers::StrataContainer& v, const nlohmann::json& names) {
+    m["bands"][1]["attributes"] = attribute_keys(false, false, false);
+    m["bands"][1]["attributes"]["files"] = names;
+    for (std::size_t i = 1; i < names.size(); ++i)  // file0's section left out
+      v.sections.push_back({"band1.file" + std::to_string(i), {0x41, 0x00}});
+  };
+  variant("missing_file", "missing section 'band1.file0'",
+          [&](nlohmann::json& m, layers::StrataContainer& v) { with_files(m, v, {"skin.png"}); });
+  variant("escaping_file", "band 1: companion file '../up.png': the name leads above",
+          [&](nlohmann::json& m, layers::StrataContainer& v) {
+            with_files(m, v, {"skin.png", "../up.png"});
+            v.sections.push_back({"band1.file0", {}});
+          });
+  variant("file_name_number", "'files' in band 1's attributes holds a value that is not a string",
+          [&](nlohmann::json& m, layers::StrataContainer& v) { with_files(m, v, {3}); });
   variant("missing_section", "missing section 'band1.rest'", [](nlohmann::json&, layers::StrataContainer& v) {
     v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),
                                     [](const layers::Section& s) { return s.name == "band1.rest"; }),

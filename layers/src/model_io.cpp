@@ -398,6 +398,16 @@ void write_model(const LayeredModel& model, const std::string& path) {
           {"material_names", va.material_names},
           {"texture_files", va.texture_files},
           {"textures", !va.face_textures.empty()}};
+      if (!va.files.empty()) {  // as above: no key where there are none
+        json names = json::array();
+        for (std::size_t i = 0; i < va.files.size(); ++i) {
+          names.push_back(va.files[i].name);
+          const std::string& bytes = va.files[i].bytes;
+          c.sections.push_back(
+              {p + "file" + std::to_string(i), std::vector<std::uint8_t>(bytes.begin(), bytes.end())});
+        }
+        bands.back()["attributes"]["files"] = names;
+      }
       std::vector<double> values;
       for (const auto& col : va.colors) values.insert(values.end(), col.begin(), col.end());
       if (!va.colors.empty()) c.sections.push_back({p + "colors", pack_f64(values)});
@@ -638,19 +648,26 @@ LayeredModel read_model(const std::string& path) {
         va.face_materials.assign(m.begin(), m.end());
       }
       va.material_library = h.text(at, "material_library", wa);
-      const json& names = h.at(at, "material_names", wa);
-      if (!names.is_array()) h.fail("'material_names' in " + wa + " is not an array");
-      for (const json& n : names) {
-        if (!n.is_string()) h.fail("'material_names' in " + wa + " holds a value that is not a string");
-        va.material_names.push_back(n.get<std::string>());
-      }
-      // texture_files and textures came later the same day (f6fed3b wrote files without them).
-      if (at.contains("texture_files")) {
-        const json& files = h.at(at, "texture_files", wa);
-        if (!files.is_array()) h.fail("'texture_files' in " + wa + " is not an array");
-        for (const json& n : files) {
-          if (!n.is_string()) h.fail("'texture_files' in " + wa + " holds a value that is not a string");
-          va.texture_files.push_back(n.get<std::string>());
+      auto strings = [&](const char* key) {
+        const json& list = h.at(at, key, wa);
+        if (!list.is_array()) h.fail(std::string("'") + key + "' in " + wa + " is not an array");
+        std::vector<std::string> out;
+        for (const json& n : list) {
+          if (!n.is_string())
+            h.fail(std::string("'") + key + "' in " + wa + " holds a value that is not a string");
+          out.push_back(n.get<std::string>());
+        }
+        return out;
+      };
+      va.material_names = strings("material_names");
+      // texture_files and textures came later the same day (f6fed3b wrote files without them),
+      // files (the companion files' names; their bytes in sections) on 2026-11-29.
+      if (at.contains("texture_files")) va.texture_files = strings("texture_files");
+      if (at.contains("files")) {
+        const std::vector<std::string> files = strings("files");
+        for (std::size_t i = 0; i < files.size(); ++i) {
+          const Section& bytes = section(p + "file" + std::to_string(i));
+          va.files.push_back({files[i], std::string(bytes.bytes.begin(), bytes.bytes.end())});
         }
       }
       if (at.contains("textures") && h.boolean(at, "textures", wa)) {
