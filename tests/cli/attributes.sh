@@ -2,7 +2,8 @@
 # A scan's vertex colours and texture coordinates through the CLI: `stats` reports them; `deform`,
 # `reconstruct`, `build` + `edit` + `export` write the result's moved vertices with the scan's
 # values, exactly, in PLY, OBJ and OFF; STL, which stores none, gets a warning; a textured OBJ
-# keeps its seams and materials; and what a file holds that cannot be kept is a note naming it.
+# keeps its seams and materials, and its material library and images go beside outputs elsewhere
+# (a model carries them); and what a file holds that cannot be kept is a note naming it.
 # Usage: bash attributes.sh <path-to-strata> <tests/data dir>
 set -euo pipefail
 STRATA=${1:?usage: attributes.sh <path-to-strata> <tests/data dir>}
@@ -129,7 +130,7 @@ python3 "$TMP/mesh.py" same "$SCAN" "$TMP/reconstructed.ply"
 import json, sys
 b = json.load(sys.stdin)['bands']
 a = b[-1].get('attributes')
-if a != {'vertex_colors': 'rgb', 'texture_coordinates': 'per_vertex', 'materials': 0, 'material_library': '', 'texture_files': []}:
+if a != {'vertex_colors': 'rgb', 'texture_coordinates': 'per_vertex', 'materials': 0, 'material_library': '', 'texture_files': [], 'companion_files': []}:
     sys.exit('FAIL: info: the finest band carries %s' % a)
 if any('attributes' in x for x in b[:-1]): sys.exit('FAIL: info: attributes on a coarser band')"
 "$STRATA" export "$TMP/m.strata" -o "$TMP/rest.ply" >/dev/null
@@ -146,7 +147,7 @@ if s['vertex_colors'] != 'none': sys.exit('FAIL: band 1 exported with colours')"
 # A textured OBJ as photogrammetry writes it: texture coordinates per face corner with seams (the
 # first face's corners use other vt than their vertices'), a material library and two
 # materials. deform keeps all of it (the faces' vt and usemtl as in the input); PLY cannot, and
-# says so; an output away from the library gets a note.
+# says so.
 python3 - "$TMP/case/detail.obj" "$TMP/seams.obj" <<'PY'
 import sys
 lines = open(sys.argv[1]).read().splitlines()
@@ -171,7 +172,10 @@ for k, f in enumerate(faces):
     out.append("f " + " ".join("%d/%d" % (v, v + shift) for v in f))
 open(sys.argv[2], "w").write("\n".join(out) + "\n")
 PY
-printf 'newmtl skin\nnewmtl eyes\n' >"$TMP/scan.mtl"
+printf 'newmtl skin\nmap_Kd -s 1 1 1 textures/skin colour.png\nnewmtl eyes\nbump eyes.png\n' >"$TMP/scan.mtl"
+mkdir "$TMP/textures"
+printf '\211PNG\r\n\032\n\000skin' >"$TMP/textures/skin colour.png"
+printf 'eyes' >"$TMP/eyes.png"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.obj" -q >/dev/null 2>"$TMP/seams.err"
 grep -q "seams.obj: 1 faces flipped" "$TMP/seams.err" && [ "$(wc -l <"$TMP/seams.err")" -eq 1 ] ||
   { echo "FAIL: notes on a textured OBJ: $(cat "$TMP/seams.err")" >&2; exit 1; }
@@ -204,17 +208,55 @@ python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 # The same through a layered model: build, edit band 0, export the finest band.
 "$STRATA" build "$TMP/seams.obj" -o "$TMP/seams.strata" -q >/dev/null 2>"$TMP/build.err"
 "$STRATA" edit "$TMP/seams.strata" --band 0 --edit "$TMP/bend.json" -o "$TMP/seams_edited.strata" -q >/dev/null 2>"$TMP/edit.err"
-"$STRATA" info "$TMP/seams_edited.strata" | grep -q "band 2 carries vertex colours none, texture coordinates per_corner, 2 materials, 0 texture images" ||
+"$STRATA" info "$TMP/seams_edited.strata" | grep -q "band 2 carries vertex colours none, texture coordinates per_corner, 2 materials, 0 texture images, 3 files" ||
   { echo "FAIL: info does not show the textured band: $("$STRATA" info "$TMP/seams_edited.strata")" >&2; exit 1; }
 "$STRATA" export "$TMP/seams_edited.strata" -o "$TMP/seams_out.obj" >/dev/null
 python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.ply" -q >/dev/null 2>"$TMP/seams_ply.err"
 grep -q "seams_out.ply: this format does not store materials; not written" \
   "$TMP/seams_ply.err" || { echo "FAIL: no warning for PLY: $(cat "$TMP/seams_ply.err")" >&2; exit 1; }
+# The material library and the images it names go beside an output elsewhere, byte for byte,
+# from the scan's directory (deform) or from the model, which carries them (export).
+same_files() {  # same_files DIR: DIR holds the library and its images as $TMP does
+  for f in scan.mtl "textures/skin colour.png" eyes.png; do
+    cmp -s "$TMP/$f" "$1/$f" || { echo "FAIL: $1/$f is not the scan's $f" >&2; exit 1; }
+  done
+}
 mkdir "$TMP/elsewhere"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/elsewhere/out.obj" -q >/dev/null 2>"$TMP/lib.err"
-grep -q "out.obj refers to the material library 'scan.mtl', which is not in its directory" "$TMP/lib.err" ||
-  { echo "FAIL: no note on the material library: $(cat "$TMP/lib.err")" >&2; exit 1; }
+same_files "$TMP/elsewhere"
+[ "$(grep -cv 'faces flipped' "$TMP/lib.err")" -eq 0 ] ||
+  { echo "FAIL: notes on a copied library: $(cat "$TMP/lib.err")" >&2; exit 1; }
+"$STRATA" stats "$TMP/elsewhere/out.obj" --json | python3 -c "
+import json, sys
+s = json.load(sys.stdin)
+if s['companion_files'] != ['scan.mtl', 'textures/skin colour.png', 'eyes.png']: sys.exit('FAIL: stats: %s' % s)"
+mkdir "$TMP/model_only"
+cp "$TMP/seams_edited.strata" "$TMP/model_only/"
+mv "$TMP/textures" "$TMP/textures.away"  # the model alone has them now
+mkdir "$TMP/model_only/out"
+"$STRATA" export "$TMP/model_only/seams_edited.strata" -o "$TMP/model_only/out/m.obj" >/dev/null
+mv "$TMP/textures.away" "$TMP/textures"
+same_files "$TMP/model_only/out"
+# A file of that name already there is the user's: kept as it is, with a note. An image the
+# library names that is not there is a note naming it; the rest is copied.
+printf 'mine' >"$TMP/model_only/out/eyes.png"
+rm "$TMP/model_only/out/scan.mtl"
+"$STRATA" export "$TMP/model_only/seams_edited.strata" -o "$TMP/model_only/out/m.obj" >/dev/null 2>"$TMP/export2.err"
+grep -q "eyes.png is already there and differs from the scan's file of that name; it was left as it is, and .*m.obj now names it" "$TMP/export2.err" &&
+  [ "$(cat "$TMP/model_only/out/eyes.png")" = mine ] && cmp -s "$TMP/scan.mtl" "$TMP/model_only/out/scan.mtl" ||
+  { echo "FAIL: an existing image: $(cat "$TMP/export2.err")" >&2; exit 1; }
+printf 'newmtl skin\nmap_Kd gone.png\nnewmtl eyes\n' >"$TMP/elsewhere/scan.mtl"
+mkdir "$TMP/again"
+"$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/again/out.obj" -q >/dev/null 2>"$TMP/gone.err"
+grep -q "scan.mtl: texture image 'gone.png' is not there (.*gone.png); it is not carried along" "$TMP/gone.err" &&
+  cmp -s "$TMP/elsewhere/scan.mtl" "$TMP/again/scan.mtl" ||
+  { echo "FAIL: a missing image: $(cat "$TMP/gone.err")" >&2; exit 1; }
+# A library that is not there at all: a note at reading, and one on the output that names it.
+rm "$TMP/elsewhere/scan.mtl"
+"$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/again/out2.obj" -q >/dev/null 2>"$TMP/nolib.err"
+grep -q "out.obj: material library 'scan.mtl' is not there" "$TMP/nolib.err" ||
+  { echo "FAIL: no note on a missing library: $(cat "$TMP/nolib.err")" >&2; exit 1; }
 # Texture coordinates on only some face corners cannot be kept: a note naming the file.
 sed '0,/^f /s|^f \([0-9]*\)/[0-9]* |f \1 |' "$TMP/seams.obj" >"$TMP/partial.obj"
 "$STRATA" deform "$TMP/partial.obj" --edit "$TMP/bend.json" -o "$TMP/partial_out.obj" -q >/dev/null 2>"$TMP/partial.err"

@@ -108,7 +108,8 @@ int run_deform(const DeformCmdOptions& o) {
   Stopwatch sw;
   log.phase("reading " + o.input + " and " + o.edit);
   const EditScript script = read_edit_script(o.edit);
-  const NamedMesh input = read_scan(o.input);
+  NamedMesh input = read_scan(o.input);
+  read_companions(input.attributes, o.input);  // written beside the output
   const double read_seconds = sw.seconds();
   const TimedIntersections input_pairs =
       find_intersections(input.mesh.vertices, input.mesh.faces, input.name);
@@ -277,6 +278,7 @@ int run_deform(const DeformCmdOptions& o) {
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
   staged.commit();
+  write_companions(input.attributes, o.output);
   std::cout << "method         " << to_string(method) << "\n"
             << "input          " << input.name << ": " << input.mesh.num_vertices() << " vertices, "
             << input.mesh.num_faces() << " faces\n";

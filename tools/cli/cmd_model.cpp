@@ -131,7 +131,8 @@ int run_build(const BuildCmdOptions& o) {
     json r{{"scan", scan_path}, {"model", out}};
     Stopwatch sw;
     try {
-      const NamedMesh scan = read_scan(scan_path);
+      NamedMesh scan = read_scan(scan_path);
+      read_companions(scan.attributes, scan_path);  // the model carries them
       layers::BuildOptions bo;
       bo.bands = o.bands;
       bo.cage.faces = o.cage_faces;
@@ -250,7 +251,8 @@ int run_info(const InfoCmdOptions& o) {
       std::cout << "band " << b["band"].get<int>() << " carries vertex colours "
                 << a["vertex_colors"].get<std::string>() << ", texture coordinates "
                 << a["texture_coordinates"].get<std::string>() << ", " << a["materials"].get<std::size_t>()
-                << " materials, " << a["texture_files"].size() << " texture images\n";
+                << " materials, " << a["texture_files"].size() << " texture images, "
+                << a["companion_files"].size() << " files (material libraries, images)\n";
     }
   // Control characters escaped: a history entry is the file's text, and raw newlines or terminal
   // escapes in it could fake lines of this output ("strata: error: ...").
@@ -488,6 +490,7 @@ int run_export(const ExportCmdOptions& o) {
   warn_attributes_not_stored(attributes, o.output);
   validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault
   write_mesh(mesh, attributes, o.output);
+  write_companions(attributes, o.output);
   std::cout << "wrote " << o.output << " (band " << k << ", " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces)" << std::endl;
   return 0;

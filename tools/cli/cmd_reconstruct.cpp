@@ -71,7 +71,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   PhaseTimes times;
   log.phase("reading " + o.detail + ", " + o.base + ", " + o.edited_base);
   Stopwatch sw;
-  const NamedMesh detail = read_named_mesh(o.detail);
+  NamedMesh detail = read_named_mesh(o.detail);
+  read_companions(detail.attributes, o.detail);  // written beside the output
   const auto [base, edited] = read_base_pair(o.base, o.edited_base);
   times.read = sw.seconds();
   const EncodedInput in = encode_input(detail, base, edited, log);
@@ -132,6 +133,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
   staged.commit();
+  write_companions(detail.attributes, o.output);
   print_summary(std::cout, report);
   if (o.strict) return finish_warnings(warnings, true, false);
   json unprinted = warnings;  // the input's warning was printed when it was found

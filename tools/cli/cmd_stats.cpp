@@ -36,7 +36,8 @@ std::size_t count_boundary_edges(const TriMesh& mesh) {
 }
 
 int run_stats(const StatsCmdOptions& o) {
-  const NamedMesh m = read_named_mesh(o.mesh);
+  NamedMesh m = read_named_mesh(o.mesh);
+  read_companions(m.attributes, o.mesh);
   const std::size_t boundary = count_boundary_edges(m.mesh);
   Stopwatch sw;
   const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces,
@@ -78,7 +79,9 @@ int run_stats(const StatsCmdOptions& o) {
             << (m.attributes.material_library.empty() ? ""
                                                       : " (library " + m.attributes.material_library + ")")
             << "\n"
-            << "texture images           " << m.attributes.texture_files.size() << std::endl;
+            << "texture images           " << m.attributes.texture_files.size() << "\n"
+            << "files beside it          " << m.attributes.files.size()
+            << " (material libraries and images the mesh names, found)" << std::endl;
   return 0;
 }
 

@@ -118,6 +118,14 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path) {
               << " vertices in no face are not written (OBJ, OFF and PLY keep them)" << std::endl;
 }
 
+namespace {
+std::vector<std::string> companion_names(const MeshAttributes& a) {
+  std::vector<std::string> names;
+  for (const CompanionFile& f : a.files) names.push_back(f.name);
+  return names;
+}
+}  // namespace
+
 json attributes_json(const MeshAttributes& a) {
   return {{"vertex_colors", a.colors.empty()      ? "none"
                             : a.colors_have_alpha ? "rgba"
@@ -127,7 +135,8 @@ json attributes_json(const MeshAttributes& a) {
                                                                : "none"},
           {"materials", a.material_names.size()},
           {"material_library", a.material_library},
-          {"texture_files", a.texture_files}};
+          {"texture_files", a.texture_files},
+          {"companion_files", companion_names(a)}};
 }
 
 void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path) {
@@ -139,17 +148,26 @@ void warn_attributes_not_stored(const MeshAttributes& attributes, const std::str
     std::cerr << "strata: warning: " << path << ": this format does not store " << what << "; not written"
               << std::endl;
   }
-  if (!attributes.material_library.empty() && lower_extension(path) == ".obj") {
-    // mtllib may name several files, separated by spaces.
-    const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-    std::istringstream names(attributes.material_library);
-    std::string lib;
-    while (names >> lib) {
-      std::error_code ec;
-      if (!std::filesystem::exists(dir / lib, ec))
-        std::cerr << "strata: note: " << path << " refers to the material library '" << lib
-                  << "', which is not in its directory: copy it (and its textures) there" << std::endl;
-    }
+}
+
+void read_companions(MeshAttributes& attributes, const std::string& path) {
+  for (const std::string& note : read_companion_files(attributes, path))
+    std::cerr << "strata: note: " << note << std::endl;
+}
+
+void write_companions(const MeshAttributes& attributes, const std::string& path) {
+  for (const std::string& note : write_companion_files(attributes, path))
+    std::cerr << "strata: note: " << note << std::endl;
+  if (attributes.material_library.empty() || lower_extension(path) != ".obj") return;
+  // mtllib may name several files, separated by spaces.
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  std::istringstream names(attributes.material_library);
+  std::string lib;
+  while (names >> lib) {
+    std::error_code ec;
+    if (!std::filesystem::exists(dir / lib, ec))
+      std::cerr << "strata: note: " << path << " refers to the material library '" << lib
+                << "', which is not in its directory: copy it (and its textures) there" << std::endl;
   }
 }
 

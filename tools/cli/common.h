@@ -121,13 +121,22 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 
 //! What \p attributes hold, as `stats` and the model reports give it: vertex_colors ("none", "rgb"
 //! or "rgba"), texture_coordinates ("none", "per_vertex" or "per_corner"), materials (how many),
-//! material_library and texture_files.
+//! material_library, texture_files and companion_files (the names of attributes.files).
 json attributes_json(const MeshAttributes& attributes);
 
 //! Warns on stderr about what of \p attributes (colours, texture coordinates, materials) the
-//! format of \p path cannot store (attributes_not_stored()), and notes an OBJ's material library
-//! that is not beside \p path (the file names it relative to its own directory).
+//! format of \p path cannot store (attributes_not_stored()).
 void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
+
+//! Reads the files that \p attributes of the mesh file \p path name (its material library and
+//! textures: read_companion_files()) into attributes.files, and prints a note on stderr for each
+//! that cannot travel (not there, or named outside the mesh's directory).
+void read_companions(MeshAttributes& attributes, const std::string& path);
+
+//! Writes attributes.files beside the mesh written to \p path (write_companion_files(): a file
+//! already there is never replaced), printing its notes, and notes an OBJ's material library that
+//! is still not beside \p path (the file names it relative to its own directory).
+void write_companions(const MeshAttributes& attributes, const std::string& path);
 
 //! Checks a computed mesh (validate_mesh) before it is written to \p output: an error names the
 //! result (\p what) and says that \p output was not written, where the writer's own check names
