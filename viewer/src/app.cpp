@@ -104,6 +104,8 @@ App::App(const Options& options, GLFWwindow* window) : options_(options), window
 
   Document document =
       options.input.empty() ? Document::from_mesh(TriMesh{}, "(none)") : Document::load(options.input);
+  for (const std::string& note : document.load_notes())
+    std::fprintf(stderr, "strata-viewer: note: %s\n", note.c_str());
   if (options.build_bands > 0) document = build_layers(document, options.build_bands);
   for (const std::string& path : options.edits) {
     const EditScript script = read_edit_script(path);

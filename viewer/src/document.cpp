@@ -51,8 +51,10 @@ Document Document::load(const std::string& path) {
   ReadOptions ro;
   ro.orient_faces = true;
   MeshFile f = read_mesh_file(path, ro);
+  std::vector<std::string> notes = read_companion_files(f.attributes, path);
   Document d = from_mesh(std::move(f.mesh), path, std::move(f.attributes));
   d.reoriented_faces_ = f.flipped_faces;
+  d.load_notes_ = std::move(notes);
   return d;
 }
 

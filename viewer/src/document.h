@@ -24,11 +24,16 @@ class Document {
  public:
   //! Reads a .strata model (by extension, any case) or a mesh (.obj, .ply, .off, .stl); a mesh's
   //! faces that disagree with their neighbours' orientation are flipped (ReadOptions::
-  //! orient_faces, as the CLI's scan commands do), counted by reoriented_faces().
+  //! orient_faces, as the CLI's scan commands do), counted by reoriented_faces(); the files it
+  //! names (material libraries, images) are read from beside it (read_companion_files()), so
+  //! that they go with saves and exports, and what cannot is in load_notes().
   //! \throw IoError / InvalidInput with the reader's message.
   static Document load(const std::string& path);
   //! Faces that load() flipped.
   int reoriented_faces() const { return reoriented_faces_; }
+  //! load()'s notes on the files the mesh names that cannot go with it (not there, or outside
+  //! its directory).
+  const std::vector<std::string>& load_notes() const { return load_notes_; }
   //! Wraps an existing model or mesh (with its vertex colours and texture coordinates, if any).
   static Document from_model(layers::LayeredModel model, const std::string& name);
   static Document from_mesh(TriMesh mesh, const std::string& name, MeshAttributes attributes = {});
@@ -86,6 +91,7 @@ class Document {
   TriMesh mesh_;               // plain mesh
   MeshAttributes attributes_;  // plain mesh: its file's colours and texture coordinates
   int reoriented_faces_ = 0;
+  std::vector<std::string> load_notes_;
   std::vector<double> mesh_errors_;         // plain mesh: per face, NaN outside the last edit's region
   std::vector<Vec3> mesh_vectors_;          // plain mesh: the last edit by displacement vectors
   std::vector<double> mesh_vector_errors_;  // plain mesh: their prism errors, as mesh_errors_

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <vector>
@@ -101,6 +102,8 @@ std::string run_headless(const Options& options) {
   nlohmann::json report;
   const auto t_load = Clock::now();
   Document document = Document::load(options.input);
+  for (const std::string& note : document.load_notes())
+    std::cerr << "strata-viewer: note: " << note << std::endl;
   report["load_s"] = seconds_since(t_load);
   if (options.build_bands > 0) {
     const auto t_build = Clock::now();
@@ -136,8 +139,12 @@ std::string run_headless(const Options& options) {
   report["scene_s"] = seconds_since(t_scene);
   if (!options.save.empty()) layers::write_model(document.model(), options.save);
   // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
-  if (!options.export_mesh.empty())
+  if (!options.export_mesh.empty()) {
     write_mesh(scene.mesh, document.attributes(scene.shown_band), options.export_mesh);
+    for (const std::string& note :
+         write_companion_files(document.attributes(scene.shown_band), options.export_mesh))
+      std::cerr << "strata-viewer: note: " << note << std::endl;
+  }
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();

@@ -288,10 +288,11 @@ void Worker::load(const std::string& path) {
         view_.visible.clear();
         d = std::move(loaded);
         const int flipped = d.reoriented_faces();
-        return "opened " + path +
-               (flipped > 0
-                    ? " (" + std::to_string(flipped) + " faces flipped to agree with their neighbours)"
-                    : "");
+        std::string status = "opened " + path;
+        if (flipped > 0)
+          status += " (" + std::to_string(flipped) + " faces flipped to agree with their neighbours)";
+        for (const std::string& note : d.load_notes()) status += "; " + note;
+        return status;
       },
       true);
 }
@@ -317,9 +318,15 @@ void Worker::save(const std::string& path) {
 void Worker::export_meshes(const std::string& prefix, const std::string& extension) {
   post(
       [prefix, extension](Document& d) {
-        for (int k = 0; k < d.num_bands(); ++k)
-          write_mesh(d.band_mesh(k), d.attributes(k), prefix + "_band" + std::to_string(k) + extension);
-        return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension;
+        std::string notes;
+        for (int k = 0; k < d.num_bands(); ++k) {
+          const std::string path = prefix + "_band" + std::to_string(k) + extension;
+          write_mesh(d.band_mesh(k), d.attributes(k), path);
+          // The material library and images beside it; a file of that name already there is kept.
+          for (const std::string& note : write_companion_files(d.attributes(k), path)) notes += "; " + note;
+        }
+        return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension +
+               notes;
       },
       false);
 }

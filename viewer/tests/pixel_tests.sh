@@ -131,6 +131,17 @@ check "vertex colours of a tetrahedron drawn per vertex" "s['changed'] == 0 and 
 # --export writes the shown band with its colours.
 if [ "$(grep -c '^v .* .* .* .* .* .*$' "$T/tet_out.obj")" -eq 4 ]; then pass "--export keeps vertex colours"; else
   fail "--export lost the vertex colours: $(grep '^v' "$T/tet_out.obj" | head -2)"; fi
+# A textured scan's material library and image go with --export to another directory, byte for
+# byte, through a model saved and opened again.
+mkdir -p "$T/textured/maps" "$T/exported"
+{ echo "mtllib bumps.mtl"; echo "usemtl m"; cat "$MESH"; } >"$T/textured/bumps.obj"
+printf 'newmtl m\nmap_Kd maps/t.png\n' >"$T/textured/bumps.mtl"
+cp "$T/tet.png" "$T/textured/maps/t.png"
+"$VIEWER" "$T/textured/bumps.obj" --layers 2 --save "$T/textured.strata" --screenshot "$T/tex1.png" --size 160x120 >/dev/null 2>"$T/tex.err" || true
+"$VIEWER" "$T/textured.strata" --export "$T/exported/bumps.obj" --screenshot "$T/tex2.png" --size 160x120 >/dev/null 2>>"$T/tex.err" || true
+if cmp -s "$T/textured/bumps.mtl" "$T/exported/bumps.mtl" && cmp -s "$T/textured/maps/t.png" "$T/exported/maps/t.png"; then
+  pass "--export writes the material library and its image beside the mesh"; else
+  fail "--export: the library or image is missing: $(ls -R "$T/exported") $(cat "$T/tex.err")"; fi
 r=$("$VIEWER" "$MESH" --screenshot "$T/plain_scan.png" "${COMMON[@]}" --color scan)
 s=$($STATS "$T/plain_scan.png" "$T/scan.png")
 check "a scan without colours is drawn in the surface colour" "s['changed'] == 0" "$s"
