@@ -2197,23 +2197,35 @@ TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) 
   EXPECT_EQ(names, (std::vector<std::string>{"scan.mtl", "tex/skin colour.png", "tex/bump.png",
                                              "sub/more.mtl", "shared.png", "sub/n.png"}));
   ASSERT_EQ(f.attributes.files.size(), 6u);
-  EXPECT_EQ(f.attributes.files[1].bytes, png);
-  EXPECT_EQ(f.attributes.files[3].bytes, read_bytes(dir.file("in/sub/more.mtl")));
+  EXPECT_EQ(f.attributes.files[1].bytes(), png);
+  EXPECT_EQ(f.attributes.files[3].bytes(), read_bytes(dir.file("in/sub/more.mtl")));
   ASSERT_EQ(notes.size(), 3u);
-  EXPECT_NE(notes[0].find("'missing.png' is not there"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("'missing.png' is not carried along: it is not there"), std::string::npos)
+      << notes[0];
   EXPECT_NE(notes[0].find("scan.mtl"), std::string::npos) << notes[0];
   EXPECT_NE(notes[1].find("'/abs/alpha.png'"), std::string::npos) << notes[1];
   EXPECT_NE(notes[1].find("absolute"), std::string::npos) << notes[1];
   EXPECT_NE(notes[2].find("'../above.png'"), std::string::npos) << notes[2];
   EXPECT_NE(notes[2].find("above the mesh file's directory"), std::string::npos) << notes[2];
 
+  // Each face's diffuse image: its material's first map_Kd ("skin", in scan.mtl). A material
+  // that only more.mtl defines, without map_Kd, has none; so do faces without a material.
+  EXPECT_EQ(face_texture_files(f.attributes), (std::vector<int>{1, 1, 1, 1}));
+  {
+    MeshAttributes two = f.attributes;
+    two.material_names = {"skin", "eyes"};
+    two.face_materials = {1, 0, -1, 0};
+    EXPECT_EQ(face_texture_files(two), (std::vector<int>{-1, 1, -1, 1}));
+    two.files.erase(two.files.begin() + 1);  // the image not found: no face has one
+    EXPECT_TRUE(face_texture_files(two).empty());
+  }
   // Written beside an OBJ elsewhere: every file at its place, the same bytes; the copy then
   // finds the same files that were read.
   fs::create_directories(dir.file("out"));
   write_mesh(f.mesh, f.attributes, dir.file("out/copy.obj"));
   EXPECT_TRUE(write_companion_files(f.attributes, dir.file("out/copy.obj")).empty());
   for (const CompanionFile& c : f.attributes.files)
-    EXPECT_EQ(read_bytes(dir.file("out/" + c.name)), c.bytes) << c.name;
+    EXPECT_EQ(read_bytes(dir.file("out/" + c.name)), c.bytes()) << c.name;
   MeshFile g = read_mesh_file(dir.file("out/copy.obj"));
   read_companion_files(g.attributes, dir.file("out/copy.obj"));
   EXPECT_EQ(g.attributes.files, f.attributes.files);
@@ -2221,7 +2233,7 @@ TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) 
   write_bytes(dir.file("out/tex/bump.png"), "MINE");
   const std::vector<std::string> again = write_companion_files(f.attributes, dir.file("out/copy.obj"));
   ASSERT_EQ(again.size(), 1u);
-  EXPECT_NE(again[0].find("bump.png is already there and differs"), std::string::npos) << again[0];
+  EXPECT_NE(again[0].find("bump.png is already there (a file that differs"), std::string::npos) << again[0];
   EXPECT_EQ(read_bytes(dir.file("out/tex/bump.png")), "MINE");
   // A PLY, an OFF or an STL names no material library: nothing is written beside them.
   fs::create_directories(dir.file("ply"));
@@ -2235,6 +2247,8 @@ TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) 
   EXPECT_TRUE(read_companion_files(p, dir.file("in/scan.ply")).empty());
   ASSERT_EQ(p.files.size(), 2u);
   EXPECT_EQ(p.files[1].name, "shared.png");
+  p.face_textures = {1, -1, 0, 7};  // 7: no such image
+  EXPECT_EQ(face_texture_files(p), (std::vector<int>{1, -1, 0, -1}));
   EXPECT_TRUE(write_companion_files(p, dir.file("ply/x.obj")).empty());
   EXPECT_EQ(files_under(dir.file("ply")), 0u);
   EXPECT_TRUE(write_companion_files(p, dir.file("ply/x.ply")).empty());
@@ -2242,13 +2256,14 @@ TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) 
   EXPECT_EQ(read_bytes(dir.file("ply/shared.png")), "SHARED");
 }
 
-TEST(MeshIoCompanionFiles, BadNamesAndFilesAreRefused) {
+TEST(MeshIoCompanionFiles, BadNamesAndFilesAreNotesAndNothingIsReplaced) {
   for (const std::string& name :
-       {std::string(""), std::string("/etc/passwd"), std::string("../x.png"), std::string("a/../../x.png"),
-        std::string("dir/"), std::string("a\nb"), std::string("."), std::string("a/..")})
+       {std::string(""), std::string("/etc/passwd"), std::string("../x.png"), std::string("a/../x.png"),
+        std::string("dir/"), std::string("a\nb"), std::string("."), std::string("a/.."),
+        std::string("./x.png"), std::string("a//x.png"), std::string(".ssh/authorized_keys"),
+        std::string(".bashrc"), std::string("maps/.x.png")})
     EXPECT_NE(companion_name_problem(name), "") << name;
-  for (const std::string& name : {std::string("x.png"), std::string("a/b/x.png"), std::string("a/../x.png"),
-                                  std::string("./x y.png"), std::string("..x.png")})
+  for (const std::string& name : {std::string("x.png"), std::string("a/b/x.png"), std::string("x y.png")})
     EXPECT_EQ(companion_name_problem(name), "") << name;
   const TriMesh m = without_unreferenced(awkward_octahedron());
   MeshAttributes a;
@@ -2263,15 +2278,75 @@ TEST(MeshIoCompanionFiles, BadNamesAndFilesAreRefused) {
   test::ScratchDir dir{"strata_mesh_io"};
   EXPECT_TRUE(throws_with<InvalidInput>([&] { write_companion_files(a, dir.file("o.obj")); },
                                         {dir.file("o.obj"), "'/abs/m.mtl'", "absolute"}));
-  // An image that is a FIFO is refused (reading it could block), naming it.
-  write_bytes(dir.file("m.mtl"), "map_Kd fifo.png\n");
-  ASSERT_EQ(::mkfifo(dir.file("fifo.png").c_str(), 0600), 0);
+
+  // Reading: what cannot travel is a note naming the library and the image, never an error; the
+  // rest is read. A FIFO (reading it could block) and a directory cannot be read; a hidden name
+  // could put ".ssh/..." beside an output; "sub/../x" resolves only where "sub" is; a link out of
+  // the directory could carry any file of the user's along.
+  fs::create_directories(dir.file("in/sub"));
+  fs::create_directories(dir.file("in/adir.png"));
+  fs::create_directories(dir.file("secret"));
+  write_bytes(dir.file("secret/key.png"), "SECRET");
+  fs::create_directory_symlink(dir.file("secret"), dir.file("in/linked"));
+  write_bytes(dir.file("in/.hidden.png"), "H");
+  write_bytes(dir.file("in/x.png"), "X");
+  write_bytes(dir.file("in/ok.png"), "OK");
+  ASSERT_EQ(::mkfifo(dir.file("in/fifo.png").c_str(), 0600), 0);
+  write_bytes(dir.file("in/my scan.mtl"),
+              "newmtl a\nmap_Kd fifo.png\nmap_Ka adir.png\nmap_Ks .hidden.png\nmap_d sub/../x.png\n"
+              "bump linked/key.png\nnorm ok.png\n");
   MeshAttributes b;
+  b.material_library = "my scan.mtl";  // one name with a space, as Blender writes it
+  const std::vector<std::string> notes = read_companion_files(b, dir.file("in/s.obj"));
+  ASSERT_EQ(b.files.size(), 2u);
+  EXPECT_EQ(b.files[0].name, "my scan.mtl");
+  EXPECT_EQ(b.files[1].name, "ok.png");
+  ASSERT_EQ(notes.size(), 5u);
+  const std::vector<std::vector<std::string>> expected = {{"'fifo.png'", "not a regular file"},
+                                                          {"'adir.png'", "not a regular file"},
+                                                          {"'.hidden.png'", "hidden"},
+                                                          {"'sub/../x.png'", "'dir/..'"},
+                                                          {"'linked/key.png'", "symbolic link"}};
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    for (const std::string& part : expected[i])
+      EXPECT_NE(notes[i].find(part), std::string::npos) << notes[i] << " lacks " << part;
+  for (const std::string& note : notes) EXPECT_NE(note.find("my scan.mtl"), std::string::npos) << note;
+
+  // Writing: whatever is at a name is left alone, with a note (a directory, a link to nothing, a
+  // file with other bytes); a file with the same bytes, silently. The rest is written.
+  b.files = {{"m.mtl", "newmtl a\nmap_Kd t.png\nmap_Ks u.png\nmap_Ka v.png\nmap_d w.png\n"},
+             {"t.png", "T"},
+             {"u.png", "U"},
+             {"v.png", "V"},
+             {"w.png", "W"}};
   b.material_library = "m.mtl";
-  EXPECT_TRUE(throws_with<IoError>([&] { read_companion_files(b, dir.file("s.obj")); }, {"fifo.png"}));
-  // A directory where a file is to go is refused, naming it; nothing else is touched.
-  b.files = {{"m.mtl", "newmtl a\nmap_Kd t.png\n"}, {"t.png", "T"}};
   fs::create_directories(dir.file("o/t.png"));
-  EXPECT_TRUE(throws_with<IoError>([&] { write_companion_files(b, dir.file("o/s.obj")); }, {"t.png"}));
+  fs::create_symlink(dir.file("nowhere"), dir.file("o/u.png"));
+  write_bytes(dir.file("o/v.png"), "mine");
+  write_bytes(dir.file("o/w.png"), "W");
+  const std::vector<std::string> written = write_companion_files(b, dir.file("o/s.obj"));
+  ASSERT_EQ(written.size(), 3u);
+  EXPECT_NE(written[0].find("t.png is already there (not a regular file)"), std::string::npos) << written[0];
+  EXPECT_NE(written[1].find("u.png is already there (a symbolic link to nothing)"), std::string::npos)
+      << written[1];
+  EXPECT_NE(written[2].find("v.png is already there (a file that differs"), std::string::npos) << written[2];
   EXPECT_TRUE(fs::is_directory(dir.file("o/t.png")));
+  EXPECT_TRUE(fs::is_symlink(dir.file("o/u.png")));
+  EXPECT_EQ(read_bytes(dir.file("o/v.png")), "mine");
+  EXPECT_EQ(read_bytes(dir.file("o/m.mtl")), b.files[0].bytes());
+  // Through a writer (the CLI stages them with its other outputs): called per file to write.
+  std::vector<std::string> called;
+  write_companion_files(b, dir.file("p/s.obj"),
+                        [&](const std::string& path, const std::string&) { called.push_back(path); });
+  EXPECT_EQ(called.size(), 5u);
+  EXPECT_EQ(files_under(dir.file("p")), 0u);  // the writer wrote nothing
+}
+
+TEST(MeshIoCompanionFiles, CopiesShareTheirBytes) {
+  // A model is copied for undo; its images are not.
+  MeshAttributes a;
+  a.files = {{"big.png", std::string(1 << 20, 'x')}};
+  const MeshAttributes b = a;
+  EXPECT_EQ(a.files[0].data.get(), b.files[0].data.get());
+  EXPECT_EQ(a.files, b.files);
 }

@@ -402,7 +402,7 @@ void write_model(const LayeredModel& model, const std::string& path) {
         json names = json::array();
         for (std::size_t i = 0; i < va.files.size(); ++i) {
           names.push_back(va.files[i].name);
-          const std::string& bytes = va.files[i].bytes;
+          const std::string& bytes = va.files[i].bytes();
           c.sections.push_back(
               {p + "file" + std::to_string(i), std::vector<std::uint8_t>(bytes.begin(), bytes.end())});
         }

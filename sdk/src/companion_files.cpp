@@ -24,10 +24,9 @@ fs::path directory_of(const std::string& mesh_path) {
 }
 
 // \p name with "." components and "dir/.." pairs resolved (lexically: no file system access),
-// '/' between components; a name companion_name_problem() refuses is returned as it is.
-std::string normal_name(const std::string& name) {
-  if (!companion_name_problem(name).empty()) return name;
-  return fs::path(name).lexically_normal().generic_string();
+// '/' between components: the form of CompanionFile::name.
+std::string normal_name(const fs::path& name) {
+  return name.lexically_normal().generic_string();
 }
 
 bool is_number(const std::string& token) {
@@ -36,10 +35,10 @@ bool is_number(const std::string& token) {
   return !token.empty() && end == token.c_str() + token.size();
 }
 
-// The image file names of an MTL library's texture statements (map_Kd and the others named in
-// mesh_io.h), each the rest of its line after the statement's options.
-std::vector<std::string> mtl_image_names(const std::string& text) {
-  std::vector<std::string> names;
+// An MTL library's texture statements (map_Kd and the others named in mesh_io.h) and its newmtl
+// lines: (keyword in lower case, the rest of the line after the statement's options).
+std::vector<std::pair<std::string, std::string>> mtl_statements(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> statements;
   std::istringstream lines(text);
   std::string line;
   while (std::getline(lines, line)) {
@@ -56,6 +55,7 @@ std::vector<std::string> mtl_image_names(const std::string& text) {
     if (tokens.empty()) continue;
     std::string key = tokens[0].first;
     std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (key == "newmtl" && tokens.size() > 1) statements.emplace_back(key, line.substr(tokens[1].second));
     if (key.rfind("map_", 0) != 0 && key != "bump" && key != "disp" && key != "decal" && key != "refl" &&
         key != "norm")
       continue;
@@ -73,9 +73,42 @@ std::vector<std::string> mtl_image_names(const std::string& text) {
         while (t + 1 < tokens.size() && is_number(tokens[t].first)) ++t;  // the name may be a number
       }
     }
-    if (t < tokens.size()) names.push_back(line.substr(tokens[t].second));
+    if (t < tokens.size()) statements.emplace_back(key, line.substr(tokens[t].second));
   }
+  return statements;
+}
+
+// The image file names of an MTL library's texture statements.
+std::vector<std::string> mtl_image_names(const std::string& text) {
+  std::vector<std::string> names;
+  for (const auto& [key, name] : mtl_statements(text))
+    if (key != "newmtl") names.push_back(name);
   return names;
+}
+
+// Whether \p name has a ".." after a directory ("sub/../x.png"): lexically that is "x.png", but
+// the file system resolves it only where "sub" exists, which beside an output it need not.
+bool has_inner_dotdot(const std::string& name) {
+  bool seen_directory = false;
+  std::istringstream parts(name);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (part == ".." && seen_directory) return true;
+    if (!part.empty() && part != "." && part != "..") seen_directory = true;
+  }
+  return false;
+}
+
+// Whether \p path, followed through symbolic links, lies inside \p dir.
+bool inside(const fs::path& path, const fs::path& dir) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(path, ec);
+  if (ec) return false;
+  const fs::path d = fs::weakly_canonical(dir.empty() ? fs::path(".") : dir, ec);
+  if (ec) return false;
+  const std::string ps = p.generic_string(), ds = d.generic_string();
+  return ps.size() > ds.size() && ps.compare(0, ds.size(), ds) == 0 &&
+         (ds.back() == '/' || ps[ds.size()] == '/');
 }
 
 // Gathers the files of one mesh: each name once, in the order first named.
@@ -83,25 +116,30 @@ class CompanionReader {
  public:
   explicit CompanionReader(const std::string& mesh_path) : dir_(directory_of(mesh_path)) {}
 
-  // Reads \p name (relative to the mesh's directory) if it can travel and is there; \p named_by
-  // says what names it, for the notes. Returns the file's index in files(), or -1.
-  int add(const std::string& given, const std::string& named_by, const std::string& what) {
-    const std::string name = normal_name(given);
-    const std::string problem = companion_name_problem(name);
-    if (!problem.empty()) {
+  // Reads \p given, a name relative to \p base (a directory relative to the mesh's), if it can
+  // travel and is there; \p named_by says what names it, for the notes. Returns the file's index
+  // in files(), or -1.
+  int add(const fs::path& base, const std::string& given, const std::string& named_by,
+          const std::string& what) {
+    auto note = [&](const std::string& why) {
       notes_.push_back(named_by + ": " + what + " '" + printable_key(given) +
-                       "' is not carried along: " + problem);
+                       "' is not carried along: " + why);
       return -1;
-    }
+    };
+    if (has_inner_dotdot(given)) return note("it goes into a directory and out again ('dir/..')");
+    const std::string name = (base / given).lexically_normal().generic_string();
+    const std::string problem = companion_name_problem(name);
+    if (!problem.empty()) return note(problem);
     if (!seen_.insert(name).second) return -1;
     const fs::path path = dir_ / name;
     std::error_code ec;
-    if (!fs::exists(path, ec)) {
-      notes_.push_back(named_by + ": " + what + " '" + printable_key(given) + "' is not there (" +
-                       path.string() + "); it is not carried along");
-      return -1;
+    if (!fs::exists(path, ec)) return note("it is not there (" + path.string() + ")");
+    if (!inside(path, dir_)) return note("it leads out of the mesh file's directory (a symbolic link)");
+    try {
+      files_.push_back({name, read_file_bytes(path.string())});
+    } catch (const IoError& e) {
+      return note(e.what());
     }
-    files_.push_back({name, read_file_bytes(path.string())});
     return static_cast<int>(files_.size()) - 1;
   }
 
@@ -115,48 +153,78 @@ class CompanionReader {
   std::vector<std::string> notes_;
 };
 
-}  // namespace
-
-std::vector<std::string> read_companion_files(MeshAttributes& attributes, const std::string& mesh_path) {
-  CompanionReader reader(mesh_path);
-  std::istringstream libraries(attributes.material_library);
-  std::string library;
-  while (libraries >> library) {
-    const int i = reader.add(library, mesh_path, "material library");
-    if (i < 0) continue;
-    // The library's images, relative to its own directory (where Blender and MeshLab look).
-    const CompanionFile lib = reader.files()[i];  // a copy: add() grows the list
-    const std::string named_by = (directory_of(mesh_path) / lib.name).string();
-    for (const std::string& image : mtl_image_names(lib.bytes))
-      reader.add((fs::path(lib.name).parent_path() / image).generic_string(), named_by, "texture image");
-  }
-  for (const std::string& image : attributes.texture_files) reader.add(image, mesh_path, "texture image");
-  attributes.files = std::move(reader.files());
-  return std::move(reader.notes());
+// The material libraries that an OBJ's mtllib names: the whole value if a file of that name is
+// there (Blender writes "mtllib my scan.mtl" for "my scan.obj"), else its words.
+std::vector<std::string> library_names(const std::string& material_library, const fs::path& dir) {
+  std::error_code ec;
+  if (material_library.empty()) return {};
+  if (fs::exists(dir / material_library, ec)) return {material_library};
+  std::vector<std::string> names;
+  std::istringstream words(material_library);
+  std::string word;
+  while (words >> word) names.push_back(word);
+  return names;
 }
 
-std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
-                                               const std::string& mesh_path) {
-  std::vector<std::string> notes;
-  const fs::path dir = directory_of(mesh_path);
-  // What the written mesh names: an OBJ its material libraries and their images, a PLY its images.
+// The indices in attributes.files of the material libraries that material_library names, as
+// library_names() finds them.
+std::vector<int> libraries_among(const MeshAttributes& attributes) {
+  auto index = [&](const std::string& name) {
+    for (std::size_t i = 0; i < attributes.files.size(); ++i)
+      if (attributes.files[i].name == normal_name(name)) return static_cast<int>(i);
+    return -1;
+  };
+  if (attributes.material_library.empty()) return {};
+  if (index(attributes.material_library) >= 0) return {index(attributes.material_library)};
+  std::vector<int> found;
+  std::istringstream words(attributes.material_library);
+  for (std::string word; words >> word;)
+    if (index(word) >= 0) found.push_back(index(word));
+  return found;
+}
+
+// The names of attributes.files that a mesh file at \p mesh_path names: an OBJ its libraries and
+// their images, a PLY its images.
+std::set<std::string> names_in(const MeshAttributes& attributes, const std::string& mesh_path) {
   std::string ext = fs::path(mesh_path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   std::set<std::string> named;
   if (ext == ".obj") {
-    std::istringstream libraries(attributes.material_library);
-    std::string library;
-    while (libraries >> library) {
-      const std::string lib = normal_name(library);
-      named.insert(lib);
-      for (const CompanionFile& f : attributes.files)
-        if (f.name == lib)
-          for (const std::string& image : mtl_image_names(f.bytes))
-            named.insert(normal_name((fs::path(lib).parent_path() / image).generic_string()));
+    for (int i : libraries_among(attributes)) {
+      const CompanionFile& lib = attributes.files[i];
+      named.insert(lib.name);
+      for (const std::string& image : mtl_image_names(lib.bytes()))
+        named.insert(normal_name(fs::path(lib.name).parent_path() / image));
     }
   } else if (ext == ".ply") {
     for (const std::string& image : attributes.texture_files) named.insert(normal_name(image));
   }
+  return named;
+}
+
+}  // namespace
+
+std::vector<std::string> read_companion_files(MeshAttributes& attributes, const std::string& mesh_path) {
+  CompanionReader reader(mesh_path);
+  for (const std::string& library : library_names(attributes.material_library, directory_of(mesh_path))) {
+    const int i = reader.add("", library, mesh_path, "material library");
+    if (i < 0) continue;
+    // The library's images, relative to its own directory (where Blender and MeshLab look).
+    const CompanionFile lib = reader.files()[i];  // a copy: add() grows the list
+    const std::string named_by = (directory_of(mesh_path) / lib.name).string();
+    for (const std::string& image : mtl_image_names(lib.bytes()))
+      reader.add(fs::path(lib.name).parent_path(), image, named_by, "texture image");
+  }
+  for (const std::string& image : attributes.texture_files) reader.add("", image, mesh_path, "texture image");
+  attributes.files = std::move(reader.files());
+  return std::move(reader.notes());
+}
+
+std::vector<std::string> write_companion_files(const MeshAttributes& attributes, const std::string& mesh_path,
+                                               const CompanionWriter& write) {
+  std::vector<std::string> notes;
+  const fs::path dir = directory_of(mesh_path);
+  const std::set<std::string> named = names_in(attributes, mesh_path);
   for (const CompanionFile& f : attributes.files) {
     const std::string problem = companion_name_problem(f.name);
     if (!problem.empty())
@@ -164,18 +232,75 @@ std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
     if (!named.count(f.name)) continue;
     const fs::path path = dir / f.name;
     std::error_code ec;
-    if (fs::exists(path, ec)) {
-      if (read_file_bytes(path.string()) != f.bytes)
-        notes.push_back(path.string() + " is already there and differs from the scan's file of that name; " +
-                        "it was left as it is, and " + mesh_path + " now names it");
+    const fs::file_status link = fs::symlink_status(path, ec);
+    if (fs::exists(link)) {
+      // Never replaced: a file there may be the user's own. Compared only where it can be read.
+      const fs::file_status target = fs::status(path, ec);
+      std::string why;
+      if (!fs::is_regular_file(target)) {
+        why =
+            fs::is_symlink(link) && !fs::exists(target) ? "a symbolic link to nothing" : "not a regular file";
+      } else if (fs::file_size(path, ec) != f.bytes().size() || read_file_bytes(path.string()) != f.bytes()) {
+        why = "a file that differs from the scan's of that name";
+      }
+      if (!why.empty())
+        notes.push_back(path.string() + " is already there (" + why + "); it was left as it is, and " +
+                        mesh_path + " names it");
       continue;
     }
-    ec.clear();
     if (!path.parent_path().empty()) fs::create_directories(path.parent_path(), ec);
     if (ec) throw IoError(path.parent_path().string() + ": cannot create the directory: " + ec.message());
-    write_text_file_atomically(path.string(), f.bytes);
+    if (write)
+      write(path.string(), f.bytes());
+    else
+      write_text_file_atomically(path.string(), f.bytes());
   }
   return notes;
+}
+
+std::vector<int> face_texture_files(const MeshAttributes& attributes) {
+  auto file_index = [&](const fs::path& name) {
+    const std::string normal = normal_name(name);
+    for (std::size_t i = 0; i < attributes.files.size(); ++i)
+      if (attributes.files[i].name == normal) return static_cast<int>(i);
+    return -1;
+  };
+  std::vector<int> image_of_material(attributes.material_names.size(), -1);
+  if (!attributes.face_materials.empty()) {
+    // Each material's map_Kd, from the first library that defines the material.
+    std::vector<char> defined(attributes.material_names.size(), 0);
+    for (int lib : libraries_among(attributes)) {
+      const fs::path lib_dir = fs::path(attributes.files[lib].name).parent_path();
+      int current = -1;
+      for (const auto& [key, name] : mtl_statements(attributes.files[lib].bytes())) {
+        if (key == "newmtl") {
+          const auto it = std::find(attributes.material_names.begin(), attributes.material_names.end(), name);
+          current = it == attributes.material_names.end() || defined[it - attributes.material_names.begin()]
+                        ? -1
+                        : static_cast<int>(it - attributes.material_names.begin());
+          if (current >= 0) defined[current] = 1;
+        } else if (key == "map_kd" && current >= 0) {
+          image_of_material[current] = file_index(lib_dir / name);
+        }
+      }
+    }
+  }
+  std::vector<int> result;
+  bool any = false;
+  const std::size_t nf = std::max(attributes.face_materials.size(), attributes.face_textures.size());
+  for (std::size_t f = 0; f < nf; ++f) {
+    int image = -1;
+    if (f < attributes.face_textures.size() && attributes.face_textures[f] >= 0 &&
+        attributes.face_textures[f] < static_cast<int>(attributes.texture_files.size()))
+      image = file_index(attributes.texture_files[attributes.face_textures[f]]);
+    if (image < 0 && f < attributes.face_materials.size() && attributes.face_materials[f] >= 0 &&
+        attributes.face_materials[f] < static_cast<int>(image_of_material.size()))
+      image = image_of_material[attributes.face_materials[f]];
+    result.push_back(image);
+    any = any || image >= 0;
+  }
+  if (!any) result.clear();
+  return result;
 }
 
 }  // namespace strata

@@ -103,19 +103,16 @@ std::string companion_name_problem(const std::string& name) {
   for (char c : name)
     if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return "the name holds a control character";
   if (name.front() == '/') return "the name is absolute";
-  if (name.back() == '/') return "the name ends in '/' (a directory)";
-  // Where the name leads, component by component: above the mesh's directory is out of bounds.
-  int depth = 0;
   std::istringstream parts(name);
   std::string part;
+  bool first = true;
   while (std::getline(parts, part, '/')) {
-    if (part == "..")
-      --depth;
-    else if (!part.empty() && part != ".")
-      ++depth;
-    if (depth < 0) return "the name leads above the mesh file's directory";
+    if (part == "..") return first ? "the name leads above the mesh file's directory" : "the name holds '..'";
+    if (part.empty() || part == ".") return "the name is not in normal form (an empty or '.' component)";
+    if (part.front() == '.') return "the name has a hidden component ('" + part + "')";
+    first = false;
   }
-  if (depth == 0) return "the name leads to the mesh file's directory itself";
+  if (name.back() == '/') return "the name ends in '/' (a directory)";
   return "";
 }
 

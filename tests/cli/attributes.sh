@@ -227,10 +227,11 @@ mkdir "$TMP/elsewhere"
 same_files "$TMP/elsewhere"
 [ "$(grep -cv 'faces flipped' "$TMP/lib.err")" -eq 0 ] ||
   { echo "FAIL: notes on a copied library: $(cat "$TMP/lib.err")" >&2; exit 1; }
-"$STRATA" stats "$TMP/elsewhere/out.obj" --json | python3 -c "
+"$STRATA" build "$TMP/elsewhere/out.obj" -o "$TMP/elsewhere/m.strata" -q >/dev/null 2>&1
+"$STRATA" info "$TMP/elsewhere/m.strata" --json | python3 -c "
 import json, sys
-s = json.load(sys.stdin)
-if s['companion_files'] != ['scan.mtl', 'textures/skin colour.png', 'eyes.png']: sys.exit('FAIL: stats: %s' % s)"
+a = json.load(sys.stdin)['bands'][-1]['attributes']
+if a['companion_files'] != ['scan.mtl', 'textures/skin colour.png', 'eyes.png']: sys.exit('FAIL: info: %s' % a)"
 mkdir "$TMP/model_only"
 cp "$TMP/seams_edited.strata" "$TMP/model_only/"
 mv "$TMP/textures" "$TMP/textures.away"  # the model alone has them now
@@ -243,20 +244,30 @@ same_files "$TMP/model_only/out"
 printf 'mine' >"$TMP/model_only/out/eyes.png"
 rm "$TMP/model_only/out/scan.mtl"
 "$STRATA" export "$TMP/model_only/seams_edited.strata" -o "$TMP/model_only/out/m.obj" >/dev/null 2>"$TMP/export2.err"
-grep -q "eyes.png is already there and differs from the scan's file of that name; it was left as it is, and .*m.obj now names it" "$TMP/export2.err" &&
+grep -q "eyes.png is already there (a file that differs from the scan's of that name); it was left as it is, and .*m.obj names it" "$TMP/export2.err" &&
   [ "$(cat "$TMP/model_only/out/eyes.png")" = mine ] && cmp -s "$TMP/scan.mtl" "$TMP/model_only/out/scan.mtl" ||
   { echo "FAIL: an existing image: $(cat "$TMP/export2.err")" >&2; exit 1; }
 printf 'newmtl skin\nmap_Kd gone.png\nnewmtl eyes\n' >"$TMP/elsewhere/scan.mtl"
 mkdir "$TMP/again"
 "$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/again/out.obj" -q >/dev/null 2>"$TMP/gone.err"
-grep -q "scan.mtl: texture image 'gone.png' is not there (.*gone.png); it is not carried along" "$TMP/gone.err" &&
+grep -q "scan.mtl: texture image 'gone.png' is not carried along: it is not there (.*gone.png)" "$TMP/gone.err" &&
   cmp -s "$TMP/elsewhere/scan.mtl" "$TMP/again/scan.mtl" ||
   { echo "FAIL: a missing image: $(cat "$TMP/gone.err")" >&2; exit 1; }
 # A library that is not there at all: a note at reading, and one on the output that names it.
 rm "$TMP/elsewhere/scan.mtl"
-"$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/again/out2.obj" -q >/dev/null 2>"$TMP/nolib.err"
-grep -q "out.obj: material library 'scan.mtl' is not there" "$TMP/nolib.err" ||
-  { echo "FAIL: no note on a missing library: $(cat "$TMP/nolib.err")" >&2; exit 1; }
+mkdir "$TMP/third"
+"$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/third/out.obj" -q >/dev/null 2>"$TMP/nolib.err"
+grep -q "out.obj: material library 'scan.mtl' is not carried along: it is not there" "$TMP/nolib.err" &&
+  grep -q "third/out.obj refers to the material library 'scan.mtl', which is not in its directory" "$TMP/nolib.err" ||
+  { echo "FAIL: no notes on a missing library: $(cat "$TMP/nolib.err")" >&2; exit 1; }
+# A file of the scan's named as an output of the command (here the report): the output wins.
+printf 'newmtl skin\nmap_Kd r.json\nnewmtl eyes\n' >"$TMP/elsewhere/scan.mtl"
+printf 'not json' >"$TMP/elsewhere/r.json"
+mkdir "$TMP/fourth"
+"$STRATA" deform "$TMP/elsewhere/out.obj" --edit "$TMP/bend.json" -o "$TMP/fourth/out.obj" --report "$TMP/fourth/r.json" -q >/dev/null 2>"$TMP/clash.err"
+grep -q "fourth/r.json is an output of this command; the scan's file of that name is not written" "$TMP/clash.err" &&
+  python3 -c "import json; json.load(open('$TMP/fourth/r.json'))" ||
+  { echo "FAIL: a companion named as the report: $(cat "$TMP/clash.err")" >&2; exit 1; }
 # Texture coordinates on only some face corners cannot be kept: a note naming the file.
 sed '0,/^f /s|^f \([0-9]*\)/[0-9]* |f \1 |' "$TMP/seams.obj" >"$TMP/partial.obj"
 "$STRATA" deform "$TMP/partial.obj" --edit "$TMP/bend.json" -o "$TMP/partial_out.obj" -q >/dev/null 2>"$TMP/partial.err"

@@ -277,8 +277,8 @@ int run_deform(const DeformCmdOptions& o) {
     report["report"] = o.report;
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
+  write_companions(input.attributes, o.output, &staged);
   staged.commit();
-  write_companions(input.attributes, o.output);
   std::cout << "method         " << to_string(method) << "\n"
             << "input          " << input.name << ": " << input.mesh.num_vertices() << " vertices, "
             << input.mesh.num_faces() << " faces\n";

@@ -132,8 +132,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
     report["report"] = o.report;
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
+  write_companions(detail.attributes, o.output, &staged);
   staged.commit();
-  write_companions(detail.attributes, o.output);
   print_summary(std::cout, report);
   if (o.strict) return finish_warnings(warnings, true, false);
   json unprinted = warnings;  // the input's warning was printed when it was found

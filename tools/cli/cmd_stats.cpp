@@ -36,8 +36,7 @@ std::size_t count_boundary_edges(const TriMesh& mesh) {
 }
 
 int run_stats(const StatsCmdOptions& o) {
-  NamedMesh m = read_named_mesh(o.mesh);
-  read_companions(m.attributes, o.mesh);
+  const NamedMesh m = read_named_mesh(o.mesh);
   const std::size_t boundary = count_boundary_edges(m.mesh);
   Stopwatch sw;
   const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces,
@@ -56,6 +55,7 @@ int run_stats(const StatsCmdOptions& o) {
          {"self_intersection_tests", isect.num_tests},
          {"intersection_seconds", isect_seconds}};
   r.update(attributes_json(m.attributes));
+  r.erase("companion_files");  // not read here: stats reads the mesh alone
   if (o.json) {
     std::cout << r.dump(2, ' ', false, json::error_handler_t::replace) << std::endl;
     return 0;
@@ -79,9 +79,7 @@ int run_stats(const StatsCmdOptions& o) {
             << (m.attributes.material_library.empty() ? ""
                                                       : " (library " + m.attributes.material_library + ")")
             << "\n"
-            << "texture images           " << m.attributes.texture_files.size() << "\n"
-            << "files beside it          " << m.attributes.files.size()
-            << " (material libraries and images the mesh names, found)" << std::endl;
+            << "texture images           " << m.attributes.texture_files.size() << std::endl;
   return 0;
 }
 

@@ -155,8 +155,18 @@ void read_companions(MeshAttributes& attributes, const std::string& path) {
     std::cerr << "strata: note: " << note << std::endl;
 }
 
-void write_companions(const MeshAttributes& attributes, const std::string& path) {
-  for (const std::string& note : write_companion_files(attributes, path))
+void write_companions(const MeshAttributes& attributes, const std::string& path, StagedOutputs* staged) {
+  CompanionWriter stage;
+  if (staged)
+    stage = [staged](const std::string& target, const std::string& bytes) {
+      if (staged->stages(target))  // the mesh or the report: an output of the command wins
+        std::cerr << "strata: note: " << target
+                  << " is an output of this command; the scan's file of that name "
+                  << "is not written" << std::endl;
+      else
+        staged->write(target, [&](const std::string& p) { write_text_file_atomically(p, bytes); });
+    };
+  for (const std::string& note : write_companion_files(attributes, path, stage))
     std::cerr << "strata: note: " << note << std::endl;
   if (attributes.material_library.empty() || lower_extension(path) != ".obj") return;
   // mtllib may name several files, separated by spaces.
@@ -165,7 +175,10 @@ void write_companions(const MeshAttributes& attributes, const std::string& path)
   std::string lib;
   while (names >> lib) {
     std::error_code ec;
-    if (!std::filesystem::exists(dir / lib, ec))
+    const bool carried = std::any_of(attributes.files.begin(), attributes.files.end(),
+                                     [&](const CompanionFile& f) { return f.name == lib; });
+    if (!carried && !std::filesystem::exists(dir / attributes.material_library, ec) &&
+        !std::filesystem::exists(dir / lib, ec))
       std::cerr << "strata: note: " << path << " refers to the material library '" << lib
                 << "', which is not in its directory: copy it (and its textures) there" << std::endl;
   }
@@ -339,6 +352,16 @@ void StagedOutputs::write(const std::string& target,
   } catch (const InvalidInput& e) {
     throw InvalidInput(named(e.what()));
   }
+}
+
+bool StagedOutputs::stages(const std::string& target) const {
+  std::error_code ec;
+  const fs::path t = fs::weakly_canonical(target, ec);
+  for (const auto& [staging, staged_target] : staged_) {
+    std::error_code ec2;
+    if (staged_target == target || (!ec && fs::weakly_canonical(staged_target, ec2) == t)) return true;
+  }
+  return false;
 }
 
 void StagedOutputs::commit() {

@@ -133,10 +133,13 @@ void warn_attributes_not_stored(const MeshAttributes& attributes, const std::str
 //! that cannot travel (not there, or named outside the mesh's directory).
 void read_companions(MeshAttributes& attributes, const std::string& path);
 
-//! Writes attributes.files beside the mesh written to \p path (write_companion_files(): a file
-//! already there is never replaced), printing its notes, and notes an OBJ's material library that
-//! is still not beside \p path (the file names it relative to its own directory).
-void write_companions(const MeshAttributes& attributes, const std::string& path);
+//! Writes attributes.files beside the mesh written to \p path (write_companion_files(): whatever
+//! is already there is never replaced), through \p staged if given (they then land with the
+//! other outputs, or none does), printing its notes; and notes an OBJ's material library that is
+//! neither beside \p path nor among the files (the file names it relative to its own directory).
+class StagedOutputs;
+void write_companions(const MeshAttributes& attributes, const std::string& path,
+                      StagedOutputs* staged = nullptr);
 
 //! Checks a computed mesh (validate_mesh) before it is written to \p output: an error names the
 //! result (\p what) and says that \p output was not written, where the writer's own check names
@@ -188,6 +191,8 @@ class StagedOutputs {
   //! Calls \p writer(path) to write \p target's contents to its staging file (atomically, as
   //! write_mesh() does). An IoError or InvalidInput it throws names \p target, not the staging file.
   void write(const std::string& target, const std::function<void(const std::string& path)>& writer);
+  //! Whether \p target (as the same file: paths compared after weakly_canonical) is staged.
+  bool stages(const std::string& target) const;
   //! Renames every staged file over its target, in staging order.
   //! \throw IoError naming the target whose rename failed.
   void commit();

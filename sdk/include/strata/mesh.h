@@ -6,7 +6,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace strata {
@@ -27,17 +29,27 @@ struct TriMesh {
 //! textures to show: an OBJ's material library, an image that library names, a PLY's texture
 //! image. read_companion_files() and write_companion_files() (mesh_io.h) carry them.
 struct CompanionFile {
-  //! Where the file sits relative to the mesh file's directory, '/' between directories, as
-  //! companion_name_problem() allows: relative, and not above that directory.
-  std::string name;
-  std::string bytes;  //!< the file's contents
+  CompanionFile() = default;
+  CompanionFile(std::string name, std::string bytes)
+      : name(std::move(name)), data(std::make_shared<const std::string>(std::move(bytes))) {}
 
-  bool operator==(const CompanionFile& o) const { return name == o.name && bytes == o.bytes; }
+  //! Where the file sits relative to the mesh file's directory, '/' between directories, as
+  //! companion_name_problem() allows.
+  std::string name;
+  //! The file's contents, shared by copies: images are large, and a model is copied for undo.
+  std::shared_ptr<const std::string> data;
+
+  const std::string& bytes() const {
+    static const std::string none;
+    return data ? *data : none;
+  }
+  bool operator==(const CompanionFile& o) const { return name == o.name && bytes() == o.bytes(); }
 };
 
-//! Why \p name cannot be a CompanionFile's name, or "" if it can: it is empty, absolute, leads
-//! above the mesh file's directory ("..", also after "a/../.."), ends in '/', or holds a control
-//! character.
+//! Why \p name cannot be a CompanionFile's name, or "" if it can. A name is relative and in
+//! normal form: '/' between non-empty components, none of them "." or "..", none hidden (starting
+//! with '.': a name from a scan's file must not put ".ssh/..." or ".bashrc" beside an output),
+//! and no control character.
 std::string companion_name_problem(const std::string& name);
 
 //! What a scan's file may hold besides its geometry that Strata carries along: vertex colours,

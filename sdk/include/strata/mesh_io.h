@@ -24,6 +24,7 @@
 //! the file (1-based for OBJ).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -152,32 +153,45 @@ std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes,
 
 //! Reads the files that \p attributes of the mesh file \p mesh_path name into attributes.files
 //! (CompanionFile), from beside the mesh, so that its materials and textures can travel with it:
-//! - each material library of material_library (OBJ's mtllib; several are separated by spaces);
+//! - each material library of material_library (OBJ's mtllib: the whole value if a file of that
+//!   name is there, else each of its words);
 //! - each image a library found names: the file name (the rest of the line, spaces included)
 //!   after the options of map_Ka, map_Kd, map_Ks, map_Ke, map_Ns, map_d, map_bump, map_Pr, map_Pm,
 //!   map_Ps, bump, disp, decal, refl and norm (any other map_* too), relative to the library's
 //!   own directory;
 //! - each of texture_files (PLY's TextureFile).
-//! Each file once, in the order first named; names are kept as given but for "." components and
-//! "dir/.." pairs, which are resolved. attributes.files is replaced.
-//! \return notes on what cannot travel, each naming \p mesh_path (or the library) and the file: a
-//!         file that is not there, or a name that is absolute or leads above the mesh's
-//!         directory (companion_name_problem()). The mesh still names these; they are not read.
-//! \throw IoError "<file>: <problem>" if a file that is there cannot be read, or is not a
-//!        regular file (a FIFO or device is refused: read_file_bytes()).
+//! Each file once, in the order first named, under its name in normal form ("./a.png" is
+//! "a.png"; "../x.png" from "sub/lib.mtl" is "x.png"). attributes.files is replaced.
+//! \return notes on what is not carried along, each naming \p mesh_path (or the library) and the
+//!         file: a file that is not there or cannot be read (a directory, a FIFO, no permission);
+//!         a name that companion_name_problem() refuses (absolute, above the mesh's directory,
+//!         hidden) or that goes into a directory and out again ("sub/../x.png", which resolves
+//!         only where "sub" exists); a file reached through a symbolic link that leads out of the
+//!         mesh's directory. The mesh still names these; nothing is thrown.
 std::vector<std::string> read_companion_files(MeshAttributes& attributes, const std::string& mesh_path);
+
+//! Writes one companion file: \p path, \p bytes. write_companion_files() calls it once per file
+//! to write, after creating the file's directory; by default write_text_file_atomically().
+using CompanionWriter = std::function<void(const std::string& path, const std::string& bytes)>;
 
 //! Writes the files of attributes.files that the mesh file \p mesh_path names beside it (an OBJ:
 //! its material libraries and the images they name; a PLY: its texture_files; OFF and STL name
-//! none): each at its name relative to the mesh's directory (subdirectories are created),
-//! atomically (write_text_file_atomically). A file
-//! already there with the same bytes is left alone; one with other bytes is left alone too (it may
-//! be the user's own) and a note says so.
+//! none): each at its name relative to the mesh's directory (subdirectories are created), by
+//! \p write (default: atomically, write_text_file_atomically()). Whatever is already at a name
+//! (a file, a directory, a symbolic link, even to nothing) is left alone, never replaced; a note
+//! says so unless it is a file with the same bytes.
 //! \return the notes, each naming the file.
-//! \throw InvalidInput if a name fails companion_name_problem(); IoError if a file or directory
-//!        cannot be written, or what is at a name is not a regular file.
-std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
-                                               const std::string& mesh_path);
+//! \throw InvalidInput if a name fails companion_name_problem(); IoError if a directory cannot be
+//!        created; what \p write throws (IoError if a file cannot be written).
+std::vector<std::string> write_companion_files(const MeshAttributes& attributes, const std::string& mesh_path,
+                                               const CompanionWriter& write = {});
+
+//! Per face, the index in attributes.files of its diffuse texture image, or -1: a PLY face's
+//! image (face_textures into texture_files), else an OBJ face's material's map_Kd (in the first
+//! of the material libraries among attributes.files that defines the material; its name relative
+//! to the library's directory, as read_companion_files() resolves it). Empty if no face has one
+//! (no images among the files, say). What a viewer needs to draw a textured scan.
+std::vector<int> face_texture_files(const MeshAttributes& attributes);
 
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
