@@ -272,24 +272,25 @@ void App::take_snapshot() {
     if (recolor_on_load_ && committed_->name() == open_path_.data()) {
       recolor_on_load_ = false;
       const ColorMode initial = initial_color_mode(*committed_);
-      if (initial == ColorMode::Scan || view_.color == ColorMode::Scan) {
+      if (initial == ColorMode::Scan || initial == ColorMode::Texture || view_.color == ColorMode::Scan ||
+          view_.color == ColorMode::Texture) {
         view_.color = initial;
         push_view();
       }
     }
   }
   // Same panels and connectivity: move the vertices only; else upload anew.
-  const bool same = s->panels.size() == panels_.size() &&
-                    std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
-                               [](const SceneData& a, const std::unique_ptr<Panel>& b) {
-                                 return a.shown_band == b->band &&
-                                        a.mesh.faces.size() == b->scene.mesh.faces.size() &&
-                                        a.mesh.vertices.size() == b->scene.mesh.vertices.size() &&
-                                        a.colors.empty() == (b->mesh.color_mode() == 0) &&
-                                        a.vertex_colors == b->scene.vertex_colors &&
-                                        (!a.vertex_colors || a.colors == b->scene.colors) &&
-                                        (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
-                               });
+  const bool same =
+      s->panels.size() == panels_.size() &&
+      std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
+                 [](const SceneData& a, const std::unique_ptr<Panel>& b) {
+                   return a.shown_band == b->band && a.mesh.faces.size() == b->scene.mesh.faces.size() &&
+                          a.mesh.vertices.size() == b->scene.mesh.vertices.size() &&
+                          (a.colors.empty() && !a.texture) == (b->mesh.color_mode() == 0) &&
+                          a.vertex_colors == b->scene.vertex_colors && a.texture == b->scene.texture &&
+                          (!a.vertex_colors || a.colors == b->scene.colors) &&
+                          (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
+                 });
   if (!same) panels_.clear();
   for (std::size_t i = 0; i < s->panels.size(); ++i) {
     if (!same) panels_.push_back(std::make_unique<Panel>());
@@ -297,12 +298,17 @@ void App::take_snapshot() {
     p.scene = std::move(s->panels[i]);
     p.band = p.scene.shown_band;
     p.vectors = view_.compare && i + 1 == s->panels.size() && !view_.vectors && s->panels.size() > 1;
-    // The scan's colours (per vertex) are already on the GPU when they are the same: positions only.
+    if (p.scene.texture && !p.scene.texture->problems.empty()) {  // drawn in the surface colour instead
+      status_ = "texture image not drawn: " + p.scene.texture->problems.front();
+      status_error_ = true;
+    }
+    // The scan's colours (per vertex) or texture are already on the GPU when they are the same:
+    // positions only.
     if (same && (p.scene.colors.empty() || p.scene.vertex_colors))
       p.mesh.update_positions(p.scene.mesh.vertices, p.scene.mesh.faces);
     else
       p.mesh.upload(p.scene.mesh.vertices, p.scene.mesh.faces, p.scene.colors, surface_color(),
-                    p.scene.vertex_colors);
+                    p.scene.vertex_colors, p.scene.texture.get());
     if (!p.scene.net.empty())
       p.net.upload(p.scene.net, std::vector<Rgb>(p.scene.net.size(), Rgb(0.95f, 0.5f, 0.05f)));
     else
@@ -849,6 +855,10 @@ void App::on_key(int key, int mods) {
       break;
     case GLFW_KEY_K:
       view_.color = view_.color == ColorMode::Scan ? ColorMode::None : ColorMode::Scan;
+      push_view();
+      break;
+    case GLFW_KEY_T:
+      view_.color = view_.color == ColorMode::Texture ? ColorMode::None : ColorMode::Texture;
       push_view();
       break;
     case GLFW_KEY_R:

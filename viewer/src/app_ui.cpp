@@ -18,8 +18,9 @@ void App::draw_ui() {
     ImGui::Checkbox("Wireframe (W)", &style_.wireframe);
     bool changed = ImGui::Checkbox("Cage net (C)", &view_.cage);
     int color = static_cast<int>(view_.color);
-    changed |= ImGui::Combo("Colour", &color,
-                            "none\0prism volume error (E)\0intersecting triangles (I)\0scan colours (K)\0");
+    changed |= ImGui::Combo(
+        "Colour", &color,
+        "none\0prism volume error (E)\0intersecting triangles (I)\0scan colours (K)\0scan texture (T)\0");
     view_.color = static_cast<ColorMode>(color);
     float scale = static_cast<float>(view_.error_scale);
     if (view_.color == ColorMode::Error &&
@@ -213,7 +214,7 @@ void App::draw_help() {
       {"1 .. 7", "front, back, left, right, top, bottom, iso"},
       {"S / W", "smooth-flat shading / wireframe"},
       {"C", "cage control net"},
-      {"E / I / K", "prism volume error / intersecting triangles / scan colours"},
+      {"E / I / K / T", "prism volume error / intersecting triangles / scan colours / scan texture"},
       {"V / B", "displacement vectors / compare side by side"},
       {"R / H", "click to place the region / handle sphere"},
       {"P", "brush mode: left drag paints the region's points"},

@@ -20,7 +20,9 @@ ColorMode parse_color_mode(const std::string& name) {
   if (name == "error") return ColorMode::Error;
   if (name == "intersections") return ColorMode::Intersections;
   if (name == "scan") return ColorMode::Scan;
-  throw std::invalid_argument("unknown colour map '" + name + "' (error, intersections, scan or none)");
+  if (name == "texture") return ColorMode::Texture;
+  throw std::invalid_argument("unknown colour map '" + name +
+                              "' (error, intersections, scan, texture or none)");
 }
 
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
@@ -36,7 +38,8 @@ std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale) {
 }
 
 ColorMode initial_color_mode(const Document& document) {
-  return document.attributes(document.finest_band()).colors.empty() ? ColorMode::None : ColorMode::Scan;
+  const MeshAttributes& a = document.attributes(document.finest_band());
+  return has_texture(a) ? ColorMode::Texture : a.colors.empty() ? ColorMode::None : ColorMode::Scan;
 }
 
 std::vector<Rgb> vertex_colors(const MeshAttributes& attributes) {

@@ -18,17 +18,21 @@ Rgb surface_color();
 Rgb alarm_color();
 
 //! What --color selects. Scan: the shown band's own vertex colours (a scan's, from its file),
-//! the surface colour where it has none.
-enum class ColorMode { None, Error, Intersections, Scan };
-//! Parses "none", "error", "intersections" or "scan". \throw std::invalid_argument otherwise.
+//! the surface colour where it has none. Texture: its texture images (the scan's material
+//! libraries' map_Kd, or a PLY's images) by its texture coordinates, the surface colour on faces
+//! without one.
+enum class ColorMode { None, Error, Intersections, Scan, Texture };
+//! Parses "none", "error", "intersections", "scan" or "texture". \throw std::invalid_argument
+//! otherwise.
 ColorMode parse_color_mode(const std::string& name);
 
 //! Per-face colours of relative errors: surface colour at 0, through yellow at scale/2, to red at
 //! \p scale and above; NaN (not measured) keeps the surface colour.
 std::vector<Rgb> error_colors(const std::vector<double>& errors, double scale);
 
-//! The colour map a document opens with when none was asked for: its own colours (Scan) if its
-//! finest band has vertex colours, as a viewer of coloured scans is expected to show them; else None.
+//! The colour map a document opens with when none was asked for: its texture (Texture) if its
+//! finest band has one (has_texture()), else its own colours (Scan) if it has vertex colours, as a
+//! viewer of textured or coloured scans is expected to show them; else None.
 ColorMode initial_color_mode(const Document& document);
 
 //! Per-vertex colours of \p attributes (their RGB), or none (empty) if they have no colours.

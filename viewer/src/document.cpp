@@ -108,6 +108,18 @@ const MeshAttributes& Document::attributes(int k) const {
   return k == 0 ? none : model_->band(k).attributes;
 }
 
+std::shared_ptr<const SceneTexture> Document::texture(int k) const {
+  const MeshAttributes& a = attributes(k);
+  textures_.resize(static_cast<std::size_t>(num_bands()));
+  CachedTexture& c = textures_[static_cast<std::size_t>(k)];
+  if (c.source != &a || c.files != a.files.data()) {
+    c.texture = make_scene_texture(a, model_ ? model_->band(k).mesh.faces : mesh_.faces);
+    c.source = &a;
+    c.files = a.files.data();
+  }
+  return c.texture;
+}
+
 const std::vector<Vec3>& Document::band_points(int k) const {
   check_band(k);
   return model_ ? model_->band_points(k) : mesh_.vertices;

@@ -11,6 +11,7 @@
 #include "strata/edit_script.h"
 #include "strata/layers/model.h"
 #include "strata/mesh.h"
+#include "texture.h"
 
 namespace strata::viewer {
 
@@ -56,6 +57,10 @@ class Document {
   //! model's triangle band's (Band::attributes: the scan's on the finest band); none for band 0
   //! of a model.
   const MeshAttributes& attributes(int k) const;
+  //! Band k's texture, decoded for drawing (make_scene_texture()), or nullptr if it has none.
+  //! Decoded once and kept while the band's attributes stay where they are (a drag's end
+  //! replaces the model, and the next call decodes anew). Not thread-safe: one thread per Document.
+  std::shared_ptr<const SceneTexture> texture(int k) const;
   //! Where selections of band k are evaluated: cage points for band 0 of a model, else vertices.
   const std::vector<Vec3>& band_points(int k) const;
   //! Band 0's control net as pairs of segment end points (empty for a plain mesh).
@@ -95,6 +100,12 @@ class Document {
   std::vector<double> mesh_errors_;         // plain mesh: per face, NaN outside the last edit's region
   std::vector<Vec3> mesh_vectors_;          // plain mesh: the last edit by displacement vectors
   std::vector<double> mesh_vector_errors_;  // plain mesh: their prism errors, as mesh_errors_
+  struct CachedTexture {
+    const MeshAttributes* source = nullptr;  // the attributes it was made from, where they were
+    const CompanionFile* files = nullptr;
+    std::shared_ptr<const SceneTexture> texture;
+  };
+  mutable std::vector<CachedTexture> textures_;  // per band
 };
 
 }  // namespace strata::viewer

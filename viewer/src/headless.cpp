@@ -139,17 +139,19 @@ std::string run_headless(const Options& options) {
   report["scene_s"] = seconds_since(t_scene);
   if (!options.save.empty()) layers::write_model(document.model(), options.save);
   // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
-  if (!options.export_mesh.empty()) {
+  if (!options.export_mesh.empty())
     write_mesh(scene.mesh, document.attributes(scene.shown_band), options.export_mesh);
-    for (const std::string& note :
-         write_companion_files(document.attributes(scene.shown_band), options.export_mesh))
-      std::cerr << "strata-viewer: note: " << note << std::endl;
-  }
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();
   if (options.color == ColorMode::Error) report["max_relative_error"] = scene.max_error;
   if (options.color == ColorMode::Intersections) report["intersecting_pairs"] = scene.intersection_pairs;
+  if (scene.texture) {  // faces drawn with an image, and images that could not be decoded
+    report["textured_faces"] = std::count_if(scene.texture->face_image.begin(),
+                                             scene.texture->face_image.end(), [](int i) { return i >= 0; });
+    report["texture_images"] = scene.texture->images.size();
+    report["texture_problems"] = scene.texture->problems;
+  }
 
   const auto t_context = Clock::now();
   EglContext context;
@@ -163,7 +165,8 @@ std::string run_headless(const Options& options) {
     Offscreen target(options.width, options.height, options.samples);
     const auto t_upload = Clock::now();
     GpuMesh mesh;
-    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, surface_color(), scene.vertex_colors);
+    mesh.upload(scene.mesh.vertices, scene.mesh.faces, scene.colors, surface_color(), scene.vertex_colors,
+                scene.texture.get());
     GpuLines net;
     if (!scene.net.empty())
       net.upload(scene.net, std::vector<Rgb>(scene.net.size(), Rgb(0.85f, 0.45f, 0.05f)));
@@ -204,6 +207,11 @@ std::string run_headless(const Options& options) {
                              " OpenGL errors while rendering (listed above)");
   const auto t_write = Clock::now();
   write_png(options.screenshot, pixels, options.width, options.height);
+  // The exported band's material library and images, after the screenshot: never over an output.
+  if (!options.export_mesh.empty())
+    for (const std::string& note :
+         write_companion_files(document.attributes(scene.shown_band), options.export_mesh))
+      std::cerr << "strata-viewer: note: " << note << std::endl;
   report["write_s"] = seconds_since(t_write);
   report["size"] = {options.width, options.height};
   report["png"] = options.screenshot;

@@ -43,10 +43,12 @@ Without --screenshot: the interactive window (GLFW + Dear ImGui; press F1 for th
   --wireframe              overlay the triangle edges
   --cage                   draw band 0's control net
   --vectors                draw the shown band rebuilt by displacement vectors (compare)
-  --color error|intersections|scan|none
-                           prism volume error of the shown band, intersecting triangles, or
-                           the scan's own vertex colours (from its file; the default when the
-                           finest band has them, else none)
+  --color error|intersections|scan|texture|none
+                           prism volume error of the shown band, intersecting triangles, the
+                           scan's own vertex colours (from its file), or its texture images (its
+                           material library's map_Kd, or a PLY's TextureFile, read from beside
+                           it); the default: texture, else colours, where the finest band has
+                           them, else none
   --error-scale S          relative prism volume error drawn full red (default 0.05)
   --layers N               build an N-band layered model (2 .. 8) from a scan first
   --edit EDIT.json         apply an edit script to --band (repeatable; in order)

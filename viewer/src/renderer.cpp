@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <map>
+#include <numeric>
+#include <unordered_map>
 
 namespace strata::viewer {
 
@@ -12,16 +16,19 @@ const char* kMeshVertex = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec3 a_color;
+layout(location = 3) in vec2 a_uv;
 uniform mat4 u_view;
 uniform mat4 u_projection;
 out vec3 v_normal;
 out vec3 v_color;
 out vec3 v_position;
+out vec2 v_uv;
 void main() {
   vec4 p = u_view * vec4(a_position, 1.0);
   v_position = p.xyz;
   v_normal = mat3(u_view) * a_normal;
   v_color = a_color;
+  v_uv = a_uv;
   gl_Position = u_projection * p;
 }
 )";
@@ -30,10 +37,13 @@ const char* kMeshFragment = R"(#version 330 core
 in vec3 v_normal;
 in vec3 v_color;
 in vec3 v_position;
+in vec2 v_uv;
 uniform int u_smooth;
-uniform int u_color_mode;  // 0 uniform, 1 per vertex, 2 per face
+uniform int u_color_mode;  // 0 uniform, 1 per vertex, 2 per face, 3 texture image
 uniform vec3 u_color;
 uniform samplerBuffer u_face_colors;
+uniform sampler2D u_texture;
+uniform int u_textured;
 out vec4 frag_color;
 void main() {
   vec3 n = u_smooth != 0 ? normalize(v_normal) : normalize(cross(dFdx(v_position), dFdy(v_position)));
@@ -45,6 +55,7 @@ void main() {
   vec3 h = normalize(key + to_eye);
   float specular = 0.18 * pow(max(dot(n, h), 0.0), 40.0);
   vec3 base = u_color_mode == 1 ? v_color : u_color_mode == 2 ? texelFetch(u_face_colors, gl_PrimitiveID).rgb : u_color;
+  if (u_color_mode == 3 && u_textured != 0) base = texture(u_texture, v_uv).rgb;
   frag_color = vec4(base * (0.22 + diffuse) + vec3(specular), 1.0);
 }
 )";
@@ -100,9 +111,13 @@ void set_matrices(GLuint program, const Mat4& view, const Mat4& projection) {
 }  // namespace
 
 void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                     const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex) {
+                     const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex,
+                     const SceneTexture* texture) {
   color_ = color;
-  color_mode_ = colors.empty()                                   ? 0
+  const bool textured =
+      texture && texture->face_image.size() == faces.size() && texture->corner_uv.size() == 6 * faces.size();
+  color_mode_ = textured                                         ? 3
+                : colors.empty()                                 ? 0
                 : per_vertex && colors.size() == vertices.size() ? 1
                 : !per_vertex && colors.size() == faces.size()   ? 2
                                                                  : 0;
@@ -114,20 +129,31 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
   }
   glBindVertexArray(vao_.get());
   vertex_count_ = static_cast<int>(vertices.size());
-  std::vector<int> gpu_index(vertices.size(), -1);
+  std::vector<GLuint> idx(3 * faces.size());
   order_.clear();
-  order_.reserve(vertices.size());
-  for (const Face& f : faces)
-    for (int v : f)
-      if (gpu_index[static_cast<std::size_t>(v)] < 0) {
-        gpu_index[static_cast<std::size_t>(v)] = static_cast<int>(order_.size());
-        order_.push_back(v);
+  ranges_.clear();
+  images_.clear();
+  if (textured) {
+    upload_texture(*texture, faces, idx);
+  } else {
+    std::vector<int> gpu_index(vertices.size(), -1);
+    order_.reserve(vertices.size());
+    for (const Face& f : faces)
+      for (int v : f)
+        if (gpu_index[static_cast<std::size_t>(v)] < 0) {
+          gpu_index[static_cast<std::size_t>(v)] = static_cast<int>(order_.size());
+          order_.push_back(v);
+        }
+    for (std::size_t v = 0; v < vertices.size(); ++v)
+      if (gpu_index[v] < 0) {
+        gpu_index[v] = static_cast<int>(order_.size());
+        order_.push_back(static_cast<int>(v));
       }
-  for (std::size_t v = 0; v < vertices.size(); ++v)
-    if (gpu_index[v] < 0) {
-      gpu_index[v] = static_cast<int>(order_.size());
-      order_.push_back(static_cast<int>(v));
-    }
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      for (int c = 0; c < 3; ++c)
+        idx[3 * f + c] = static_cast<GLuint>(gpu_index[static_cast<std::size_t>(faces[f][c])]);
+    glDisableVertexAttribArray(3);
+  }
   update_positions(vertices, faces);
   glBindVertexArray(vao_.get());
   glBindBuffer(GL_ARRAY_BUFFER, positions_.get());
@@ -145,10 +171,6 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
     glDisableVertexAttribArray(2);
     glVertexAttrib3f(2, color.x(), color.y(), color.z());
   }
-  std::vector<GLuint> idx(3 * faces.size());
-  for (std::size_t f = 0; f < faces.size(); ++f)
-    for (int c = 0; c < 3; ++c)
-      idx[3 * f + c] = static_cast<GLuint>(gpu_index[static_cast<std::size_t>(faces[f][c])]);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices_.get());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)), idx.data(),
                GL_STATIC_DRAW);
@@ -182,8 +204,8 @@ void GpuMesh::upload(const std::vector<Vec3>& vertices, const std::vector<Face>&
 
 void GpuMesh::update_positions(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
   const std::vector<Vec3> normals = vertex_normals(vertices, faces);
-  std::vector<float> data(6 * vertices.size());
-  for (std::size_t i = 0; i < vertices.size(); ++i) {
+  std::vector<float> data(6 * order_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) {
     const auto v = static_cast<std::size_t>(order_[i]);
     put(&data[6 * i], vertices[v]);
     put(&data[6 * i + 3], normals[v]);
@@ -194,10 +216,87 @@ void GpuMesh::update_positions(const std::vector<Vec3>& vertices, const std::vec
   glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
-void GpuMesh::draw() const {
+void GpuMesh::upload_texture(const SceneTexture& texture, const std::vector<Face>& faces,
+                             std::vector<GLuint>& idx) {
+  // Faces in groups by image, each group one draw call.
+  std::vector<int> face_order(faces.size());
+  std::iota(face_order.begin(), face_order.end(), 0);
+  std::stable_sort(face_order.begin(), face_order.end(),
+                   [&](int a, int b) { return texture.face_image[a] < texture.face_image[b]; });
+  // One GPU vertex per (vertex, texture coordinate) pair that some corner uses.
+  struct Key {
+    int vertex;
+    float u, v;
+    bool operator==(const Key& o) const { return vertex == o.vertex && u == o.u && v == o.v; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint32_t u = 0, v = 0;
+      std::memcpy(&u, &k.u, 4);
+      std::memcpy(&v, &k.v, 4);
+      return std::hash<std::uint64_t>()((static_cast<std::uint64_t>(k.vertex) << 32) ^ (u * 2654435761u) ^ v);
+    }
+  };
+  std::unordered_map<Key, GLuint, KeyHash> gpu_index;
+  gpu_index.reserve(3 * faces.size());
+  std::vector<float> uv;
+  for (std::size_t i = 0; i < face_order.size(); ++i) {
+    const std::size_t f = static_cast<std::size_t>(face_order[i]);
+    const int image = texture.face_image[f];
+    if (ranges_.empty() || ranges_.back().image != image) ranges_.push_back({image, static_cast<int>(i), 0});
+    ++ranges_.back().count;
+    for (int c = 0; c < 3; ++c) {
+      const Key key{faces[f][c], texture.corner_uv[6 * f + 2 * c], texture.corner_uv[6 * f + 2 * c + 1]};
+      const auto [it, added] = gpu_index.emplace(key, static_cast<GLuint>(order_.size()));
+      if (added) {
+        order_.push_back(key.vertex);
+        uv.insert(uv.end(), {key.u, key.v});
+      }
+      idx[3 * i + c] = it->second;
+    }
+  }
+  if (!uvs_) uvs_ = make_buffer();
+  glBindBuffer(GL_ARRAY_BUFFER, uvs_.get());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uv.size() * sizeof(float)), uv.data(),
+               GL_STATIC_DRAW);
+  attribute(3, 2, 2 * sizeof(float), 0);
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  for (const TextureImage& image : texture.images) {
+    images_.push_back(make_texture());
+    glBindTexture(GL_TEXTURE_2D, images_.back().get());
+    // An image larger than the GL takes is left empty (black) rather than failing the upload.
+    if (image.width <= max_size && image.height <= max_size) {
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                   image.rgba.data());
+      glGenerateMipmap(GL_TEXTURE_2D);
+    }
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);  // OBJ's texture coordinates repeat
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  }
+  glBindTexture(GL_TEXTURE_2D, 0);
+}
+
+void GpuMesh::draw(GLint textured_uniform) const {
   if (triangles_ == 0) return;
   glBindVertexArray(vao_.get());
-  glDrawElements(GL_TRIANGLES, 3 * triangles_, GL_UNSIGNED_INT, nullptr);
+  if (color_mode_ == 3 && textured_uniform >= 0) {
+    glActiveTexture(GL_TEXTURE1);
+    for (const ImageRange& r : ranges_) {
+      const bool has = r.image >= 0 && static_cast<std::size_t>(r.image) < images_.size();
+      glUniform1i(textured_uniform, has ? 1 : 0);
+      glBindTexture(GL_TEXTURE_2D, has ? images_[static_cast<std::size_t>(r.image)].get() : 0);
+      glDrawElements(GL_TRIANGLES, 3 * r.count, GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(3 * static_cast<std::size_t>(r.first) * sizeof(GLuint)));
+    }
+    glBindTexture(GL_TEXTURE_2D, 0);
+    glActiveTexture(GL_TEXTURE0);
+  } else {
+    glDrawElements(GL_TRIANGLES, 3 * triangles_, GL_UNSIGNED_INT, nullptr);
+  }
   glBindVertexArray(0);
 }
 
@@ -268,7 +367,8 @@ void Renderer::draw_mesh(const GpuMesh& mesh, const MeshStyle& style) {
   glPolygonOffset(1.0f, 1.0f);
   // Back faces of a closed mesh are hidden anyway: culling them halves llvmpipe's triangle setup.
   if (mesh.closed()) glEnable(GL_CULL_FACE);
-  mesh.draw();
+  glUniform1i(glGetUniformLocation(p, "u_texture"), 1);
+  mesh.draw(glGetUniformLocation(p, "u_textured"));
   glDisable(GL_CULL_FACE);
   glDisable(GL_POLYGON_OFFSET_FILL);
   glBindTexture(GL_TEXTURE_BUFFER, 0);

@@ -10,6 +10,7 @@
 #include "camera.h"
 #include "gl.h"
 #include "strata/mesh.h"
+#include "texture.h"
 
 namespace strata::viewer {
 
@@ -24,18 +25,23 @@ class GpuMesh {
  public:
   //! Uploads \p vertices / \p faces. \p colors: empty (all \p color), or one per face, or one
   //! per vertex if \p per_vertex (a tetrahedron has as many of each); any other count draws
-  //! \p color. \pre face indices are in range.
+  //! \p color. With \p texture (faces.size() faces), its images are drawn instead of colours: a
+  //! vertex is stored once per texture coordinate its corners use (texture seams), and faces are
+  //! drawn in groups by image. \pre face indices are in range.
   void upload(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-              const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex = false);
+              const std::vector<Rgb>& colors, const Rgb& color, bool per_vertex = false,
+              const SceneTexture* texture = nullptr);
   //! New positions for the same vertices and faces (normals recomputed).
   //! \pre vertices.size() is the uploaded vertex count.
   void update_positions(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
-  //! Binds the state and issues the draw call(s) of the fill pass; used by Renderer.
-  void draw() const;
+  //! Binds the state and issues the draw call(s) of the fill pass; used by Renderer. Textured
+  //! (color_mode() 3) with \p textured_uniform >= 0: one call per image, with its texture bound
+  //! on unit 1 and the uniform set to whether the group has one; else one call for all faces.
+  void draw(GLint textured_uniform = -1) const;
   int triangles() const { return triangles_; }
   int vertices() const { return vertex_count_; }
   bool empty() const { return triangles_ == 0; }
-  //! 0: uniform colour, 1: per vertex, 2: per face.
+  //! 0: uniform colour, 1: per vertex, 2: per face, 3: texture images.
   int color_mode() const { return color_mode_; }
   //! Every edge has exactly two faces: back faces are culled.
   bool closed() const { return closed_; }
@@ -43,7 +49,15 @@ class GpuMesh {
   GLuint face_color_texture() const { return face_texture_.get(); }
 
  private:
-  GlName vao_, positions_, colors_, indices_, face_buffer_, face_texture_;
+  GlName vao_, positions_, colors_, indices_, face_buffer_, face_texture_, uvs_;
+  std::vector<GlName> images_;
+  struct ImageRange {
+    int image, first, count;  // image -1: no texture; first and count in triangles
+  };
+  std::vector<ImageRange> ranges_;
+  // Texture mode: the GPU vertices, index buffer (faces grouped by image), texture coordinates
+  // and images.
+  void upload_texture(const SceneTexture& texture, const std::vector<Face>& faces, std::vector<GLuint>& idx);
   // Vertices are stored in order of first use by the faces (locality for llvmpipe's vertex
   // cache): order_[gpu index] = mesh index.
   std::vector<int> order_;

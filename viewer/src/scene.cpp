@@ -20,6 +20,8 @@ SceneData make_scene(const Document& document, const SceneSettings& settings) {
   } else if (settings.color == ColorMode::Scan) {
     s.colors = vertex_colors(document.attributes(s.shown_band));
     s.vertex_colors = true;
+  } else if (settings.color == ColorMode::Texture) {
+    s.texture = document.texture(s.shown_band);  // the vectors' mesh has the same faces
   }
   if (settings.cage || s.shown_band == 0) s.net = document.control_net();
   return s;

@@ -23,7 +23,9 @@ struct SceneData {
   TriMesh mesh;
   std::vector<Rgb> colors;     //!< per face, per vertex (vertex_colors), or empty (surface colour)
   bool vertex_colors = false;  //!< colors are per vertex (ColorMode::Scan)
-  std::vector<Vec3> net;       //!< control net segments (pairs), or empty
+  //! ColorMode::Texture: the band's texture (Document::texture()), or nullptr.
+  std::shared_ptr<const SceneTexture> texture;
+  std::vector<Vec3> net;  //!< control net segments (pairs), or empty
   std::size_t intersection_pairs = 0;
   double max_error = 0.0;  //!< max relative prism error (error map), 0 otherwise
   int shown_band = 0;

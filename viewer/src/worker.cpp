@@ -97,9 +97,11 @@ void Worker::publish(bool commit, std::string message, bool error) {
   for (char v : visible) any = any || v;
   if (!any) visible[static_cast<std::size_t>(n - 1)] = 1;
   // Colour maps cost a solve-sized pass (intersections: a BVH search): not during drag steps. The
-  // scan's own colours cost nothing and do not change with the positions: they stay.
+  // scan's own colours and texture cost nothing (the texture is decoded once) and do not change
+  // with the positions: they stay.
   const bool dragging = (doc_.is_model() && doc_.model().dragging()) || mesh_dragging_;
-  const ColorMode drag_color = view_.color == ColorMode::Scan ? ColorMode::Scan : ColorMode::None;
+  const ColorMode drag_color =
+      view_.color == ColorMode::Scan || view_.color == ColorMode::Texture ? view_.color : ColorMode::None;
   for (int k = 0; k < n; ++k) {
     if (!visible[static_cast<std::size_t>(k)]) continue;
     SceneSettings settings;

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Pixel tests of strata-viewer's headless mode (EGL surfaceless; no display needed):
 #   usage: pixel_tests.sh VIEWER REPO_ROOT
-# Renders the bumps-75 detail mesh (3k faces) and a 3-band model built from it, then checks
+# Renders the bumps-75 detail mesh (3k faces), a 3-band model built from it and a textured plane
+# (textured_plane.py), then checks
 # with png_stats.py: the model is drawn, muting a band changes the image (and amplitude 1 does
 # not), the prism-error colour map shows red after an edit rebuilt by displacement vectors and
 # none at rest, no GL errors, and bad inputs exit 1 with a message and leave the PNG untouched.
@@ -142,6 +143,37 @@ cp "$T/tet.png" "$T/textured/maps/t.png"
 if cmp -s "$T/textured/bumps.mtl" "$T/exported/bumps.mtl" && cmp -s "$T/textured/maps/t.png" "$T/exported/maps/t.png"; then
   pass "--export writes the material library and its image beside the mesh"; else
   fail "--export: the library or image is missing: $(ls -R "$T/exported") $(cat "$T/tex.err")"; fi
+# A textured scan (textured_plane.py: red on the left of its texture, blue on the right) opens
+# showing its texture, the right way round and up; texture seams (vt per face corner) too; a model
+# built from it carries the images (drawn from a directory without them); an image that does not
+# decode is named, its faces drawn in the surface colour.
+python3 "$HERE/textured_plane.py" "$T/plane"
+PLANE=(--size 320x240 --view front)
+r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_tex.png" "${PLANE[@]}")
+s=$($STATS "$T/plane_tex.png")
+check "a textured scan opens showing its texture" \
+  "s['reddish'] > 0.08 and s['bluish'] > 0.08 and s['red_x'] < 0.5 < s['blue_x'] and r['textured_faces'] == 400 and r['texture_problems'] == [] and r['gl_errors'] == 0" "$s" "$r"
+r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_none.png" "${PLANE[@]}" --color none)
+s=$($STATS "$T/plane_none.png")
+check "--color none: no texture" "s['reddish'] == 0 and s['bluish'] == 0 and s['foreground'] > 0.1" "$s"
+r=$("$VIEWER" "$T/plane/upright.obj" --screenshot "$T/plane_up.png" "${PLANE[@]}" --color texture)
+s=$($STATS "$T/plane_up.png")
+check "the texture's top row is drawn at v = 1 (OBJ's)" "0 <= s['blue_y'] < 0.5 < s['red_y']" "$s"
+r=$("$VIEWER" "$T/plane/seams.obj" --screenshot "$T/plane_seams.png" "${PLANE[@]}")
+s=$($STATS "$T/plane_seams.png")
+p=$($STATS "$T/plane_tex.png")
+check "texture seams: each side of the seam its own coordinates (no blend between them)" \
+  "s['red_x'] < 0.5 < s['blue_x'] and s['reddish'] + s['bluish'] > $(field "$p" reddish) + $(field "$p" bluish) and r['textured_faces'] == 400" "$s" "$r"
+mkdir -p "$T/plane_model"
+"$VIEWER" "$T/plane/plane.obj" --layers 2 --save "$T/plane_model/m.strata" --screenshot "$T/plane_built.png" "${PLANE[@]}" >/dev/null
+r=$("$VIEWER" "$T/plane_model/m.strata" --screenshot "$T/plane_model.png" "${PLANE[@]}")
+s=$($STATS "$T/plane_model.png" "$T/plane_tex.png")
+check "a model carries the texture (opened where the images are not)" "s['changed'] == 0 and r['textured_faces'] == 400" "$s" "$r"
+printf 'not an image' >"$T/plane/maps/rb.png"
+r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_bad.png" "${PLANE[@]}" --color texture)
+s=$($STATS "$T/plane_bad.png" "$T/plane_none.png")
+check "an image that does not decode: named, its faces in the surface colour" \
+  "s['changed'] == 0 and len(r['texture_problems']) == 1 and 'maps/rb.png' in r['texture_problems'][0]" "$s" "$r"
 r=$("$VIEWER" "$MESH" --screenshot "$T/plain_scan.png" "${COMMON[@]}" --color scan)
 s=$($STATS "$T/plain_scan.png" "$T/scan.png")
 check "a scan without colours is drawn in the surface colour" "s['changed'] == 0" "$s"

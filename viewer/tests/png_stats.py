@@ -4,7 +4,9 @@
 png_stats.py IMAGE.png [OTHER.png]  prints one JSON object:
   width, height; foreground: fraction of pixels differing from the background (the top-left
   pixel's colour) by more than 24 in some channel; centre_foreground: the same over the central
-  10% x 10% box; reddish: fraction of pixels with R > 150, G < 110, B < 110; and with OTHER.png,
+  10% x 10% box; reddish: fraction of pixels with R > 150, G < 110, B < 110 (bluish: B > 150,
+  R < 110, G < 110); red_x, blue_x (red_y, blue_y): the mean x of those pixels over the width (y
+  over the height, 0 at the top; -1: none); and with OTHER.png,
   changed: fraction of pixels differing from OTHER by more than 24 in some channel.
 Decodes 8-bit non-interlaced greyscale/RGB/RGBA PNGs (what stb_image_write produces).
 """
@@ -61,6 +63,11 @@ def read_png(path):
     return width, height, pixels
 
 
+def mean_x(px, w, test):
+    xs = [i % w for i, p in enumerate(px) if test(p)]
+    return sum(xs) / len(xs) / w if xs else -1.0
+
+
 def differs(p, q):
     return max(abs(p[0] - q[0]), abs(p[1] - q[1]), abs(p[2] - q[2])) > 24
 
@@ -77,6 +84,14 @@ def main():
         "foreground": fg / len(px),
         "centre_foreground": sum(1 for p in centre if differs(p, bg)) / len(centre),
         "reddish": sum(1 for p in px if p[0] > 150 and p[1] < 110 and p[2] < 110) / len(px),
+        "bluish": sum(1 for p in px if p[2] > 150 and p[0] < 110 and p[1] < 110) / len(px),
+        # Where the red and the blue pixels lie across the image: the mean x of each, 0 to 1.
+        "red_x": mean_x(px, w, lambda p: p[0] > 150 and p[1] < 110 and p[2] < 110),
+        "blue_x": mean_x(px, w, lambda p: p[2] > 150 and p[0] < 110 and p[1] < 110),
+        "red_y": mean_x([px[(i % h) * w + i // h] for i in range(w * h)], h,
+                        lambda p: p[0] > 150 and p[1] < 110 and p[2] < 110),
+        "blue_y": mean_x([px[(i % h) * w + i // h] for i in range(w * h)], h,
+                         lambda p: p[2] > 150 and p[0] < 110 and p[1] < 110),
     }
     if len(sys.argv) > 2:
         w2, h2, px2 = read_png(sys.argv[2])
