@@ -121,7 +121,7 @@ App::App(const Options& options, GLFWwindow* window) : options_(options), window
   if (!options.script_drag.empty()) script_ = read_edit_script(options.script_drag);
   if (!options.color_given) view_.color = initial_color_mode(document);
   copy_to(open_path_, options.input);
-  worker_ = std::make_unique<Worker>(std::move(document));
+  worker_ = std::make_unique<Worker>(std::move(document), view_);
   push_view();
 }
 
@@ -149,9 +149,13 @@ int App::run() {
     if (scripted) {
       frame_ms_.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
       frame_in_drag_.push_back(dragging_ ? 1 : 0);
-      bool coloured = false;
-      for (const auto& p : panels_) coloured = coloured || p->mesh.color_mode() == 1;
+      bool coloured = false, textured = false;
+      for (const auto& p : panels_) {
+        coloured = coloured || p->mesh.color_mode() == 1;
+        textured = textured || p->mesh.color_mode() == 3;
+      }
       frame_scan_colours_.push_back(coloured ? 1 : 0);
+      frame_texture_.push_back(textured ? 1 : 0);
       frame_drag_step_.push_back(showing_drag_step_ ? 1 : 0);
       if (script_done_) break;
     }
@@ -177,14 +181,16 @@ int App::run() {
     r["frames"] = stats(all);
     r["drag_frames"] = stats(drag_ms);
     // Frames that showed a drag step's preview, and of those the ones that drew the scan's own
-    // colours (--color scan keeps them on during drags).
-    long long previews = 0, coloured = 0;
+    // colours (--color scan keeps them on during drags), or its texture (--color texture).
+    long long previews = 0, coloured = 0, textured = 0;
     for (std::size_t i = 0; i < frame_ms_.size(); ++i) {
       previews += frame_drag_step_[i];
       coloured += frame_drag_step_[i] && frame_scan_colours_[i];
+      textured += frame_drag_step_[i] && frame_texture_[i];
     }
     r["preview_frames"] = previews;
     r["preview_frames_scan_colours"] = coloured;
+    r["preview_frames_texture"] = textured;
     r["drag_steps_solved"] = worker_->drag_steps();
     r["drag_step_mean_s"] =
         worker_->drag_seconds() / static_cast<double>(std::max(1LL, worker_->drag_steps()));
@@ -263,6 +269,7 @@ void App::take_snapshot() {
     status_error_ = s->error;
   }
   if (s->committed) {
+    if (!committed_) first_picture_frame_ = frames_;
     committed_ = s->committed;
     amplitudes_.assign(static_cast<std::size_t>(committed_->num_bands()), 1.0f);
     for (int k = 0; k < committed_->num_bands(); ++k)
@@ -917,8 +924,9 @@ void App::on_drop(const std::string& path) {
 void App::run_script_step() {
   // Each edit step: begin, options.frames update steps (one per frame, the worker taking the
   // newest), end; then frames until the worker is idle.
-  // Starts once the first picture is up (its upload and shader compiles are not drag frames).
-  if (script_done_ || !committed_ || frames_ < 3) return;
+  // Starts once the first picture is up (its upload and shader compiles are not drag frames): 3
+  // frames in, and 2 after the frame that uploaded it.
+  if (script_done_ || !committed_ || frames_ < 3 || frames_ < first_picture_frame_ + 2) return;
   if (script_waiting_) {
     if (!worker_->busy()) {
       script_waiting_ = false;

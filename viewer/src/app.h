@@ -161,9 +161,11 @@ class App {
   std::array<double, 5> phase_s_{};  // snapshot, ui, scene, imgui draw, swap (benchmark)
   std::vector<char> frame_in_drag_;
   std::vector<char> frame_scan_colours_;  // per scripted frame: a panel drew per-vertex colours
+  std::vector<char> frame_texture_;       // per scripted frame: a panel drew a texture
   std::vector<char> frame_drag_step_;     // per scripted frame: the panels showed a drag step's preview
   bool showing_drag_step_ = false;
   long long frames_ = 0;
+  long long first_picture_frame_ = -1;  // the frame that uploaded the first snapshot
 };
 
 }  // namespace strata::viewer

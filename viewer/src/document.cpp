@@ -112,10 +112,25 @@ std::shared_ptr<const SceneTexture> Document::texture(int k) const {
   const MeshAttributes& a = attributes(k);
   textures_.resize(static_cast<std::size_t>(num_bands()));
   CachedTexture& c = textures_[static_cast<std::size_t>(k)];
-  if (c.source != &a || c.files != a.files.data()) {
-    c.texture = make_scene_texture(a, model_ ? model_->band(k).mesh.faces : mesh_.faces);
-    c.source = &a;
-    c.files = a.files.data();
+  const std::vector<Face>& faces = model_ ? model_->band(k).mesh.faces : mesh_.faces;
+  // The same values; the files compared by their shared contents' address, not byte by byte.
+  const auto same_files = [](const std::vector<CompanionFile>& x, const std::vector<CompanionFile>& y) {
+    return std::equal(
+        x.begin(), x.end(), y.begin(), y.end(),
+        [](const CompanionFile& p, const CompanionFile& q) { return p.name == q.name && p.data == q.data; });
+  };
+  const MeshAttributes& s = c.source;
+  const bool same = c.made && c.faces == faces.size() && same_files(s.files, a.files) &&
+                    s.texcoords == a.texcoords && s.corner_uv == a.corner_uv &&
+                    s.corner_uv_index == a.corner_uv_index && s.face_materials == a.face_materials &&
+                    s.material_names == a.material_names && s.material_library == a.material_library &&
+                    s.texture_files == a.texture_files && s.face_textures == a.face_textures;
+  if (!same) {
+    c.texture = make_scene_texture(a, faces);
+    c.source = a;
+    c.source.colors.clear();  // not needed for the comparison
+    c.faces = faces.size();
+    c.made = true;
   }
   return c.texture;
 }

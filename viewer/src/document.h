@@ -58,8 +58,9 @@ class Document {
   //! of a model.
   const MeshAttributes& attributes(int k) const;
   //! Band k's texture, decoded for drawing (make_scene_texture()), or nullptr if it has none.
-  //! Decoded once and kept while the band's attributes stay where they are (a drag's end
-  //! replaces the model, and the next call decodes anew). Not thread-safe: one thread per Document.
+  //! Decoded once and kept while the band's attributes are the same (their values, and the same
+  //! file contents: copies of a model share them), so that drag steps, which copy bands, do not
+  //! decode it anew. Not thread-safe: one thread per Document.
   std::shared_ptr<const SceneTexture> texture(int k) const;
   //! Where selections of band k are evaluated: cage points for band 0 of a model, else vertices.
   const std::vector<Vec3>& band_points(int k) const;
@@ -101,9 +102,10 @@ class Document {
   std::vector<Vec3> mesh_vectors_;          // plain mesh: the last edit by displacement vectors
   std::vector<double> mesh_vector_errors_;  // plain mesh: their prism errors, as mesh_errors_
   struct CachedTexture {
-    const MeshAttributes* source = nullptr;  // the attributes it was made from, where they were
-    const CompanionFile* files = nullptr;
-    std::shared_ptr<const SceneTexture> texture;
+    MeshAttributes source;  // the attributes it was made from (the files' bytes shared, not copied)
+    std::size_t faces = 0;
+    bool made = false;
+    std::shared_ptr<const SceneTexture> texture;  // nullptr: the band has none
   };
   mutable std::vector<CachedTexture> textures_;  // per band
 };

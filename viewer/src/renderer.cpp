@@ -262,16 +262,17 @@ void GpuMesh::upload_texture(const SceneTexture& texture, const std::vector<Face
   attribute(3, 2, 2 * sizeof(float), 0);
   GLint max_size = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   for (const TextureImage& image : texture.images) {
     images_.push_back(make_texture());
     glBindTexture(GL_TEXTURE_2D, images_.back().get());
-    // An image larger than the GL takes is left empty (black) rather than failing the upload.
-    if (image.width <= max_size && image.height <= max_size) {
-      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-                   image.rgba.data());
-      glGenerateMipmap(GL_TEXTURE_2D);
-    }
+    // Levels larger than the GL takes are skipped: the image is drawn from its smaller mipmaps.
+    int level = 0;
+    for (const TextureLevel& l : image.levels)
+      if (l.width <= max_size && l.height <= max_size)
+        glTexImage2D(GL_TEXTURE_2D, level++, GL_RGBA8, l.width, l.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                     l.rgba.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, std::max(0, level - 1));
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);  // OBJ's texture coordinates repeat

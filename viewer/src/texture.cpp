@@ -10,6 +10,29 @@
 
 namespace strata::viewer {
 
+namespace {
+// The next mipmap level: each pixel the mean of a 2x2 block (of the last row or column where the
+// size is odd).
+TextureLevel half(const TextureLevel& in) {
+  TextureLevel out;
+  out.width = std::max(1, in.width / 2);
+  out.height = std::max(1, in.height / 2);
+  out.rgba.resize(4 * static_cast<std::size_t>(out.width) * out.height);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      const int x0 = std::min(2 * x, in.width - 1), x1 = std::min(2 * x + 1, in.width - 1);
+      const int y0 = std::min(2 * y, in.height - 1), y1 = std::min(2 * y + 1, in.height - 1);
+      auto at = [&](int px, int py, int c) {
+        return static_cast<int>(in.rgba[4 * (static_cast<std::size_t>(py) * in.width + px) + c]);
+      };
+      for (int c = 0; c < 4; ++c)
+        out.rgba[4 * (static_cast<std::size_t>(y) * out.width + x) + c] = static_cast<std::uint8_t>(
+            (at(x0, y0, c) + at(x1, y0, c) + at(x0, y1, c) + at(x1, y1, c) + 2) / 4);
+    }
+  return out;
+}
+}  // namespace
+
 bool has_texture(const MeshAttributes& attributes) {
   return (!attributes.texcoords.empty() || !attributes.corner_uv_index.empty()) &&
          !face_texture_files(attributes).empty();
@@ -37,15 +60,19 @@ std::shared_ptr<const SceneTexture> make_scene_texture(const MeshAttributes& att
         t->problems.push_back(attributes.files[file].name + ": " + stbi_failure_reason());
         image_of_file[file] = -1;
       } else {
-        TextureImage image;
-        image.width = w, image.height = h;
-        image.rgba.resize(4 * static_cast<std::size_t>(w) * h);
+        TextureLevel level;
+        level.width = w, level.height = h;
+        level.rgba.resize(4 * static_cast<std::size_t>(w) * h);
         // The image's top row first in the file; OpenGL's first row is v = 0, the bottom.
         for (int y = 0; y < h; ++y)
-          std::memcpy(&image.rgba[4 * static_cast<std::size_t>(w) * y],
+          std::memcpy(&level.rgba[4 * static_cast<std::size_t>(w) * y],
                       pixels + 4 * static_cast<std::size_t>(w) * (h - 1 - y),
                       4 * static_cast<std::size_t>(w));
         stbi_image_free(pixels);
+        TextureImage image;
+        image.levels.push_back(std::move(level));
+        while (image.levels.back().width > 1 || image.levels.back().height > 1)
+          image.levels.push_back(half(image.levels.back()));
         image_of_file[file] = static_cast<int>(t->images.size());
         t->images.push_back(std::move(image));
       }

@@ -15,7 +15,7 @@
 
 namespace strata::viewer {
 
-Worker::Worker(Document document) : doc_(std::move(document)) {
+Worker::Worker(Document document, const ViewSettings& view) : doc_(std::move(document)), view_(view) {
   publish(true, "", false);
   thread_ = std::thread([this] { run(); });
 }

@@ -45,7 +45,10 @@ struct ViewSettings {
 
 class Worker {
  public:
-  explicit Worker(Document document);
+  //! Publishes the first snapshot of \p document as \p view shows it (its colour map too: a
+  //! texture is decoded here, so that the first picture is the one asked for), then starts the
+  //! thread.
+  explicit Worker(Document document, const ViewSettings& view = {});
   ~Worker();  //!< stops the thread after the running job (pending ones are dropped)
   Worker(const Worker&) = delete;
   Worker& operator=(const Worker&) = delete;

@@ -3,8 +3,10 @@
 # (the bear scan, 1-to-4 subdivided), in a 1280x800 window under Xvfb on llvmpipe, while the
 # reconstruction runs on the worker thread. Prints the benchmark JSON (frame_ms omitted) and
 # fails if a drag frame took longer than 50 ms. With "scan" as the fourth argument the scan gets
-# vertex colours (COFF) and the drag shows them (--color scan).
-#   usage: frame_benchmark.sh VIEWER REPO_ROOT [FRAMES] [scan]
+# vertex colours (COFF) and the drag shows them (--color scan); with "texture", texture
+# coordinates and a 2048 x 2048 image (OBJ and a material library), and the drag shows it
+# (--color texture).
+#   usage: frame_benchmark.sh VIEWER REPO_ROOT [FRAMES] [scan|texture]
 set -euo pipefail
 VIEWER=$1
 ROOT=$2
@@ -29,7 +31,37 @@ open(sys.argv[1], "w").write("\n".join(lines))
 PY
   EXTRA=(--color scan)
 fi
-"$VIEWER" "$T/bear110k.off" --layers 3 --save "$T/bear110k.strata" --screenshot "$T/rest.png" --size 320x240 >/dev/null
+SCAN=$T/bear110k.off
+if [ "$COLOUR" = texture ]; then
+  # As OBJ with texture coordinates per vertex (the angle about the y axis, and y) and a 2048 x
+  # 2048 checker image through a material library.
+  python3 - "$T/bear110k.off" "$T" <<'PY'
+import math, struct, sys, zlib
+lines = open(sys.argv[1]).read().split("\n")
+n, m = (int(t) for t in lines[1].split()[:2])
+v = [[float(t) for t in lines[i].split()[:3]] for i in range(2, 2 + n)]
+ys = [p[1] for p in v]
+lo, hi = min(ys), max(ys)
+with open(sys.argv[2] + "/bear110k.obj", "w") as o:
+    o.write("mtllib bear.mtl\n")
+    for p in v: o.write("v %r %r %r\n" % tuple(p))
+    for p in v: o.write("vt %.6f %.6f\n" % (math.atan2(p[2], p[0]) / (2 * math.pi) + 0.5, (p[1] - lo) / (hi - lo)))
+    o.write("usemtl fur\n")
+    for i in range(2 + n, 2 + n + m):
+        t = [int(x) + 1 for x in lines[i].split()[1:4]]
+        o.write("f %d/%d %d/%d %d/%d\n" % (t[0], t[0], t[1], t[1], t[2], t[2]))
+open(sys.argv[2] + "/bear.mtl", "w").write("newmtl fur\nmap_Kd checker.png\n")
+W = 2048
+row_a = bytes(b for x in range(W) for b in ((200, 120, 40) if (x // 64) % 2 else (40, 90, 200)))
+row_b = bytes(b for x in range(W) for b in ((40, 90, 200) if (x // 64) % 2 else (200, 120, 40)))
+raw = b"".join(b"\x00" + (row_a if (y // 64) % 2 else row_b) for y in range(W))
+def chunk(k, d): return struct.pack(">I", len(d)) + k + d + struct.pack(">I", zlib.crc32(k + d) & 0xffffffff)
+open(sys.argv[2] + "/checker.png", "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", W, W, 8, 2, 0, 0, 0)) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+PY
+  SCAN=$T/bear110k.obj
+  EXTRA=(--color texture)
+fi
+"$VIEWER" "$SCAN" --layers 3 --save "$T/bear110k.strata" --screenshot "$T/rest.png" --size 320x240 >/dev/null
 cat > "$T/arm.json" <<'JSON'
 {"region": {"box": {"min": [0.2, 0.0, -1], "max": [1, 0.55, 1]}},
  "handle": {"box": {"min": [0.45, 0.05, -1], "max": [1, 0.5, 1]}},

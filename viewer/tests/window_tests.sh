@@ -46,6 +46,26 @@ assert r['gl_errors'] == 0, 'GL errors'
 assert r['preview_frames'] > 0, 'no drag preview was shown'
 assert r['preview_frames_scan_colours'] == r['preview_frames'], 'the scan colours went off during the drag'
 "
+# The scan's texture stays on during the drag too (--color texture; textured_plane.py's plane,
+# its right half bent up about the y axis).
+python3 "$(dirname "$0")/textured_plane.py" "$T/plane"
+cat >"$T/fold.json" <<'JSON'
+{"region": {"halfspace": {"point": [1.2, 0, 0], "normal": [1, 0, 0]}},
+ "handle": {"halfspace": {"point": [1.8, 0, 0], "normal": [1, 0, 0]}},
+ "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 30, "pivot": [1.2, 0, 0]}}}
+JSON
+"$VIEWER" "$T/plane/plane.obj" --layers 2 --save "$T/plane.strata" --screenshot "$T/plane_rest.png" --size 320x240 >/dev/null
+json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$T/plane.strata" --band 1 --script-drag "$T/fold.json" \
+  --frames 30 --benchmark --size 800x600 --color texture --screenshot "$T/plane_window.png")
+echo "$json" | python3 -c "
+import json, sys
+r = json.loads(sys.stdin.read())
+print('window, texture: %d of %d frames that showed a drag preview drew it'
+      % (r['preview_frames_texture'], r['preview_frames']))
+assert r['gl_errors'] == 0, 'GL errors'
+assert r['preview_frames'] > 0, 'no drag preview was shown'
+assert r['preview_frames_texture'] == r['preview_frames'], 'the texture went off during the drag'
+"
 s=$(python3 "$(dirname "$0")/png_stats.py" "$T/window.png")
 python3 -c "
 import json, sys
