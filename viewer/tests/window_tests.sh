@@ -31,21 +31,26 @@ assert d['count'] >= 19, 'drag frames missing'
 assert r['drag_steps_solved'] >= 1, 'no drag step solved'
 assert r['status'].startswith('exact solve'), 'the exact solve did not finish: ' + r['status']
 "
+# drag_keeps MODEL BAND SCRIPT FRAMES COLOUR KEY WHAT: every frame of a scripted drag that shows a
+# preview draws the colour map (the benchmark's preview_frames_KEY counts them).
+drag_keeps() {
+  local json
+  json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$1" --band "$2" --script-drag "$3" \
+    --frames "$4" --benchmark --size 800x600 --color "$5" --screenshot "$T/$5_window.png")
+  echo "$json" | python3 -c "
+import json, sys
+r = json.loads(sys.stdin.read())
+print('window, $7: %d of %d frames that showed a drag preview drew it' % (r['preview_frames_$6'], r['preview_frames']))
+assert r['gl_errors'] == 0, 'GL errors'
+assert r['preview_frames'] > 0, 'no drag preview was shown'
+assert r['preview_frames_$6'] == r['preview_frames'], 'the $7 went off during the drag'
+"
+}
 # The scan's own colours stay on during the drag (--color scan): every drag frame draws them.
 awk '/^v / {print $0, 0.9, 0.05, 0.05; next} {print}' "$ROOT/assets/bumps-75/detail.obj" >"$T/red.obj"
 "$VIEWER" "$T/red.obj" --layers 3 --save "$T/red.strata" --screenshot "$T/red_rest.png" --size 320x240 >/dev/null
 # (60 frames: the previews arrive as the worker solves drag steps, about 0.1 s each.)
-json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$T/red.strata" --band 0 --script-drag "$T/bend.json" \
-  --frames 60 --benchmark --size 800x600 --color scan --screenshot "$T/red_window.png")
-echo "$json" | python3 -c "
-import json, sys
-r = json.loads(sys.stdin.read())
-print('window, scan colours: %d of %d frames that showed a drag preview drew them'
-      % (r['preview_frames_scan_colours'], r['preview_frames']))
-assert r['gl_errors'] == 0, 'GL errors'
-assert r['preview_frames'] > 0, 'no drag preview was shown'
-assert r['preview_frames_scan_colours'] == r['preview_frames'], 'the scan colours went off during the drag'
-"
+drag_keeps "$T/red.strata" 0 "$T/bend.json" 60 scan scan_colours "scan colours"
 # The scan's texture stays on during the drag too (--color texture; textured_plane.py's plane,
 # its right half bent up about the y axis).
 python3 "$(dirname "$0")/textured_plane.py" "$T/plane"
@@ -55,17 +60,7 @@ cat >"$T/fold.json" <<'JSON'
  "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 30, "pivot": [1.2, 0, 0]}}}
 JSON
 "$VIEWER" "$T/plane/plane.obj" --layers 2 --save "$T/plane.strata" --screenshot "$T/plane_rest.png" --size 320x240 >/dev/null
-json=$(xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$T/plane.strata" --band 1 --script-drag "$T/fold.json" \
-  --frames 30 --benchmark --size 800x600 --color texture --screenshot "$T/plane_window.png")
-echo "$json" | python3 -c "
-import json, sys
-r = json.loads(sys.stdin.read())
-print('window, texture: %d of %d frames that showed a drag preview drew it'
-      % (r['preview_frames_texture'], r['preview_frames']))
-assert r['gl_errors'] == 0, 'GL errors'
-assert r['preview_frames'] > 0, 'no drag preview was shown'
-assert r['preview_frames_texture'] == r['preview_frames'], 'the texture went off during the drag'
-"
+drag_keeps "$T/plane.strata" 1 "$T/fold.json" 30 texture texture texture
 s=$(python3 "$(dirname "$0")/png_stats.py" "$T/window.png")
 python3 -c "
 import json, sys
