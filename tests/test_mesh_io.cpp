@@ -2324,8 +2324,13 @@ TEST(MeshIoCompanionFiles, BadNamesAndFilesAreNotesAndNothingIsReplaced) {
   fs::create_symlink(dir.file("nowhere"), dir.file("o/u.png"));
   write_bytes(dir.file("o/v.png"), "mine");
   write_bytes(dir.file("o/w.png"), "W");
+  b.files.push_back({"in/x.png", "X"});  // its directory's place taken by a file
+  b.files[0] = {"m.mtl", b.files[0].bytes() + "map_Ks in/x.png\n"};
+  write_bytes(dir.file("o/in"), "a file");
   const std::vector<std::string> written = write_companion_files(b, dir.file("o/s.obj"));
-  ASSERT_EQ(written.size(), 3u);
+  ASSERT_EQ(written.size(), 4u);
+  EXPECT_NE(written[3].find("in/x.png is not written: cannot create the directory"), std::string::npos)
+      << written[3];
   EXPECT_NE(written[0].find("t.png is already there (not a regular file)"), std::string::npos) << written[0];
   EXPECT_NE(written[1].find("u.png is already there (a symbolic link to nothing)"), std::string::npos)
       << written[1];
@@ -2338,7 +2343,7 @@ TEST(MeshIoCompanionFiles, BadNamesAndFilesAreNotesAndNothingIsReplaced) {
   std::vector<std::string> called;
   write_companion_files(b, dir.file("p/s.obj"),
                         [&](const std::string& path, const std::string&) { called.push_back(path); });
-  EXPECT_EQ(called.size(), 5u);
+  EXPECT_EQ(called.size(), 6u);
   EXPECT_EQ(files_under(dir.file("p")), 0u);  // the writer wrote nothing
 }
 

@@ -240,16 +240,26 @@ std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
       if (!fs::is_regular_file(target)) {
         why =
             fs::is_symlink(link) && !fs::exists(target) ? "a symbolic link to nothing" : "not a regular file";
-      } else if (fs::file_size(path, ec) != f.bytes().size() || read_file_bytes(path.string()) != f.bytes()) {
-        why = "a file that differs from the scan's of that name";
+      } else {
+        try {
+          if (fs::file_size(path, ec) != f.bytes().size() || read_file_bytes(path.string()) != f.bytes())
+            why = "a file that differs from the scan's of that name";
+        } catch (const IoError& e) {
+          why = std::string("a file that cannot be read: ") + e.what();
+        }
       }
       if (!why.empty())
         notes.push_back(path.string() + " is already there (" + why + "); it was left as it is, and " +
                         mesh_path + " names it");
       continue;
     }
+    ec.clear();
     if (!path.parent_path().empty()) fs::create_directories(path.parent_path(), ec);
-    if (ec) throw IoError(path.parent_path().string() + ": cannot create the directory: " + ec.message());
+    if (ec) {  // something else is where the directory would go: left as it is too
+      notes.push_back(path.string() + " is not written: cannot create the directory " +
+                      path.parent_path().string() + " (" + ec.message() + ")");
+      continue;
+    }
     if (write)
       write(path.string(), f.bytes());
     else

@@ -260,6 +260,15 @@ mkdir "$TMP/third"
 grep -q "out.obj: material library 'scan.mtl' is not carried along: it is not there" "$TMP/nolib.err" &&
   grep -q "third/out.obj refers to the material library 'scan.mtl', which is not in its directory" "$TMP/nolib.err" ||
   { echo "FAIL: no notes on a missing library: $(cat "$TMP/nolib.err")" >&2; exit 1; }
+# A library named with a space (Blender's "mtllib my scan.mtl"): one file, copied, and no note.
+mkdir "$TMP/spaced" "$TMP/spaced_out"
+sed 's/^mtllib scan.mtl$/mtllib my scan.mtl/' "$TMP/seams.obj" >"$TMP/spaced/my scan.obj"
+cp "$TMP/scan.mtl" "$TMP/spaced/my scan.mtl"
+cp -r "$TMP/textures" "$TMP/eyes.png" "$TMP/spaced/"
+"$STRATA" deform "$TMP/spaced/my scan.obj" --edit "$TMP/bend.json" -o "$TMP/spaced_out/out.obj" -q >/dev/null 2>"$TMP/spaced.err"
+cmp -s "$TMP/scan.mtl" "$TMP/spaced_out/my scan.mtl" && cmp -s "$TMP/eyes.png" "$TMP/spaced_out/eyes.png" &&
+  [ "$(grep -cv 'faces flipped' "$TMP/spaced.err")" -eq 0 ] ||
+  { echo "FAIL: a library named with a space: $(ls "$TMP/spaced_out") $(cat "$TMP/spaced.err")" >&2; exit 1; }
 # A file of the scan's named as an output of the command (here the report): the output wins.
 printf 'newmtl skin\nmap_Kd r.json\nnewmtl eyes\n' >"$TMP/elsewhere/scan.mtl"
 printf 'not json' >"$TMP/elsewhere/r.json"

@@ -305,7 +305,8 @@ void App::take_snapshot() {
     p.scene = std::move(s->panels[i]);
     p.band = p.scene.shown_band;
     p.vectors = view_.compare && i + 1 == s->panels.size() && !view_.vectors && s->panels.size() > 1;
-    if (p.scene.texture && !p.scene.texture->problems.empty()) {  // drawn in the surface colour instead
+    if (!same && p.scene.texture &&
+        !p.scene.texture->problems.empty()) {  // drawn in the surface colour instead
       status_ = "texture image not drawn: " + p.scene.texture->problems.front();
       status_error_ = true;
     }

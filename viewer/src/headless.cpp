@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -139,8 +140,23 @@ std::string run_headless(const Options& options) {
   report["scene_s"] = seconds_since(t_scene);
   if (!options.save.empty()) layers::write_model(document.model(), options.save);
   // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
-  if (!options.export_mesh.empty())
+  if (!options.export_mesh.empty()) {
     write_mesh(scene.mesh, document.attributes(scene.shown_band), options.export_mesh);
+    // Its material library and images beside it, but never at the screenshot's path.
+    std::error_code ec;
+    const auto screenshot = std::filesystem::weakly_canonical(options.screenshot, ec);
+    const CompanionWriter write = [&](const std::string& path, const std::string& bytes) {
+      std::error_code ec2;
+      if (std::filesystem::weakly_canonical(path, ec2) == screenshot)
+        std::cerr << "strata-viewer: note: " << path
+                  << " is the screenshot; the scan's file of that name is not written" << std::endl;
+      else
+        write_text_file_atomically(path, bytes);
+    };
+    for (const std::string& note :
+         write_companion_files(document.attributes(scene.shown_band), options.export_mesh, write))
+      std::cerr << "strata-viewer: note: " << note << std::endl;
+  }
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();
@@ -207,11 +223,6 @@ std::string run_headless(const Options& options) {
                              " OpenGL errors while rendering (listed above)");
   const auto t_write = Clock::now();
   write_png(options.screenshot, pixels, options.width, options.height);
-  // The exported band's material library and images, after the screenshot: never over an output.
-  if (!options.export_mesh.empty())
-    for (const std::string& note :
-         write_companion_files(document.attributes(scene.shown_band), options.export_mesh))
-      std::cerr << "strata-viewer: note: " << note << std::endl;
   report["write_s"] = seconds_since(t_write);
   report["size"] = {options.width, options.height};
   report["png"] = options.screenshot;

@@ -52,12 +52,19 @@ std::shared_ptr<const SceneTexture> make_scene_texture(const MeshAttributes& att
     const int file = f < file_of_face.size() ? file_of_face[f] : -1;
     if (file >= 0 && image_of_file[file] == -2) {
       const std::string& bytes = attributes.files[file].bytes();
+      const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+      const int length = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
       int w = 0, h = 0, channels = 0;
-      stbi_uc* pixels = stbi_load_from_memory(
-          reinterpret_cast<const stbi_uc*>(bytes.data()),
-          static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX)), &w, &h, &channels, 4);
+      // The size first: a small file may declare a huge image (20000 x 20000 took 3.1 GB before this check).
+      const bool huge = stbi_info_from_memory(data, length, &w, &h, &channels) &&
+                        static_cast<long long>(w) * h > kMaxTexturePixels;
+      stbi_uc* pixels = huge ? nullptr : stbi_load_from_memory(data, length, &w, &h, &channels, 4);
       if (!pixels) {
-        t->problems.push_back(attributes.files[file].name + ": " + stbi_failure_reason());
+        t->problems.push_back(attributes.files[file].name + ": " +
+                              (huge ? std::to_string(w) + " x " + std::to_string(h) +
+                                          " pixels, more than the viewer draws (" +
+                                          std::to_string(kMaxTexturePixels) + ")"
+                                    : std::string(stbi_failure_reason())));
         image_of_file[file] = -1;
       } else {
         TextureLevel level;

@@ -35,6 +35,10 @@ struct SceneTexture {
   std::vector<std::string> problems;
 };
 
+//! The most pixels of an image the viewer decodes (8192 x 8192: 256 MB as RGBA, a third more with
+//! its mipmaps); a larger one is a problem and its faces get the surface colour.
+constexpr long long kMaxTexturePixels = 8192LL * 8192;
+
 //! Whether \p attributes give some face a texture image and every face texture coordinates (per
 //! vertex or per corner): what the texture view needs. Cheap: no image is decoded.
 bool has_texture(const MeshAttributes& attributes);

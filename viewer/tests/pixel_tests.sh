@@ -174,6 +174,15 @@ r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_bad.png" "${PLANE[@]}"
 s=$($STATS "$T/plane_bad.png" "$T/plane_none.png")
 check "an image that does not decode: named, its faces in the surface colour" \
   "s['changed'] == 0 and len(r['texture_problems']) == 1 and 'maps/rb.png' in r['texture_problems'][0]" "$s" "$r"
+# A small file that declares a huge image (12000 x 12000) is refused by its size, not decoded.
+python3 -c "
+import struct, sys, zlib
+def chunk(k, d): return struct.pack('>I', len(d)) + k + d + struct.pack('>I', zlib.crc32(k + d) & 0xffffffff)
+open(sys.argv[1], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', 12000, 12000, 8, 2, 0, 0, 0))
+                            + chunk(b'IDAT', zlib.compress(b'\0' * 60001)) + chunk(b'IEND', b''))" "$T/plane/maps/rb.png"
+r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_huge.png" "${PLANE[@]}" --color texture)
+check "a huge image is refused by its declared size" \
+  "len(r['texture_problems']) == 1 and '12000 x 12000 pixels, more than the viewer draws' in r['texture_problems'][0] and r['load_s'] + r['scene_s'] < 5" '{}' "$r"
 r=$("$VIEWER" "$MESH" --screenshot "$T/plain_scan.png" "${COMMON[@]}" --color scan)
 s=$($STATS "$T/plain_scan.png" "$T/scan.png")
 check "a scan without colours is drawn in the surface colour" "s['changed'] == 0" "$s"

@@ -180,9 +180,10 @@ using CompanionWriter = std::function<void(const std::string& path, const std::s
 //! \p write (default: atomically, write_text_file_atomically()). Whatever is already at a name
 //! (a file, a directory, a symbolic link, even to nothing) is left alone, never replaced; a note
 //! says so unless it is a file with the same bytes.
-//! \return the notes, each naming the file.
-//! \throw InvalidInput if a name fails companion_name_problem(); IoError if a directory cannot be
-//!        created; what \p write throws (IoError if a file cannot be written).
+//! \return the notes, each naming the file (also one whose directory cannot be created: a file
+//!         or a link in the way).
+//! \throw InvalidInput if a name fails companion_name_problem(); what \p write throws (IoError
+//!        if a file cannot be written).
 std::vector<std::string> write_companion_files(const MeshAttributes& attributes, const std::string& mesh_path,
                                                const CompanionWriter& write = {});
 
