@@ -2345,6 +2345,17 @@ TEST(MeshIoCompanionFiles, BadNamesAndFilesAreNotesAndNothingIsReplaced) {
                         [&](const std::string& path, const std::string&) { called.push_back(path); });
   EXPECT_EQ(called.size(), 6u);
   EXPECT_EQ(files_under(dir.file("p")), 0u);  // the writer wrote nothing
+  // An OBJ naming a library that is neither among the files nor beside it: a note; a PLY names none.
+  MeshAttributes lonely;
+  lonely.material_library = "gone.mtl";
+  const std::vector<std::string> gone = write_companion_files(lonely, dir.file("o/s.obj"));
+  ASSERT_EQ(gone.size(), 1u);
+  EXPECT_NE(gone[0].find("refers to the material library 'gone.mtl', which is not in its directory"),
+            std::string::npos)
+      << gone[0];
+  EXPECT_TRUE(write_companion_files(lonely, dir.file("o/s.ply")).empty());
+  write_bytes(dir.file("o/gone.mtl"), "newmtl a\n");
+  EXPECT_TRUE(write_companion_files(lonely, dir.file("o/s.obj")).empty());
 }
 
 TEST(MeshIoCompanionFiles, CopiesShareTheirBytes) {

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -27,6 +28,12 @@ fs::path directory_of(const std::string& mesh_path) {
 // '/' between components: the form of CompanionFile::name.
 std::string normal_name(const fs::path& name) {
   return name.lexically_normal().generic_string();
+}
+
+std::string lower_extension(const std::string& mesh_path) {
+  std::string ext = fs::path(mesh_path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
 }
 
 bool is_number(const std::string& token) {
@@ -127,7 +134,7 @@ class CompanionReader {
       return -1;
     };
     if (has_inner_dotdot(given)) return note("it goes into a directory and out again ('dir/..')");
-    const std::string name = (base / given).lexically_normal().generic_string();
+    const std::string name = normal_name(base / given);
     const std::string problem = companion_name_problem(name);
     if (!problem.empty()) return note(problem);
     if (!seen_.insert(name).second) return -1;
@@ -153,41 +160,39 @@ class CompanionReader {
   std::vector<std::string> notes_;
 };
 
-// The material libraries that an OBJ's mtllib names: the whole value if a file of that name is
-// there (Blender writes "mtllib my scan.mtl" for "my scan.obj"), else its words.
-std::vector<std::string> library_names(const std::string& material_library, const fs::path& dir) {
-  std::error_code ec;
+// The material libraries that an OBJ's mtllib names: the whole value if \p is_there says a file
+// of that name is (Blender writes "mtllib my scan.mtl" for "my scan.obj"), else its words.
+std::vector<std::string> library_names(const std::string& material_library,
+                                       const std::function<bool(const std::string&)>& is_there) {
   if (material_library.empty()) return {};
-  if (fs::exists(dir / material_library, ec)) return {material_library};
+  if (is_there(material_library)) return {material_library};
   std::vector<std::string> names;
   std::istringstream words(material_library);
-  std::string word;
-  while (words >> word) names.push_back(word);
+  for (std::string word; words >> word;) names.push_back(word);
   return names;
 }
 
-// The indices in attributes.files of the material libraries that material_library names, as
-// library_names() finds them.
+// The index in attributes.files of the file called \p name (in normal form), or -1.
+int file_index(const MeshAttributes& attributes, const fs::path& name) {
+  const std::string normal = normal_name(name);
+  for (std::size_t i = 0; i < attributes.files.size(); ++i)
+    if (attributes.files[i].name == normal) return static_cast<int>(i);
+  return -1;
+}
+
+// The indices in attributes.files of the material libraries that material_library names.
 std::vector<int> libraries_among(const MeshAttributes& attributes) {
-  auto index = [&](const std::string& name) {
-    for (std::size_t i = 0; i < attributes.files.size(); ++i)
-      if (attributes.files[i].name == normal_name(name)) return static_cast<int>(i);
-    return -1;
-  };
-  if (attributes.material_library.empty()) return {};
-  if (index(attributes.material_library) >= 0) return {index(attributes.material_library)};
   std::vector<int> found;
-  std::istringstream words(attributes.material_library);
-  for (std::string word; words >> word;)
-    if (index(word) >= 0) found.push_back(index(word));
+  for (const std::string& name : library_names(
+           attributes.material_library, [&](const std::string& n) { return file_index(attributes, n) >= 0; }))
+    if (file_index(attributes, name) >= 0) found.push_back(file_index(attributes, name));
   return found;
 }
 
 // The names of attributes.files that a mesh file at \p mesh_path names: an OBJ its libraries and
 // their images, a PLY its images.
 std::set<std::string> names_in(const MeshAttributes& attributes, const std::string& mesh_path) {
-  std::string ext = fs::path(mesh_path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(mesh_path);
   std::set<std::string> named;
   if (ext == ".obj") {
     for (int i : libraries_among(attributes)) {
@@ -206,7 +211,11 @@ std::set<std::string> names_in(const MeshAttributes& attributes, const std::stri
 
 std::vector<std::string> read_companion_files(MeshAttributes& attributes, const std::string& mesh_path) {
   CompanionReader reader(mesh_path);
-  for (const std::string& library : library_names(attributes.material_library, directory_of(mesh_path))) {
+  const auto is_there = [&](const std::string& name) {
+    std::error_code ec;
+    return fs::exists(directory_of(mesh_path) / name, ec);
+  };
+  for (const std::string& library : library_names(attributes.material_library, is_there)) {
     const int i = reader.add("", library, mesh_path, "material library");
     if (i < 0) continue;
     // The library's images, relative to its own directory (where Blender and MeshLab look).
@@ -265,16 +274,24 @@ std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
     else
       write_text_file_atomically(path.string(), f.bytes());
   }
+  // A library that is neither among the files (written, or a note said why not) nor beside it.
+  if (lower_extension(mesh_path) == ".obj") {
+    const auto is_there = [&](const std::string& name) {
+      std::error_code ec;
+      return file_index(attributes, name) >= 0 || fs::exists(dir / name, ec);
+    };
+    for (const std::string& library : library_names(attributes.material_library, is_there))
+      if (!is_there(library))
+        notes.push_back(mesh_path + " refers to the material library '" + library +
+                        "', which is not in its directory: copy it (and its textures) there");
+  }
   return notes;
 }
 
 std::vector<int> face_texture_files(const MeshAttributes& attributes) {
-  auto file_index = [&](const fs::path& name) {
-    const std::string normal = normal_name(name);
-    for (std::size_t i = 0; i < attributes.files.size(); ++i)
-      if (attributes.files[i].name == normal) return static_cast<int>(i);
-    return -1;
-  };
+  std::vector<int> image_of_texture;  // per texture_files entry
+  for (const std::string& name : attributes.texture_files)
+    image_of_texture.push_back(file_index(attributes, name));
   std::vector<int> image_of_material(attributes.material_names.size(), -1);
   if (!attributes.face_materials.empty()) {
     // Each material's map_Kd, from the first library that defines the material.
@@ -290,7 +307,7 @@ std::vector<int> face_texture_files(const MeshAttributes& attributes) {
                         : static_cast<int>(it - attributes.material_names.begin());
           if (current >= 0) defined[current] = 1;
         } else if (key == "map_kd" && current >= 0) {
-          image_of_material[current] = file_index(lib_dir / name);
+          image_of_material[current] = file_index(attributes, lib_dir / name);
         }
       }
     }
@@ -301,8 +318,8 @@ std::vector<int> face_texture_files(const MeshAttributes& attributes) {
   for (std::size_t f = 0; f < nf; ++f) {
     int image = -1;
     if (f < attributes.face_textures.size() && attributes.face_textures[f] >= 0 &&
-        attributes.face_textures[f] < static_cast<int>(attributes.texture_files.size()))
-      image = file_index(attributes.texture_files[attributes.face_textures[f]]);
+        attributes.face_textures[f] < static_cast<int>(image_of_texture.size()))
+      image = image_of_texture[attributes.face_textures[f]];
     if (image < 0 && f < attributes.face_materials.size() && attributes.face_materials[f] >= 0 &&
         attributes.face_materials[f] < static_cast<int>(image_of_material.size()))
       image = image_of_material[attributes.face_materials[f]];

@@ -168,26 +168,6 @@ void write_companions(const MeshAttributes& attributes, const std::string& path,
     };
   for (const std::string& note : write_companion_files(attributes, path, stage))
     std::cerr << "strata: note: " << note << std::endl;
-  if (attributes.material_library.empty() || lower_extension(path) != ".obj") return;
-  // mtllib may name several files, separated by spaces.
-  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  std::istringstream names(attributes.material_library);
-  std::string lib;
-  // A library among the files was written (or staged) beside the output, or a note said why not;
-  // "mtllib my scan.mtl" may be one file.
-  const auto carried = [&](const std::string& name) {
-    const std::string normal = std::filesystem::path(name).lexically_normal().generic_string();
-    return std::any_of(attributes.files.begin(), attributes.files.end(),
-                       [&](const CompanionFile& f) { return f.name == normal; });
-  };
-  std::error_code ec;
-  if (carried(attributes.material_library) || std::filesystem::exists(dir / attributes.material_library, ec))
-    return;
-  while (names >> lib) {
-    if (!carried(lib) && !std::filesystem::exists(dir / lib, ec))
-      std::cerr << "strata: note: " << path << " refers to the material library '" << lib
-                << "', which is not in its directory: copy it (and its textures) there" << std::endl;
-  }
 }
 
 void require_numbers(CLI::App& app) {

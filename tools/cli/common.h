@@ -135,8 +135,8 @@ void read_companions(MeshAttributes& attributes, const std::string& path);
 
 //! Writes attributes.files beside the mesh written to \p path (write_companion_files(): whatever
 //! is already there is never replaced), through \p staged if given (they then land with the
-//! other outputs, or none does), printing its notes; and notes an OBJ's material library that is
-//! neither beside \p path nor among the files (the file names it relative to its own directory).
+//! other outputs, or none does), printing its notes (also on an OBJ's material library that is
+//! neither among the files nor beside \p path).
 class StagedOutputs;
 void write_companions(const MeshAttributes& attributes, const std::string& path,
                       StagedOutputs* staged = nullptr);

@@ -33,16 +33,22 @@ TextureLevel half(const TextureLevel& in) {
 }
 }  // namespace
 
+namespace {
+bool has_texcoords(const MeshAttributes& attributes) {
+  return !attributes.texcoords.empty() || !attributes.corner_uv_index.empty();
+}
+}  // namespace
+
 bool has_texture(const MeshAttributes& attributes) {
-  return (!attributes.texcoords.empty() || !attributes.corner_uv_index.empty()) &&
-         !face_texture_files(attributes).empty();
+  return has_texcoords(attributes) && !face_texture_files(attributes).empty();
 }
 
 std::shared_ptr<const SceneTexture> make_scene_texture(const MeshAttributes& attributes,
                                                        const std::vector<Face>& faces) {
   const std::size_t num_faces = faces.size();
-  if (!has_texture(attributes)) return nullptr;
-  const std::vector<int> file_of_face = face_texture_files(attributes);
+  if (!has_texcoords(attributes)) return nullptr;
+  const std::vector<int> file_of_face = face_texture_files(attributes);  // as has_texture(), once
+  if (file_of_face.empty()) return nullptr;
   auto t = std::make_shared<SceneTexture>();
   // Each file decoded once; -2: not yet tried.
   std::vector<int> image_of_file(attributes.files.size(), -2);

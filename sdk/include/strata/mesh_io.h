@@ -181,7 +181,9 @@ using CompanionWriter = std::function<void(const std::string& path, const std::s
 //! (a file, a directory, a symbolic link, even to nothing) is left alone, never replaced; a note
 //! says so unless it is a file with the same bytes.
 //! \return the notes, each naming the file (also one whose directory cannot be created: a file
-//!         or a link in the way).
+//!         or a link in the way), and for an OBJ each material library it names that is neither
+//!         among the files nor beside it ("<mesh> refers to the material library 'x.mtl', which
+//!         is not in its directory: ...").
 //! \throw InvalidInput if a name fails companion_name_problem(); what \p write throws (IoError
 //!        if a file cannot be written).
 std::vector<std::string> write_companion_files(const MeshAttributes& attributes, const std::string& mesh_path,
