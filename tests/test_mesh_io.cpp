@@ -2366,3 +2366,99 @@ TEST(MeshIoCompanionFiles, CopiesShareTheirBytes) {
   EXPECT_EQ(a.files[0].data.get(), b.files[0].data.get());
   EXPECT_EQ(a.files, b.files);
 }
+
+// Per face, the name of its diffuse image (face_texture_files()), "" for none.
+std::vector<std::string> face_image_names(const MeshAttributes& a) {
+  std::vector<std::string> names;
+  for (int i : face_texture_files(a)) names.push_back(i < 0 ? "" : a.files[i].name);
+  return names;
+}
+
+// \p mesh written to \p path with \p attributes and the files they name, and read back with
+// them; neither side may have notes.
+MeshFile written_and_read(const TriMesh& mesh, const MeshAttributes& attributes, const std::string& path) {
+  fs::create_directories(fs::path(path).parent_path());
+  write_mesh(mesh, attributes, path);
+  EXPECT_TRUE(write_companion_files(attributes, path).empty()) << path;
+  MeshFile back = read_mesh_file(path);
+  EXPECT_TRUE(read_companion_files(back.attributes, path).empty()) << path;
+  return back;
+}
+
+TEST(MeshIoCompanionFiles, TexturesGoFromPlyToObjAndBack) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  fs::create_directories(dir.file("in/sub"));
+  TriMesh tet;
+  tet.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  tet.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  MeshAttributes scan;
+  scan.texture_files = {"a.png", "sub/b b.png", "-c.png"};
+  scan.face_textures = {1, 0, -1, 2};
+  for (int j = 0; j < 12; ++j) scan.corner_uv.push_back({0.05 * j, 1.0 - 0.05 * j});
+  scan.corner_uv_index = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 10, 11}};
+  write_mesh(tet, scan, dir.file("in/scan.ply"));
+  write_bytes(dir.file("in/a.png"), "A");
+  write_bytes(dir.file("in/sub/b b.png"), "B");
+  write_bytes(dir.file("in/-c.png"), "C");
+  MeshFile ply = read_mesh_file(dir.file("in/scan.ply"));
+  EXPECT_TRUE(read_companion_files(ply.attributes, dir.file("in/scan.ply")).empty());
+  const std::vector<std::string> images = {"sub/b b.png", "a.png", "", "-c.png"};
+  ASSERT_EQ(face_image_names(ply.attributes), images);
+
+  // To an OBJ: a library named after it, a material per image, the faces' images as they were.
+  std::vector<std::string> notes;
+  const MeshAttributes obj = attributes_for_format(ply.attributes, dir.file("out/x.obj"), &notes);
+  EXPECT_TRUE(notes.empty());
+  EXPECT_EQ(obj.material_library, "x.mtl");
+  EXPECT_TRUE(obj.texture_files.empty() && obj.face_textures.empty());
+  EXPECT_TRUE(attributes_not_stored(obj, dir.file("out/x.obj")).empty());
+  EXPECT_FALSE(attributes_not_stored(ply.attributes, dir.file("out/x.obj")).empty());
+  ASSERT_EQ(obj.files.size(), 4u);
+  EXPECT_NE(obj.files[3].bytes().find("map_Kd sub/b b.png\n"), std::string::npos) << obj.files[3].bytes();
+  EXPECT_NE(obj.files[3].bytes().find("map_Kd ./-c.png\n"), std::string::npos);  // not an option
+  EXPECT_EQ(face_image_names(obj), images);
+  const MeshFile back = written_and_read(ply.mesh, obj, dir.file("out/x.obj"));
+  EXPECT_EQ(face_image_names(back.attributes), images);
+  EXPECT_EQ(back.attributes.corner_uv_index.size(), 4u);
+  for (std::size_t c = 0; c < 12; ++c) {
+    const auto& a = back.attributes.corner_uv[back.attributes.corner_uv_index[c / 3][c % 3]];
+    const auto& b = ply.attributes.corner_uv[ply.attributes.corner_uv_index[c / 3][c % 3]];
+    EXPECT_NEAR(a[0], b[0], 1e-12);
+    EXPECT_NEAR(a[1], b[1], 1e-12);
+  }
+  for (const char* name : {"a.png", "sub/b b.png", "-c.png"})
+    EXPECT_EQ(read_bytes(dir.file(std::string("out/") + name)),
+              read_bytes(dir.file(std::string("in/") + name)));
+
+  // And from that OBJ to a PLY: the images in the order the faces first use them, and the
+  // materials, which a PLY does not store, named as what is lost.
+  const MeshAttributes ply2 = attributes_for_format(back.attributes, dir.file("back/y.ply"));
+  EXPECT_EQ(ply2.texture_files, (std::vector<std::string>{"sub/b b.png", "a.png", "-c.png"}));
+  EXPECT_EQ(ply2.face_textures, (std::vector<int>{0, 1, -1, 2}));
+  EXPECT_EQ(attributes_not_stored(ply2, dir.file("back/y.ply")),
+            (std::vector<std::string>{"materials (their diffuse images are kept, as TextureFile)"}));
+  EXPECT_EQ(face_image_names(written_and_read(back.mesh, ply2, dir.file("back/y.ply")).attributes), images);
+  EXPECT_EQ(files_under(dir.file("back")), 4u);  // the PLY and its three images, no library
+
+  // Without its library among the files an OBJ's images are unknown: nothing changes.
+  MeshAttributes bare = back.attributes;
+  bare.files.clear();
+  const MeshAttributes same = attributes_for_format(bare, dir.file("back/z.ply"));
+  EXPECT_TRUE(same.texture_files.empty() && same.face_textures.empty());
+  EXPECT_EQ(attributes_not_stored(same, dir.file("back/z.ply")), (std::vector<std::string>{"materials"}));
+  // OFF names no images; an OBJ that has materials keeps them.
+  EXPECT_EQ(attributes_for_format(ply.attributes, dir.file("out/x.off")).texture_files, scan.texture_files);
+  EXPECT_EQ(attributes_for_format(back.attributes, dir.file("out/w.obj")).files.size(),
+            back.attributes.files.size());
+
+  // A name MTL cannot hold is a note; a hidden stem or a library name already taken is not used.
+  MeshAttributes odd = ply.attributes;
+  odd.texture_files[0] = "a#1.png";
+  odd.files.push_back({"x.mtl", "not a library"});
+  notes.clear();
+  const MeshAttributes o2 = attributes_for_format(odd, dir.file("out/.x.obj"), &notes);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("'a#1.png' cannot be named in a material library"), std::string::npos) << notes[0];
+  EXPECT_EQ(o2.material_library, "x_1.mtl");
+  EXPECT_EQ(o2.face_materials, (std::vector<int>{1, -1, -1, 2}));
+}

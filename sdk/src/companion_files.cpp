@@ -331,3 +331,65 @@ std::vector<int> face_texture_files(const MeshAttributes& attributes) {
 }
 
 }  // namespace strata
+
+namespace strata {
+
+MeshAttributes attributes_for_format(const MeshAttributes& attributes, const std::string& mesh_path,
+                                     std::vector<std::string>* notes) {
+  MeshAttributes a = attributes;
+  const std::string ext = lower_extension(mesh_path);
+  const bool materials = !a.material_library.empty() || !a.face_materials.empty();
+  if (ext == ".obj" && !materials && !a.texture_files.empty()) {
+    // A PLY's images as an OBJ names them: a library "<stem>.mtl" of one material per image.
+    std::string stem = fs::path(mesh_path).stem().string();
+    stem.erase(0, stem.find_first_not_of('.'));  // no hidden library
+    std::replace(stem.begin(), stem.end(), ' ', '_');
+    if (stem.empty()) stem = "materials";
+    std::string library = stem + ".mtl";
+    for (int k = 1; !companion_name_problem(library).empty() || file_index(a, library) >= 0; ++k)
+      library = stem + "_" + std::to_string(k) + ".mtl";
+    std::string text = "# Materials for " + fs::path(mesh_path).filename().string() +
+                       ": one per texture image (written by Strata)\n";
+    std::vector<char> named(a.texture_files.size(), 0);
+    for (std::size_t i = 0; i < a.texture_files.size(); ++i) {
+      std::string image = a.texture_files[i];
+      // MTL has no quoting: '#' starts a comment, and a leading '-' an option ("./-x.png" is not).
+      if (image.find('#') != std::string::npos || image.empty()) {
+        if (notes)
+          notes->push_back(mesh_path + ": texture image '" + printable_key(image) +
+                           "' cannot be named in a material library (MTL has no quoting for '#'); its "
+                           "faces are written without a texture");
+        continue;
+      }
+      if (image.front() == '-') image = "./" + image;
+      named[i] = 1;
+      text += "\nnewmtl material_" + std::to_string(i) + "\nKd 1 1 1\nmap_Kd " + image + "\n";
+    }
+    a.material_library = library;
+    for (std::size_t i = 0; i < a.texture_files.size(); ++i)
+      a.material_names.push_back("material_" + std::to_string(i));
+    a.face_materials.assign(a.face_textures.size(), -1);
+    for (std::size_t f = 0; f < a.face_textures.size(); ++f) {
+      const int t = a.face_textures[f];
+      if (t >= 0 && t < static_cast<int>(named.size()) && named[t]) a.face_materials[f] = t;
+    }
+    a.files.emplace_back(library, std::move(text));
+    a.texture_files.clear();
+    a.face_textures.clear();
+  } else if (ext == ".ply" && materials && a.texture_files.empty() && a.face_textures.empty()) {
+    // An OBJ's materials' diffuse images as a PLY names them (TextureFile, texnumber), in the
+    // order the faces first use them. The materials stay, for attributes_not_stored().
+    const std::vector<int> image_of_face = face_texture_files(a);
+    std::vector<int> texture_of_file(a.files.size(), -1);
+    for (int file : image_of_face) {
+      if (file < 0 || texture_of_file[file] >= 0) continue;
+      texture_of_file[file] = static_cast<int>(a.texture_files.size());
+      a.texture_files.push_back(a.files[file].name);
+    }
+    if (!a.texture_files.empty())
+      for (int file : image_of_face) a.face_textures.push_back(file < 0 ? -1 : texture_of_file[file]);
+  }
+  return a;
+}
+
+}  // namespace strata

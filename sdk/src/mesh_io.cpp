@@ -2139,7 +2139,10 @@ std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes,
   }
   if (seams && (format == Format::Off || format == Format::Stl))
     lost.push_back("texture coordinates per face corner (texture seams)");
-  if (materials && format != Format::Obj) lost.push_back("materials");
+  if (materials && format != Format::Obj)
+    lost.push_back(format == Format::Ply && !a.texture_files.empty()
+                       ? "materials (their diffuse images are kept, as TextureFile)"
+                       : "materials");
   if (images && format != Format::Ply) lost.push_back("texture images (PLY's TextureFile)");
   return lost;
 }

@@ -3,7 +3,8 @@
 # `reconstruct`, `build` + `edit` + `export` write the result's moved vertices with the scan's
 # values, exactly, in PLY, OBJ and OFF; STL, which stores none, gets a warning; a textured OBJ
 # keeps its seams and materials, and its material library and images go beside outputs elsewhere
-# (a model carries them); and what a file holds that cannot be kept is a note naming it.
+# (a model carries them); its diffuse images go to PLY (TextureFile) and from there back to OBJ;
+# and what a file holds that cannot be kept is a note naming it.
 # Usage: bash attributes.sh <path-to-strata> <tests/data dir>
 set -euo pipefail
 STRATA=${1:?usage: attributes.sh <path-to-strata> <tests/data dir>}
@@ -213,8 +214,39 @@ python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 "$STRATA" export "$TMP/seams_edited.strata" -o "$TMP/seams_out.obj" >/dev/null
 python3 "$TMP/compare_textured.py" "$TMP/seams.obj" "$TMP/seams_out.obj"
 "$STRATA" deform "$TMP/seams.obj" --edit "$TMP/bend.json" -o "$TMP/seams_out.ply" -q >/dev/null 2>"$TMP/seams_ply.err"
-grep -q "seams_out.ply: this format does not store materials; not written" \
+grep -q "seams_out.ply: this format does not store materials (their diffuse images are kept, as TextureFile); not written" \
   "$TMP/seams_ply.err" || { echo "FAIL: no warning for PLY: $(cat "$TMP/seams_ply.err")" >&2; exit 1; }
+# The diffuse image goes with it, as MeshLab's TextureFile; and that PLY back to an OBJ elsewhere
+# gets a library named after it, with the image beside it, on the same faces (per triangle: the
+# scan's "skin" faces, the only material with a map_Kd, and no material for the others).
+grep -a -q "^comment TextureFile textures/skin colour.png$" "$TMP/seams_out.ply" ||
+  { echo "FAIL: the PLY does not name the image" >&2; exit 1; }
+mkdir "$TMP/from_ply"
+"$STRATA" deform "$TMP/seams_out.ply" --edit "$TMP/bend.json" -o "$TMP/from_ply/back.obj" -q >/dev/null 2>"$TMP/from_ply.err"
+cmp -s "$TMP/textures/skin colour.png" "$TMP/from_ply/textures/skin colour.png" &&
+  grep -q "^mtllib back.mtl$" "$TMP/from_ply/back.obj" && [ "$(grep -cv 'faces flipped' "$TMP/from_ply.err")" -eq 0 ] ||
+  { echo "FAIL: PLY to OBJ: $(ls -R "$TMP/from_ply") $(cat "$TMP/from_ply.err")" >&2; exit 1; }
+python3 - "$TMP/seams.obj" "$TMP/from_ply/back.obj" <<'PY'
+import os, sys
+def images(path):
+    """Per triangle its material's map_Kd ('' for none); a polygon of n corners counts n - 2 times."""
+    d = os.path.dirname(path)
+    maps, cur, out = {}, None, []
+    for l in open(path):
+        t = l.split(maxsplit=1)
+        if t and t[0] == "mtllib":
+            m = None
+            for x in open(os.path.join(d, t[1].strip())):
+                y = x.split(maxsplit=1)
+                if y and y[0] == "newmtl": m = y[1].strip()
+                if y and y[0] == "map_Kd": maps[m] = y[1].strip().replace("-s 1 1 1 ", "")
+        if t and t[0] == "usemtl": cur = t[1].strip() if len(t) > 1 else None
+        if t and t[0] == "f": out += [maps.get(cur, "")] * (len(t[1].split()) - 2)
+    return out
+a, b = images(sys.argv[1]), images(sys.argv[2])
+if a != b or a.count("textures/skin colour.png") == 0 or a.count("") == 0:
+    sys.exit("FAIL: PLY to OBJ: the faces' images differ (%d and %d faces)" % (len(a), len(b)))
+PY
 # The material library and the images it names go beside an output elsewhere, byte for byte,
 # from the scan's directory (deform) or from the model, which carries them (export).
 same_files() {  # same_files DIR: DIR holds the library and its images as $TMP does

@@ -236,8 +236,9 @@ int run_deform(const DeformCmdOptions& o) {
   StagedOutputs staged;  // the outputs land together, or none does
   validate_result(current, "the mesh edited by " + o.edit, o.output);
   warn_stl_drops_vertices(current, o.output);
-  warn_attributes_not_stored(input.attributes, o.output);
-  staged.write(o.output, [&](const std::string& p) { write_mesh(current, input.attributes, p); });
+  const MeshAttributes attributes = output_attributes(input.attributes, o.output);
+  warn_attributes_not_stored(attributes, o.output);
+  staged.write(o.output, [&](const std::string& p) { write_mesh(current, attributes, p); });
   if (!o.base_output.empty()) {
     if (subdiv)
       staged.write(o.base_output, [&](const std::string& p) { write_cage(cage, p); });
@@ -277,7 +278,7 @@ int run_deform(const DeformCmdOptions& o) {
     report["report"] = o.report;
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
-  write_companions(input.attributes, o.output, &staged);
+  write_companions(attributes, o.output, &staged);
   staged.commit();
   std::cout << "method         " << to_string(method) << "\n"
             << "input          " << input.name << ": " << input.mesh.num_vertices() << " vertices, "

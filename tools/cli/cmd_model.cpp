@@ -485,7 +485,7 @@ int run_export(const ExportCmdOptions& o) {
   }
   // A triangle band's colours and texture coordinates (the scan's, on the finest band).
   const MeshAttributes none;
-  const MeshAttributes& attributes = k >= 1 ? model.band(k).attributes : none;
+  const MeshAttributes attributes = output_attributes(k >= 1 ? model.band(k).attributes : none, o.output);
   warn_stl_drops_vertices(mesh, o.output);
   warn_attributes_not_stored(attributes, o.output);
   validate_result(mesh, o.model + ": band " + std::to_string(k), o.output);  // the model's fault

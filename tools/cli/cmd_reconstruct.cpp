@@ -99,8 +99,9 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   StagedOutputs staged;  // the mesh lands only with its report
   validate_result(result, "the reconstructed detail", o.output);
   warn_stl_drops_vertices(result, o.output);
-  warn_attributes_not_stored(detail.attributes, o.output);
-  staged.write(o.output, [&](const std::string& p) { write_mesh(result, detail.attributes, p); });
+  const MeshAttributes attributes = output_attributes(detail.attributes, o.output);
+  warn_attributes_not_stored(attributes, o.output);
+  staged.write(o.output, [&](const std::string& p) { write_mesh(result, attributes, p); });
   times.write = sw.seconds();
 
   json report{{"command", "reconstruct"},
@@ -132,7 +133,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
     report["report"] = o.report;
     staged.write(o.report, [&](const std::string& p) { write_json_report(report, p); });
   }
-  write_companions(detail.attributes, o.output, &staged);
+  write_companions(attributes, o.output, &staged);
   staged.commit();
   print_summary(std::cout, report);
   if (o.strict) return finish_warnings(warnings, true, false);

@@ -150,6 +150,13 @@ void warn_attributes_not_stored(const MeshAttributes& attributes, const std::str
   }
 }
 
+MeshAttributes output_attributes(const MeshAttributes& attributes, const std::string& path) {
+  std::vector<std::string> notes;
+  MeshAttributes a = attributes_for_format(attributes, path, &notes);
+  for (const std::string& note : notes) std::cerr << "strata: note: " << note << std::endl;
+  return a;
+}
+
 void read_companions(MeshAttributes& attributes, const std::string& path) {
   for (const std::string& note : read_companion_files(attributes, path))
     std::cerr << "strata: note: " << note << std::endl;

@@ -124,6 +124,11 @@ void warn_stl_drops_vertices(const TriMesh& mesh, const std::string& path);
 //! material_library, texture_files and companion_files (the names of attributes.files).
 json attributes_json(const MeshAttributes& attributes);
 
+//! \p attributes as the mesh written to \p path names its textures (attributes_for_format(): a
+//! PLY's images as an OBJ's material library, an OBJ's materials' images as a PLY's TextureFile),
+//! with its notes on stderr.
+MeshAttributes output_attributes(const MeshAttributes& attributes, const std::string& path);
+
 //! Warns on stderr about what of \p attributes (colours, texture coordinates, materials) the
 //! format of \p path cannot store (attributes_not_stored()).
 void warn_attributes_not_stored(const MeshAttributes& attributes, const std::string& path);

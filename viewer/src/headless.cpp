@@ -141,7 +141,10 @@ std::string run_headless(const Options& options) {
   if (!options.save.empty()) layers::write_model(document.model(), options.save);
   // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
   if (!options.export_mesh.empty()) {
-    write_mesh(scene.mesh, document.attributes(scene.shown_band), options.export_mesh);
+    std::vector<std::string> notes;  // images named as the format names them (attributes_for_format())
+    const MeshAttributes attributes =
+        attributes_for_format(document.attributes(scene.shown_band), options.export_mesh, &notes);
+    write_mesh(scene.mesh, attributes, options.export_mesh);
     // Its material library and images beside it, but never at the screenshot's path.
     std::error_code ec;
     const auto screenshot = std::filesystem::weakly_canonical(options.screenshot, ec);
@@ -153,9 +156,9 @@ std::string run_headless(const Options& options) {
       else
         write_text_file_atomically(path, bytes);
     };
-    for (const std::string& note :
-         write_companion_files(document.attributes(scene.shown_band), options.export_mesh, write))
-      std::cerr << "strata-viewer: note: " << note << std::endl;
+    for (const std::string& note : write_companion_files(attributes, options.export_mesh, write))
+      notes.push_back(note);
+    for (const std::string& note : notes) std::cerr << "strata-viewer: note: " << note << std::endl;
   }
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();

@@ -323,9 +323,14 @@ void Worker::export_meshes(const std::string& prefix, const std::string& extensi
         std::string notes;
         for (int k = 0; k < d.num_bands(); ++k) {
           const std::string path = prefix + "_band" + std::to_string(k) + extension;
-          write_mesh(d.band_mesh(k), d.attributes(k), path);
+          // Its images named as the format names them (a PLY's as an OBJ's material library).
+          std::vector<std::string> format_notes;
+          const MeshAttributes attributes = attributes_for_format(d.attributes(k), path, &format_notes);
+          write_mesh(d.band_mesh(k), attributes, path);
           // The material library and images beside it; a file of that name already there is kept.
-          for (const std::string& note : write_companion_files(d.attributes(k), path)) notes += "; " + note;
+          for (const std::string& note : write_companion_files(attributes, path))
+            format_notes.push_back(note);
+          for (const std::string& note : format_notes) notes += "; " + note;
         }
         return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension +
                notes;

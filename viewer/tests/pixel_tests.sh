@@ -169,6 +169,16 @@ mkdir -p "$T/plane_model"
 r=$("$VIEWER" "$T/plane_model/m.strata" --screenshot "$T/plane_model.png" "${PLANE[@]}")
 s=$($STATS "$T/plane_model.png" "$T/plane_tex.png")
 check "a model carries the texture (opened where the images are not)" "s['changed'] == 0 and r['textured_faces'] == 400" "$s" "$r"
+# Exported to PLY the texture goes as its TextureFile, and from that PLY to OBJ as a material
+# library made for it: each drawn as the scan, from directories of their own.
+mkdir -p "$T/plane_ply" "$T/plane_back"
+"$VIEWER" "$T/plane/plane.obj" --export "$T/plane_ply/p.ply" --screenshot "$T/plane_exp1.png" "${PLANE[@]}" >/dev/null
+"$VIEWER" "$T/plane_ply/p.ply" --export "$T/plane_back/o.obj" --screenshot "$T/plane_exp2.png" "${PLANE[@]}" >/dev/null
+r=$("$VIEWER" "$T/plane_back/o.obj" --screenshot "$T/plane_back.png" "${PLANE[@]}")
+s=$($STATS "$T/plane_exp2.png" "$T/plane_tex.png")
+t=$($STATS "$T/plane_back.png" "$T/plane_tex.png")
+check "a texture exported to PLY and from there to OBJ is drawn as the scan's" \
+  "s['changed'] == 0 and $(field "$t" changed) == 0 and r['textured_faces'] == 400" "$s" "$r"
 printf 'not an image' >"$T/plane/maps/rb.png"
 r=$("$VIEWER" "$T/plane/plane.obj" --screenshot "$T/plane_bad.png" "${PLANE[@]}" --color texture)
 s=$($STATS "$T/plane_bad.png" "$T/plane_none.png")

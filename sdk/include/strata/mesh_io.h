@@ -145,8 +145,9 @@ void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std
                 MeshEncoding encoding = MeshEncoding::Default);
 
 //! What of \p attributes the format of \p path (by its extension) cannot store, for a warning:
-//! "materials" (all but OBJ), "texture images (PLY's TextureFile)" (all but PLY), "texture
-//! coordinates per face corner (texture seams)" (OFF, STL), and for STL also "vertex colours" and
+//! "materials" (all but OBJ; for a PLY with texture_files "materials (their diffuse images are
+//! kept, as TextureFile)", attributes_for_format()), "texture images (PLY's TextureFile)" (all but PLY),
+//! "texture coordinates per face corner (texture seams)" (OFF, STL), and for STL also "vertex colours" and
 //! "texture coordinates". Empty if nothing is lost. \throw IoError if the extension is not
 //! supported.
 std::vector<std::string> attributes_not_stored(const MeshAttributes& attributes, const std::string& path);
@@ -195,6 +196,24 @@ std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
 //! to the library's directory, as read_companion_files() resolves it). Empty if no face has one
 //! (no images among the files, say). What a viewer needs to draw a textured scan.
 std::vector<int> face_texture_files(const MeshAttributes& attributes);
+
+//! \p attributes with their texture images named as the format of \p mesh_path names them, so
+//! that a textured scan converted from PLY to OBJ or from OBJ to PLY keeps its textures (as
+//! MeshLab converts them):
+//! - to an OBJ, a PLY's images (texture_files and face_textures, without materials) become a
+//!   material library "<stem>.mtl" (the mesh's file name stem; "_1", "_2", .. appended if
+//!   attributes.files holds that name) with a material "material_<i>" per image (Kd 1 1 1,
+//!   map_Kd the image), added to files, and face_materials; texture_files and face_textures are
+//!   cleared. An image whose name MTL cannot hold (a '#') is left out, with a note;
+//! - to a PLY, an OBJ's materials' diffuse images (face_texture_files(): the libraries and
+//!   images must be among attributes.files, read_companion_files()) become texture_files (the
+//!   images' names, in the order the faces first use them) and face_textures; the materials
+//!   stay (a PLY does not store them: attributes_not_stored() still names them);
+//! - anything else comes back unchanged (OFF and STL name no images).
+//! Write the result with write_mesh() and write_companion_files(). \p notes: if given, notes
+//! are appended, each naming \p mesh_path and the image.
+MeshAttributes attributes_for_format(const MeshAttributes& attributes, const std::string& mesh_path,
+                                     std::vector<std::string>* notes = nullptr);
 
 //! Writes a polygon mesh (faces of 3 or more corners, e.g. a quad control cage) as OBJ, OFF or
 //! PLY, keeping every polygon as it is, atomically as write_mesh(). read_mesh(path, &polygons)
