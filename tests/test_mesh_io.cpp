@@ -2461,4 +2461,39 @@ TEST(MeshIoCompanionFiles, TexturesGoFromPlyToObjAndBack) {
   EXPECT_NE(notes[0].find("'a#1.png' cannot be named in a material library"), std::string::npos) << notes[0];
   EXPECT_EQ(o2.material_library, "x_1.mtl");
   EXPECT_EQ(o2.face_materials, (std::vector<int>{1, -1, -1, 2}));
+  EXPECT_NE(o2.files.back().bytes().find("newmtl material_0\nKd 1 1 1\n\nnewmtl"), std::string::npos)
+      << o2.files.back().bytes();  // defined, without map_Kd
+
+  // A stem with what an OBJ line or a companion name cannot hold is made one that can.
+  for (const char* stem : {"t#a\tb", "  "}) {
+    const std::string path = dir.file(std::string("odd/") + stem + ".obj");
+    const MeshAttributes o3 = attributes_for_format(ply.attributes, path);
+    EXPECT_EQ(o3.material_library, std::string(stem) == "  " ? "__.mtl" : "t_a_b.mtl");
+    EXPECT_EQ(face_image_names(written_and_read(ply.mesh, o3, path).attributes), images);
+  }
+  // A library beside the mesh with other bytes is the user's: another name. One with the same
+  // bytes (an earlier run's) is the same library.
+  fs::create_directories(dir.file("mine"));
+  write_bytes(dir.file("mine/x.mtl"), "newmtl mine\n");
+  EXPECT_EQ(attributes_for_format(ply.attributes, dir.file("mine/x.obj")).material_library, "x_1.mtl");
+  written_and_read(ply.mesh, attributes_for_format(ply.attributes, dir.file("mine/x.obj")),
+                   dir.file("mine/x.obj"));
+  EXPECT_EQ(attributes_for_format(ply.attributes, dir.file("mine/x.obj")).material_library, "x_1.mtl");
+  EXPECT_EQ(read_bytes(dir.file("mine/x.mtl")), "newmtl mine\n");
+
+  // To a PLY, an image name with a space at an end (which a PLY comment line loses) is a note.
+  MeshAttributes spaced = back.attributes;
+  for (CompanionFile& f : spaced.files) {
+    if (f.name == "a.png") f.name = " a.png";
+    const std::size_t at = f.bytes().find("map_Kd a.png");
+    if (f.name == "x.mtl" && at != std::string::npos)
+      f = CompanionFile("x.mtl", std::string(f.bytes()).replace(at, 12, "map_Kd ./ a.png"));
+  }
+  notes.clear();
+  const MeshAttributes p3 = attributes_for_format(spaced, dir.file("sp/s.ply"), &notes);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("' a.png' cannot be named in a PLY"), std::string::npos) << notes[0];
+  EXPECT_EQ(p3.texture_files, (std::vector<std::string>{"sub/b b.png", "-c.png"}));
+  EXPECT_EQ(p3.face_textures, (std::vector<int>{0, -1, -1, 1}));
+  written_and_read(back.mesh, p3, dir.file("sp/s.ply"));
 }

@@ -339,32 +339,52 @@ MeshAttributes attributes_for_format(const MeshAttributes& attributes, const std
   MeshAttributes a = attributes;
   const std::string ext = lower_extension(mesh_path);
   const bool materials = !a.material_library.empty() || !a.face_materials.empty();
+  auto note = [&](const std::string& image, const std::string& why) {
+    if (notes)
+      notes->push_back(mesh_path + ": texture image '" + printable_key(image) + "' " + why +
+                       "; its faces are written without a texture");
+  };
   if (ext == ".obj" && !materials && !a.texture_files.empty()) {
-    // A PLY's images as an OBJ names them: a library "<stem>.mtl" of one material per image.
-    std::string stem = fs::path(mesh_path).stem().string();
-    stem.erase(0, stem.find_first_not_of('.'));  // no hidden library
-    std::replace(stem.begin(), stem.end(), ' ', '_');
-    if (stem.empty()) stem = "materials";
-    std::string library = stem + ".mtl";
-    for (int k = 1; !companion_name_problem(library).empty() || file_index(a, library) >= 0; ++k)
-      library = stem + "_" + std::to_string(k) + ".mtl";
+    // A PLY's images as an OBJ names them: a library of one material per image. Every material
+    // is defined, an image MTL cannot name too (without map_Kd), so that no reader misses one.
     std::string text = "# Materials for " + fs::path(mesh_path).filename().string() +
                        ": one per texture image (written by Strata)\n";
     std::vector<char> named(a.texture_files.size(), 0);
     for (std::size_t i = 0; i < a.texture_files.size(); ++i) {
       std::string image = a.texture_files[i];
+      text += "\nnewmtl material_" + std::to_string(i) + "\nKd 1 1 1\n";
       // MTL has no quoting: '#' starts a comment, and a leading '-' an option ("./-x.png" is not).
-      if (image.find('#') != std::string::npos || image.empty()) {
-        if (notes)
-          notes->push_back(mesh_path + ": texture image '" + printable_key(image) +
-                           "' cannot be named in a material library (MTL has no quoting for '#'); its "
-                           "faces are written without a texture");
+      if (image.empty() || image.find('#') != std::string::npos) {
+        note(image, "cannot be named in a material library (MTL has no quoting for '#')");
         continue;
       }
       if (image.front() == '-') image = "./" + image;
       named[i] = 1;
-      text += "\nnewmtl material_" + std::to_string(i) + "\nKd 1 1 1\nmap_Kd " + image + "\n";
+      text += "map_Kd " + image + "\n";
     }
+    // The library's name: the mesh's stem with what an OBJ line or a companion name cannot hold
+    // ('#', spaces, control characters, a leading '.') as '_', and "_1", "_2", .. appended while
+    // the name is another of the files, or a file beside the mesh with other bytes (a library
+    // from an earlier run with the same bytes is the same library).
+    std::string stem = fs::path(mesh_path).stem().string();
+    for (char& c : stem)
+      if (c == '#' || c == ' ' || c == 0x7f || static_cast<unsigned char>(c) < 0x20) c = '_';
+    stem.erase(0, stem.find_first_not_of('.'));
+    if (stem.empty()) stem = "materials";
+    auto taken = [&](const std::string& name) {
+      if (file_index(a, name) >= 0) return true;
+      const fs::path path = directory_of(mesh_path) / name;
+      std::error_code ec;
+      if (!fs::exists(fs::symlink_status(path, ec))) return false;
+      try {
+        return !fs::is_regular_file(path, ec) || fs::file_size(path, ec) != text.size() ||
+               read_file_bytes(path.string()) != text;
+      } catch (const IoError&) {
+        return true;
+      }
+    };
+    std::string library = stem + ".mtl";
+    for (std::size_t k = 1; taken(library); ++k) library = stem + "_" + std::to_string(k) + ".mtl";
     a.material_library = library;
     for (std::size_t i = 0; i < a.texture_files.size(); ++i)
       a.material_names.push_back("material_" + std::to_string(i));
@@ -381,10 +401,18 @@ MeshAttributes attributes_for_format(const MeshAttributes& attributes, const std
     // order the faces first use them. The materials stay, for attributes_not_stored().
     const std::vector<int> image_of_face = face_texture_files(a);
     std::vector<int> texture_of_file(a.files.size(), -1);
+    std::vector<char> noted(a.files.size(), 0);
     for (int file : image_of_face) {
-      if (file < 0 || texture_of_file[file] >= 0) continue;
+      if (file < 0 || texture_of_file[file] >= 0 || noted[file]) continue;
+      const std::string& name = a.files[file].name;
+      // A PLY comment line is trimmed when read (check_mesh_attributes() refuses such a name).
+      if (name.front() == ' ' || name.back() == ' ') {
+        noted[file] = 1;
+        note(name, "cannot be named in a PLY (a space at an end of the name)");
+        continue;
+      }
       texture_of_file[file] = static_cast<int>(a.texture_files.size());
-      a.texture_files.push_back(a.files[file].name);
+      a.texture_files.push_back(name);
     }
     if (!a.texture_files.empty())
       for (int file : image_of_face) a.face_textures.push_back(file < 0 ? -1 : texture_of_file[file]);

@@ -201,14 +201,19 @@ std::vector<int> face_texture_files(const MeshAttributes& attributes);
 //! that a textured scan converted from PLY to OBJ or from OBJ to PLY keeps its textures (as
 //! MeshLab converts them):
 //! - to an OBJ, a PLY's images (texture_files and face_textures, without materials) become a
-//!   material library "<stem>.mtl" (the mesh's file name stem; "_1", "_2", .. appended if
-//!   attributes.files holds that name) with a material "material_<i>" per image (Kd 1 1 1,
-//!   map_Kd the image), added to files, and face_materials; texture_files and face_textures are
-//!   cleared. An image whose name MTL cannot hold (a '#') is left out, with a note;
+//!   material library with a material "material_<i>" per image (Kd 1 1 1, map_Kd the image),
+//!   added to files, and face_materials; texture_files and face_textures are cleared. The
+//!   library is named after the mesh: its file name stem, with '#', spaces, control characters
+//!   and leading dots replaced or dropped ("materials" if nothing is left), then ".mtl"; "_1",
+//!   "_2", .. are appended while that name is another of the files, or a file beside the mesh
+//!   with other bytes (one with the same bytes, from an earlier run, is the same library). An
+//!   image whose name MTL cannot hold (a '#') keeps its material, without map_Kd, and its faces
+//!   none, with a note;
 //! - to a PLY, an OBJ's materials' diffuse images (face_texture_files(): the libraries and
 //!   images must be among attributes.files, read_companion_files()) become texture_files (the
 //!   images' names, in the order the faces first use them) and face_textures; the materials
-//!   stay (a PLY does not store them: attributes_not_stored() still names them);
+//!   stay (a PLY does not store them: attributes_not_stored() still names them). An image whose
+//!   name a PLY cannot hold (a space at an end) is left out, with a note;
 //! - anything else comes back unchanged (OFF and STL name no images).
 //! Write the result with write_mesh() and write_companion_files(). \p notes: if given, notes
 //! are appended, each naming \p mesh_path and the image.
