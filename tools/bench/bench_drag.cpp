@@ -16,6 +16,7 @@
 #include "paper_cases.h"
 #include "strata/editing.h"
 #include "strata/intersections.h"
+#include "strata/process.h"
 
 using namespace strata;
 using Clock = std::chrono::steady_clock;
@@ -25,6 +26,7 @@ static double since(Clock::time_point t) {
 }
 
 int main(int argc, char** argv) {
+  strata::reexec_with_huge_page_malloc(argv);  // as the strata tool runs (process.h)
   int region_triangles = 50000, steps = 30;
   double degrees = 90.0;
   EditOptions opt;

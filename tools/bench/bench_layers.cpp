@@ -21,6 +21,7 @@
 #include "stats_json.h"
 #include "strata/layers/model.h"
 #include "strata/mesh_io.h"
+#include "strata/process.h"
 #include "strata/reconstruction.h"
 
 using namespace strata;
@@ -79,6 +80,7 @@ layers::CascadeReport bend_top(layers::LayeredModel& model) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  strata::reexec_with_huge_page_malloc(argv);  // as the strata tool runs (process.h)
   std::vector<std::string> scans;
   int min_faces = 0, bands = 3;
   std::vector<std::string> sets;  // --set NAME=VALUE: ReconstructOptions of the model

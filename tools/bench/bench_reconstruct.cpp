@@ -47,6 +47,7 @@
 #include "strata/encoding.h"
 #include "strata/intersections.h"
 #include "strata/metrics.h"
+#include "strata/process.h"
 #include "strata/reconstruction.h"
 
 namespace {
@@ -415,14 +416,15 @@ bool completed(const json* r) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // libgomp reads OMP_NUM_THREADS when it is loaded, before main: re-execute with it set.
-  if (!std::getenv("OMP_NUM_THREADS")) {
+  // libgomp reads OMP_NUM_THREADS when it is loaded, before main: re-execute with it set (and
+  // with malloc on huge pages, as the strata tool and the viewer run: process.h).
+  const bool omp_unset = !std::getenv("OMP_NUM_THREADS");
+  if (omp_unset) {
     setenv("OMP_NUM_THREADS", "1", 1);
     setenv("OPENBLAS_NUM_THREADS", "1", 1);
-    char self[4096];
-    const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
-    if (n > 0) self[n] = '\0';
-    execv(n > 0 ? self : "/proc/self/exe", argv);
+  }
+  strata::reexec_with_huge_page_malloc(argv, omp_unset);
+  if (omp_unset) {
     std::perror("strata_bench: re-exec");
     return 1;
   }
@@ -519,6 +521,10 @@ int main(int argc, char** argv) {
              "IntersectionOptions::parallel = false"},
             {"OMP_NUM_THREADS", std::getenv("OMP_NUM_THREADS")},
             {"intersections_parallel", false}}},
+          {"malloc",
+           {{"note",
+             "GLIBC_TUNABLES as the process started (reexec_with_huge_page_malloc(), strata/process.h)"},
+            {"GLIBC_TUNABLES", std::getenv("GLIBC_TUNABLES") ? std::getenv("GLIBC_TUNABLES") : ""}}},
           {"reconstruct_options",
            {{"volume_scales", ro.volume_scales},
             {"max_levels", ro.max_levels},

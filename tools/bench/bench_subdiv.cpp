@@ -19,6 +19,7 @@
 #include "bench_args.h"
 #include "paper_cases.h"
 #include "strata/encoding.h"
+#include "strata/process.h"
 #include "strata/subdiv.h"
 
 using namespace strata;
@@ -133,6 +134,7 @@ nlohmann::json run(const char* name, const PolyMesh& cage, int num_points, unsig
 }  // namespace
 
 int main(int argc, char** argv) {
+  strata::reexec_with_huge_page_malloc(argv);  // as the strata tool runs (process.h)
   int num_points = 1000000, threads = 0;
   const char* usage = "usage: strata_bench_subdiv [--points N] [--threads T]\n";
   if (const int rc = bench::help_or_usage_error(argc, argv, usage); rc >= 0) return rc;

@@ -8,9 +8,11 @@
 
 #include "common.h"
 #include "strata/exceptions.h"
+#include "strata/process.h"
 #include "strata/version.h"
 
 int main(int argc, char** argv) {
+  strata::reexec_with_huge_page_malloc(argv);  // the solver's big arrays on huge pages
   using namespace strata::cli;
   CLI::App app{
       "strata: multiresolution detail of scanned surfaces with displacement volumes.\n"

@@ -9,8 +9,10 @@
 #include "app.h"
 #include "headless.h"
 #include "options.h"
+#include "strata/process.h"
 
 int main(int argc, char** argv) {
+  strata::reexec_with_huge_page_malloc(argv);  // the solver's big arrays on huge pages
   using namespace strata::viewer;
   try {
     const Options options = parse_options(argc, argv);
