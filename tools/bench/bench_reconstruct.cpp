@@ -424,7 +424,8 @@ int main(int argc, char** argv) {
     setenv("OPENBLAS_NUM_THREADS", "1", 1);
   }
   strata::reexec_with_huge_page_malloc(argv, omp_unset);
-  if (omp_unset) {
+  if (omp_unset) {  // not re-executed there (a program it started, say): for OMP_NUM_THREADS alone
+    execv("/proc/self/exe", argv);
     std::perror("strata_bench: re-exec");
     return 1;
   }
