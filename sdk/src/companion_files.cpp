@@ -330,10 +330,6 @@ std::vector<int> face_texture_files(const MeshAttributes& attributes) {
   return result;
 }
 
-}  // namespace strata
-
-namespace strata {
-
 MeshAttributes attributes_for_format(const MeshAttributes& attributes, const std::string& mesh_path,
                                      std::vector<std::string>* notes) {
   MeshAttributes a = attributes;

@@ -31,9 +31,6 @@ TextureLevel half(const TextureLevel& in) {
     }
   return out;
 }
-}  // namespace
-
-namespace {
 bool has_texcoords(const MeshAttributes& attributes) {
   return !attributes.texcoords.empty() || !attributes.corner_uv_index.empty();
 }

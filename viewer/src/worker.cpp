@@ -328,9 +328,8 @@ void Worker::export_meshes(const std::string& prefix, const std::string& extensi
           const MeshAttributes attributes = attributes_for_format(d.attributes(k), path, &format_notes);
           write_mesh(d.band_mesh(k), attributes, path);
           // The material library and images beside it; a file of that name already there is kept.
-          for (const std::string& note : write_companion_files(attributes, path))
-            format_notes.push_back(note);
           for (const std::string& note : format_notes) notes += "; " + note;
+          for (const std::string& note : write_companion_files(attributes, path)) notes += "; " + note;
         }
         return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension +
                notes;
