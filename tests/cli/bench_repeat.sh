@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # strata_bench --repeat N: N reconstructions with one solver object, each run's time listed, the
 # reported times their median, the runs identical (else an error); a bad count is a usage error.
+# --min-run-seconds S: more runs past --repeat until their wall times add up to S (100 at most).
 # Usage: bash bench_repeat.sh <path-to-strata> <tests/data dir>
 set -euo pipefail
 STRATA=${1:?usage: bench_repeat.sh <path-to-strata> <tests/data dir>}
@@ -9,13 +10,13 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
-"$BENCH" --sizes 3000 --jitter 0.4 --solver multigrid --repeat 3 --out "$TMP/r.json" >/dev/null 2>"$TMP/err" ||
+"$BENCH" --sizes 3000 --jitter 0.4 --solver multigrid --repeat 3 --min-run-seconds 0 --out "$TMP/r.json" >/dev/null 2>"$TMP/err" ||
   fail "strata_bench --repeat 3 exited non-zero: $(cat "$TMP/err")"
 python3 - "$TMP/r.json" <<'PY' || fail "report check"
 import json, sys
 d = json.load(open(sys.argv[1]))
 r = d["results"][0]
-assert r["repeat"] == 3, r["repeat"]
+assert r["repeat"] == 3 and r["runs"] == 3, (r["repeat"], r["runs"])
 runs = r["seconds"]["reconstruct_runs"]
 assert len(runs) == 3 and all(t > 0 for t in runs), runs
 assert r["seconds"]["reconstruct"] == sorted(runs)[1], (runs, r["seconds"]["reconstruct"])
@@ -27,11 +28,33 @@ assert r["targets"]["all"], r["targets"]
 PY
 grep -q "reconstruct run 3 in" "$TMP/err" || fail "no progress line for the third run"
 
+# One run asked for, but at least 0.3 s of runs: more runs, the median of them all.
+"$BENCH" --sizes 3000 --jitter 0.4 --solver multigrid --repeat 1 --min-run-seconds 0.3 --out "$TMP/m.json" \
+  >/dev/null 2>"$TMP/err" || fail "strata_bench --min-run-seconds 0.3 exited non-zero: $(cat "$TMP/err")"
+python3 - "$TMP/m.json" <<'PY' || fail "--min-run-seconds report check"
+import json, statistics, sys
+d = json.load(open(sys.argv[1]))
+assert d["min_run_seconds"] == 0.3, d["min_run_seconds"]
+r = d["results"][0]
+runs = r["seconds"]["reconstruct_runs"]
+assert r["repeat"] == 1 and r["runs"] == len(runs) > 1, (r["repeat"], r["runs"], runs)
+# The runs stop as soon as they add up to 0.3 s (or at 100): without the last one they did not.
+assert sum(runs[:-1]) < 0.3 and (sum(runs) >= 0.3 or len(runs) == 100), runs
+assert r["seconds"]["reconstruct"] == statistics.median(runs), (runs, r["seconds"]["reconstruct"])
+assert len(r["cpu_seconds"]["reconstruct_runs"]) == len(runs)
+PY
+
 set +e
 for bad in 0 -1 x 101 99999999999 2x; do
   err=$("$BENCH" --sizes 3000 --repeat "$bad" 2>&1 >/dev/null); rc=$?
   [ "$rc" -eq 2 ] || fail "--repeat $bad exited $rc, expected 2"
   grep -qF -- "--repeat is a whole number from 1 to 100, got '$bad'" <<<"$err" || fail "--repeat $bad: $err"
+done
+for bad in -1 x 3601 nan 1s; do
+  err=$("$BENCH" --sizes 3000 --min-run-seconds "$bad" 2>&1 >/dev/null); rc=$?
+  [ "$rc" -eq 2 ] || fail "--min-run-seconds $bad exited $rc, expected 2"
+  grep -qF -- "--min-run-seconds is a number of seconds from 0 to 3600, got '$bad'" <<<"$err" ||
+    fail "--min-run-seconds $bad: $err"
 done
 set -e
 echo "bench_repeat: all checks passed"

@@ -18,6 +18,10 @@
 // is listed, and the runs must give the same positions bit for bit (else the size is an error).
 // On a shared VM single runs of the same solve vary by up to 1.5x: the median of a few is what
 // another run reproduces.
+// --min-run-seconds S (default 5): past --repeat, the runs go on until their wall times add up
+// to S (100 runs at most), so that the small sizes, whose single runs vary most (the 100k median
+// of three moved between 0.59 and 1.10 s from one benchmark run to the next), get a median of
+// more runs; at 1M, --repeat's runs already take longer than S.
 
 #include <poll.h>
 #include <signal.h>
@@ -116,6 +120,7 @@ struct Args {
   unsigned shuffle = 0;              // --shuffle SEED (0: none)
   int finest_volume_iterations = 0;  // 0: the options' own
   int repeat = 1;                    // reconstructions per size (--repeat)
+  double min_run_seconds = 5.0;      // more runs until their wall times add up to this
   bool help = false;
   ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
 };
@@ -189,6 +194,16 @@ Args parse_args(int argc, char** argv) {
       }
       if (used == 0 || used != v.size() || a.repeat < 1 || a.repeat > 100)
         throw std::runtime_error("--repeat is a whole number from 1 to 100, got '" + v + "'");
+    } else if (opt == "--min-run-seconds") {
+      const std::string v = value(i);
+      std::size_t used = 0;
+      try {
+        a.min_run_seconds = std::stod(v, &used);
+      } catch (const std::exception&) {
+        used = 0;  // not a number, or out of double's range
+      }
+      if (used == 0 || used != v.size() || !(a.min_run_seconds >= 0 && a.min_run_seconds <= 3600))
+        throw std::runtime_error("--min-run-seconds is a number of seconds from 0 to 3600, got '" + v + "'");
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));
       if (!(a.max_seconds > 0)) throw std::runtime_error("--max-seconds must be > 0");
@@ -248,7 +263,12 @@ json run_size(const Args& args, int size, long long parent_rss) {
   std::vector<double> wall{sec["reconstruct"].get<double>()}, cpus{cpu["reconstruct"].get<double>()},
       solves{st.seconds_solve}, frame_secs{st.seconds_frames};
   std::vector<json> phases{strata::tools::solve_phases_json(st)};
-  for (int k = 1; k < args.repeat; ++k) {
+  constexpr int kMaxRuns = 100;
+  auto more = [&](int k) {
+    if (k < args.repeat) return true;
+    return k < kMaxRuns && std::accumulate(wall.begin(), wall.end(), 0.0) < args.min_run_seconds;
+  };
+  for (int k = 1; more(k); ++k) {
     const auto t0 = Clock::now();
     const double c0 = cpu_seconds();
     const ReconstructResult again = rec.reconstruct(edited);
@@ -303,6 +323,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   };
   return json{{"size", size},
               {"repeat", args.repeat},
+              {"runs", wall.size()},
               {"case", cases::to_string(args.detail)},
               {"jitter", args.jitter},
               {"shuffle", args.shuffle},
@@ -432,7 +453,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
       "[--shuffle SEED] [--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
-      "[--repeat N] [--out FILE.json] [--max-seconds S]\n"
+      "[--repeat N] [--min-run-seconds S] [--out FILE.json] [--max-seconds S]\n"
       "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
       "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
       "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
@@ -440,7 +461,9 @@ int main(int argc, char** argv) {
       "  --solver: legacy (the default options) or multigrid (multigrid_reconstruct_options())\n"
       "  --set OPTION=VALUE: a ReconstructOptions field (multigrid.* for MultigridStepOptions)\n"
       "  --repeat N: N reconstructions per size with one solver object; times are their median, and\n"
-      "    the runs must agree bit for bit\n";
+      "    the runs must agree bit for bit\n"
+      "  --min-run-seconds S: more runs past --repeat until their wall times add up to S seconds\n"
+      "    (default 5; at most 100 runs): a steadier median for the small sizes\n";
   Args args;
   try {
     args = parse_args(argc, argv);
@@ -471,6 +494,12 @@ int main(int argc, char** argv) {
     if (completed(r100k) && completed(r1m)) ratio = reconstruct_seconds(r1m) / reconstruct_seconds(r100k);
     // The same for a first reconstruction, setup included (informational: the targets time the
     // reconstructions of a kept solver).
+    // And of the CPU times (informational: less sensitive than wall time to other work on a
+    // shared machine).
+    json cpu_ratio = nullptr;
+    if (completed(r100k) && completed(r1m))
+      cpu_ratio = (*r1m)["cpu_seconds"]["reconstruct"].get<double>() /
+                  (*r100k)["cpu_seconds"]["reconstruct"].get<double>();
     json first_ratio = nullptr;
     if (completed(r100k) && completed(r1m))
       first_ratio = (*r1m)["seconds"]["first_reconstruction"].get<double>() /
@@ -503,7 +532,7 @@ int main(int argc, char** argv) {
     const json report {
       {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
           {"case", cases::to_string(args.detail)}, {"jitter", args.jitter}, {"shuffle", args.shuffle},
-          {"sizes", args.sizes}, {"max_seconds", args.max_seconds},
+          {"sizes", args.sizes}, {"max_seconds", args.max_seconds}, {"min_run_seconds", args.min_run_seconds},
           {"machine",
            {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
             {"cpu_model", cpu_model()},
@@ -583,7 +612,8 @@ int main(int argc, char** argv) {
             {"step_solver", solver_name(ro.step_solver)},
             {"polish_solver", solver_name(ro.polish_solver)}}},
           {"parent_baseline_rss_bytes", parent_rss}, {"results", results}, {"time_ratio_1m_over_100k", ratio},
-          {"time_ratio_1m_over_100k_first_reconstruction", first_ratio}, {
+          {"time_ratio_1m_over_100k_first_reconstruction", first_ratio},
+          {"cpu_time_ratio_1m_over_100k", cpu_ratio}, {
         "targets", {
           {"throughput_ge_1e6_per_cycle",
            {{"definition",
