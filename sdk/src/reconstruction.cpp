@@ -1685,8 +1685,10 @@ class VolumeReconstructor::Impl {
           llt = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
           llt->cholmod().print = 0;
           llt->analyzePattern(A);
+          check_cancel();  // the ordering took 0.4 s of a 191k-prism local end at 1M prisms
         }
         llt->factorize(A);
+        check_cancel();  // the factorization is not interrupted; what follows it is not run
         if (llt->info() != Eigen::Success) return factorization_failed(damping);
         y = llt->solve(r);
       } else {
@@ -2259,6 +2261,7 @@ class VolumeReconstructor::Impl {
     assemble(L, w.grad, w.damping);
     const internal::SerialOpenMp serial;
     L.llt->factorize(L.jj);
+    check_cancel();  // the factorization is not interrupted; the step's line search is not run
     if (L.llt->info() != Eigen::Success)
       throw SolverError("Cholesky factorization of the volume step failed");
     Eigen::Map<const Eigen::VectorXd> r(w.r.data(), static_cast<Eigen::Index>(m));
