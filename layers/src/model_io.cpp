@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 #include "strata/layers/model.h"
 #include "strata/layers/strata_file.h"
 
@@ -472,7 +473,7 @@ LayeredModel read_model(const std::string& path) {
   try {
     m = json::parse(c.model_json);
   } catch (const json::exception& e) {
-    h.fail(std::string("malformed model header: ") + e.what());
+    h.fail("malformed model header: " + json_error_text(e.what()));
   }
   if (h.text(m, "type", "the model header") != "strata.layered_model")
     h.fail("not a layered model (type '" + m.at("type").get<std::string>() + "')");

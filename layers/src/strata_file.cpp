@@ -172,7 +172,7 @@ class Reader {
     try {
       problem = parse_json_limited(begin, end, header);
     } catch (const Json::exception& e) {
-      malformed(std::string("invalid JSON: ") + e.what());
+      malformed("invalid JSON: " + json_error_text(e.what()));
     }
     if (!problem.empty()) malformed(problem);
     if (!header.is_object()) malformed("not a JSON object");
@@ -311,7 +311,7 @@ void write_strata_container(const StrataContainer& container, const std::string&
     problem = parse_json_limited(container.model_json.data(),
                                  container.model_json.data() + container.model_json.size(), model);
   } catch (const Json::exception& e) {
-    throw InvalidInput(path + ": model_json is not valid JSON: " + e.what());
+    throw InvalidInput(path + ": model_json is not valid JSON: " + json_error_text(e.what()));
   }
   if (!problem.empty()) throw InvalidInput(path + ": model_json: " + problem);
   if (!model.is_object()) throw InvalidInput(path + ": model_json is not a JSON object");

@@ -58,7 +58,7 @@ SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
   try {
     j = json::parse(text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
-    throw InvalidInput(name + ": not valid JSON: " + e.what());
+    throw InvalidInput(name + ": not valid JSON: " + json_error_text(e.what()));
   }
   only_keys(name, "top level", j, {"creases", "corners"});
   SubdivTags tags;

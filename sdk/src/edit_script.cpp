@@ -150,7 +150,7 @@ EditScript parse_edit_script(const std::string& text, const std::string& name) {
   try {
     j = json::parse(text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
-    throw InvalidInput(name + ": not valid JSON: " + e.what());
+    throw InvalidInput(name + ": not valid JSON: " + json_error_text(e.what()));
   }
   // A key given twice in one object: JSON keeps the later value silently (a second "region"
   // won); and the depth and width limits of Strata's JSON. Checked after the parse, so that a

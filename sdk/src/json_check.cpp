@@ -86,4 +86,13 @@ std::string json_structure_problem(std::string_view text, const JsonLimits& limi
   return check.problem();
 }
 
+std::string json_error_text(std::string_view what) {
+  constexpr std::string_view kPrefix = "[json.exception.";
+  if (what.substr(0, kPrefix.size()) == kPrefix) {
+    const std::size_t end = what.find("] ");
+    if (end != std::string_view::npos) what.remove_prefix(end + 2);
+  }
+  return std::string(what);
+}
+
 }  // namespace strata

@@ -38,4 +38,10 @@ std::string json_structure_problem(std::string_view text, const JsonLimits& limi
 //! control characters that a terminal would act on.
 std::string printable_key(std::string_view key);
 
+//! The text of a JSON parser's exception (\p what, nlohmann's `e.what()`) as Strata's messages
+//! show it: without the `[json.exception.parse_error.101] ` prefix, which names the library's
+//! exception class rather than the problem; the rest (`parse error at line 1, column 27: ...`) is
+//! kept. Text without such a prefix is returned as it is.
+std::string json_error_text(std::string_view what);
+
 }  // namespace strata
