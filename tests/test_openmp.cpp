@@ -27,6 +27,7 @@ int team_size(int n) {
 TEST(SerialOpenMp, CapsRegionsWithANumThreadsClauseOnTheCallingThreadAndRestores) {
   const int max_threads = omp_get_max_threads();
   const int dynamic = omp_get_dynamic();
+  const int levels = omp_get_max_active_levels();
   // Without the guard the clause gets its threads (the oversubscription the guard is for), unless
   // the environment limits them.
   const bool unlimited = !std::getenv("OMP_THREAD_LIMIT") && !dynamic;
@@ -37,6 +38,10 @@ TEST(SerialOpenMp, CapsRegionsWithANumThreadsClauseOnTheCallingThreadAndRestores
     const strata::internal::SerialOpenMp guard;
     EXPECT_EQ(team_size(4), 1);
     EXPECT_EQ(omp_get_max_threads(), 1);
+    // Inactive regions, not dynamic adjustment: with it, libgomp asked the kernel for the load
+    // average and the affinity at every region.
+    EXPECT_EQ(omp_get_max_active_levels(), 0);
+    EXPECT_EQ(omp_get_dynamic(), dynamic);
     // Another thread keeps the process's defaults.
     int other = 0;
     std::thread t([&] { other = team_size(2); });
@@ -52,4 +57,5 @@ TEST(SerialOpenMp, CapsRegionsWithANumThreadsClauseOnTheCallingThreadAndRestores
   }
   EXPECT_EQ(omp_get_max_threads(), max_threads);
   EXPECT_EQ(omp_get_dynamic(), dynamic);
+  EXPECT_EQ(omp_get_max_active_levels(), levels);
 }

@@ -5,14 +5,15 @@
 
 namespace strata::internal {
 
-SerialOpenMp::SerialOpenMp() : dynamic_(omp_get_dynamic()), max_threads_(omp_get_max_threads()) {
-  omp_set_dynamic(1);
+SerialOpenMp::SerialOpenMp()
+    : max_active_levels_(omp_get_max_active_levels()), max_threads_(omp_get_max_threads()) {
+  omp_set_max_active_levels(0);
   omp_set_num_threads(1);
 }
 
 SerialOpenMp::~SerialOpenMp() {
   omp_set_num_threads(max_threads_);
-  omp_set_dynamic(dynamic_);
+  omp_set_max_active_levels(max_active_levels_);
 }
 
 }  // namespace strata::internal
