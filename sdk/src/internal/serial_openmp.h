@@ -14,11 +14,10 @@ namespace strata::internal {
 //! (Dynamic adjustment with nthreads-var 1, used before, also gave one thread, but libgomp then
 //! asked the kernel for the load average and the CPU affinity at every region that could have had
 //! more threads: 18,220 of each call in one reconstruction of the regular 100k bend (strace); a
-//! microbenchmark: 4.0 against 1.3 us a region. The bend's solve time did not change measurably: 3.50-4.40 s against 3.35-4.56 s,
-//! medians of three, alternating.)
-//! nthreads-var is set to 1 too, for code that sizes per-thread workspace by
-//! omp_get_max_threads(). Both are the calling thread's own ICVs (libgomp since GCC 11), so other
-//! threads (and the caller's own OpenMP code after the guard ends) are unaffected; the previous
+//! microbenchmark: 4.0 against 1.3 us a region. The bend's solve time did not change measurably: 3.50-4.40 s
+//! against 3.35-4.56 s, medians of three, alternating.) nthreads-var is set to 1 too, for code that sizes
+//! per-thread workspace by omp_get_max_threads(). Both are the calling thread's own ICVs (libgomp since GCC
+//! 11), so other threads (and the caller's own OpenMP code after the guard ends) are unaffected; the previous
 //! values are restored.
 class SerialOpenMp {
  public:
