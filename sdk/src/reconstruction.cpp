@@ -1697,6 +1697,7 @@ class VolumeReconstructor::Impl {
           ldlt->analyzePattern(A);
         }
         ldlt->factorize(A);
+        check_cancel();
         if (ldlt->info() != Eigen::Success) return factorization_failed(damping);
         y = ldlt->solve(r);
       }
@@ -2040,6 +2041,7 @@ class VolumeReconstructor::Impl {
     if (L.llt) return;
     const std::vector<Face>& lf = L.local_faces.empty() ? L.faces : L.local_faces;
     build_jj_pattern(lf, internal::build_adjacency(static_cast<int>(L.verts.size()), lf), L);
+    check_cancel();  // the pattern and its analysis are kept for the next call
   }
 
   // V's entries of \p faces recomputed, after a step that moved only vertices of these prisms.

@@ -21,7 +21,8 @@
 // --min-run-seconds S (default 5): past --repeat, the runs go on until their wall times add up
 // to S (100 runs at most), so that the small sizes, whose single runs vary most (the 100k median
 // of three moved between 0.59 and 1.10 s from one benchmark run to the next), get a median of
-// more runs; at 1M, --repeat's runs already take longer than S.
+// more runs (on this project's 2-core VM, --repeat 3 at 1M already takes longer than 5 s). Keep S
+// well under --max-seconds, which kills a size's child with all its runs.
 
 #include <poll.h>
 #include <signal.h>
@@ -278,8 +279,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
     frame_secs.push_back(again.stats.seconds_frames);
     phases.push_back(strata::tools::solve_phases_json(again.stats));
     if (again.positions != r.positions)
-      throw std::runtime_error("run " + std::to_string(k + 1) +
-                               " of --repeat gave other positions than the first");
+      throw std::runtime_error("run " + std::to_string(k + 1) + " gave other positions than the first");
     log("reconstruct run " + std::to_string(k + 1) + " in " + std::to_string(wall.back()) + " s");
   }
   sec["reconstruct_runs"] = wall;
@@ -291,7 +291,7 @@ json run_size(const Args& args, int size, long long parent_rss) {
   cpu["reconstruct"] = median(cpus);
   sec["frames"] = median(frame_secs);
   sec["solve"] = median(solves);
-  // The phases of the run whose solve took the median time.
+  // The phases of the run whose solve took the median time (of an even count, the lower middle one).
   std::vector<std::size_t> order(solves.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return solves[i] < solves[j]; });
@@ -492,14 +492,14 @@ int main(int argc, char** argv) {
     auto reconstruct_seconds = [](const json* r) { return (*r)["seconds"]["reconstruct"].get<double>(); };
     json ratio = nullptr;
     if (completed(r100k) && completed(r1m)) ratio = reconstruct_seconds(r1m) / reconstruct_seconds(r100k);
-    // The same for a first reconstruction, setup included (informational: the targets time the
-    // reconstructions of a kept solver).
-    // And of the CPU times (informational: less sensitive than wall time to other work on a
+    // The same of the CPU times (informational: less sensitive than wall time to other work on a
     // shared machine).
     json cpu_ratio = nullptr;
     if (completed(r100k) && completed(r1m))
       cpu_ratio = (*r1m)["cpu_seconds"]["reconstruct"].get<double>() /
                   (*r100k)["cpu_seconds"]["reconstruct"].get<double>();
+    // The same for a first reconstruction, setup included (informational: the targets time the
+    // reconstructions of a kept solver).
     json first_ratio = nullptr;
     if (completed(r100k) && completed(r1m))
       first_ratio = (*r1m)["seconds"]["first_reconstruction"].get<double>() /
@@ -626,7 +626,7 @@ int main(int argc, char** argv) {
               {"reconstruct_100k_le_2s",
                {{"definition",
                  "wall time of VolumeReconstructor::reconstruct() (frames + solve; setup excluded), "
-                 "the median of --repeat runs"},
+                 "the median of the runs (--repeat, then --min-run-seconds)"},
                 {"seconds", completed(r100k) ? json(reconstruct_seconds(r100k)) : json(nullptr)},
                 {"pass", t100k}}},
               {"scaling_1m_le_12x_100k", {{"ratio", ratio}, {"pass", tscale}}},
