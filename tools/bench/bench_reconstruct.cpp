@@ -44,6 +44,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -132,6 +133,22 @@ const char* solver_name(VolumeStepSolver s) {
                                             : "jacobi_cg";
 }
 
+// Whether all of \p v is a number (std::stoll's or std::stod's, by \p out's type) within the type's
+// range; if so, it is in \p out.
+template <class T>
+bool read_whole(const std::string& v, T& out) {
+  std::size_t used = 0;
+  try {
+    if constexpr (std::is_same_v<T, double>)
+      out = std::stod(v, &used);
+    else
+      out = std::stoll(v, &used);
+  } catch (const std::exception&) {
+    return false;  // not a number, or out of range
+  }
+  return used != 0 && used == v.size();
+}
+
 Args parse_args(int argc, char** argv) {
   Args a;
   bool multigrid = false;
@@ -167,14 +184,8 @@ Args parse_args(int argc, char** argv) {
       a.jitter = std::stod(value(i));
     } else if (opt == "--shuffle") {
       const std::string v = value(i);
-      std::size_t used = 0;
       long long seed = -1;
-      try {
-        seed = std::stoll(v, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != v.size() || seed < 0 || seed > 4294967295LL)
+      if (!read_whole(v, seed) || seed < 0 || seed > 4294967295LL)
         throw std::runtime_error("--shuffle is a seed from 0 to 4294967295, got '" + v + "'");
       a.shuffle = static_cast<unsigned>(seed);
     } else if (opt == "--finest-volume-iterations") {
@@ -187,23 +198,13 @@ Args parse_args(int argc, char** argv) {
       sets.push_back(value(i));
     } else if (opt == "--repeat") {
       const std::string v = value(i);
-      std::size_t used = 0;
-      try {
-        a.repeat = std::stoi(v, &used);
-      } catch (const std::exception&) {
-        used = 0;  // not a number, or out of int's range
-      }
-      if (used == 0 || used != v.size() || a.repeat < 1 || a.repeat > 100)
+      long long n = 0;
+      if (!read_whole(v, n) || n < 1 || n > 100)
         throw std::runtime_error("--repeat is a whole number from 1 to 100, got '" + v + "'");
+      a.repeat = static_cast<int>(n);
     } else if (opt == "--min-run-seconds") {
       const std::string v = value(i);
-      std::size_t used = 0;
-      try {
-        a.min_run_seconds = std::stod(v, &used);
-      } catch (const std::exception&) {
-        used = 0;  // not a number, or out of double's range
-      }
-      if (used == 0 || used != v.size() || !(a.min_run_seconds >= 0 && a.min_run_seconds <= 3600))
+      if (!read_whole(v, a.min_run_seconds) || !(a.min_run_seconds >= 0 && a.min_run_seconds <= 3600))
         throw std::runtime_error("--min-run-seconds is a number of seconds from 0 to 3600, got '" + v + "'");
     } else if (opt == "--max-seconds") {
       a.max_seconds = std::stod(value(i));

@@ -590,8 +590,9 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
 
   // --- Preconditioned conjugate gradients from delta = 0, tracking rho = r - J delta. A stop
-  // read here spares the first V-cycle too (at 1M prisms the operators and that cycle took up to
-  // 0.25 s before the first iteration's check).
+  // read here spares the first V-cycle too (at 1M prisms a cancel at a step's start waited up to
+  // 0.25 s, for the step's gradients, these operators and that cycle, before the first iteration's
+  // check).
   if (sys.stop && sys.stop->load(std::memory_order_relaxed)) return result;
   ws.rho = r;
   ws.res.resize(n);
