@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <random>
@@ -149,6 +150,26 @@ TEST(RegionEditor, RejectsBadSelections) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("region editor's mesh"), std::string::npos) << e.what();
   }
+}
+
+// A tiny normal is a direction like any other (1e-170 underflowed norm() and was refused as
+// zero), and a kind cast from outside the enum is refused (it selected nothing).
+TEST(Selection, TinyNormalsSelectAndBadKindsAreRefused) {
+  const TriMesh m = bumpy_cylinder(2000);
+  const std::vector<char> unit =
+      select_vertices(m.vertices, Selection::halfspace(Vec3(0, 0, 2), Vec3::UnitZ()));
+  const std::vector<char> tiny =
+      select_vertices(m.vertices, Selection::halfspace(Vec3(0, 0, 2), Vec3(0, 1e-300, 1e-170)));
+  EXPECT_EQ(tiny, unit);
+  EXPECT_GT(std::count(unit.begin(), unit.end(), 1), 0);
+  EXPECT_THROW(select_vertices(m.vertices, Selection::halfspace(Vec3(0, 0, 2), Vec3::Zero())), InvalidInput);
+  Selection bad = Selection::sphere(Vec3::Zero(), 1.0);
+  bad.kind = static_cast<Selection::Kind>(7);
+  EXPECT_THROW(select_vertices(m.vertices, bad), InvalidInput);
+  const EditScript sc = parse_edit_script(
+      R"({"region": {"halfspace": {"point": [0, 0, 2], "normal": [0, 0, 1e-170]}}, "handle": {"vertices": [0]}, "transform": {}})",
+      "tiny.json");
+  EXPECT_EQ(select_vertices(m.vertices, sc.edits[0].region), unit);
 }
 
 // Options out of range: NaN or negative smoothing was taken as the default, negative solved rings
@@ -587,6 +608,47 @@ TEST(RegionEditor, DragEndsAtTheExactSolution) {
   EXPECT_EQ(br.positions, be.apply(end_transform).positions);
 }
 
+// A cancelled or failed end_drag() keeps the drag (it was ended before the solve and lost); the
+// editor's CageEditor twin shares the code path.
+TEST(RegionEditor, AnEndDragThatThrowsLeavesTheDragOn) {
+  const TriMesh m = bumpy_cylinder(2000);
+  const Bend b = elbow(m);
+  std::atomic<bool> cancel{false};
+  EditOptions o;
+  o.reconstruct.cancel = &cancel;
+  RegionEditor ed(m, b.region, b.handle, o);
+  ed.begin_drag();
+  ed.update_drag(b.transform);
+  cancel = true;
+  EXPECT_THROW(ed.end_drag(), Cancelled);
+  EXPECT_TRUE(ed.dragging());
+  cancel = false;
+  const EditResult r = ed.end_drag();
+  EXPECT_FALSE(ed.dragging());
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(r.volume.max_relative_error, 1e-3);
+}
+
+// handle_solved_rings 0 pins the most of the handle (it pinned none: the rigid-frame test's
+// depth was capped at rings + 1 = 1, below the 2 it asks for).
+TEST(RegionEditor, FewerSolvedHandleRingsPinMoreOfTheHandle) {
+  const TriMesh m = bumpy_cylinder(8000);
+  const Bend b = elbow(m);
+  auto pinned_in_handle = [&](int rings) {
+    EditOptions o;
+    o.handle_solved_rings = rings;
+    const RegionEditor ed(m, b.region, b.handle, o);
+    const std::vector<int>& sub = ed.region_submesh_vertices();
+    int n = 0;
+    for (std::size_t k = 0; k < sub.size(); ++k) n += b.handle[sub[k]] && ed.encoding().pinned[k];
+    return n;
+  };
+  const int p0 = pinned_in_handle(0), p1 = pinned_in_handle(1), p3 = pinned_in_handle(3);
+  EXPECT_GT(p3, 0);
+  EXPECT_GT(p0, p1);
+  EXPECT_GE(p1, p3);
+}
+
 TEST(EditScript, ParsesTheDocumentedForms) {
   const std::string one = R"({"region": {"sphere": {"center": [0.0, 0.4, 0.1], "radius": 0.3}},
     "handle": {"sphere": {"center": [0.0, 0.7, 0.1], "radius": 0.12}},
@@ -612,6 +674,31 @@ TEST(EditScript, ParsesTheDocumentedForms) {
   EXPECT_DOUBLE_EQ(l.edits[0].transform.linear(2, 2), 2.0);
   EXPECT_EQ(l.edits[1].region.indices, (std::vector<int>{1, 2, 3}));
   EXPECT_DOUBLE_EQ(l.edits[1].transform.linear(0, 1), 0.5);
+}
+
+// Scales within the script's limits are maps the editors take: a uniform 1e-5 was refused as
+// "singular or a reflection (determinant 0.000000)" by an absolute threshold on the determinant.
+TEST(EditScript, TinyAndHugeScalesWithinTheLimitsReachTheEditors) {
+  const TriMesh m = bumpy_cylinder(2000);
+  const Bend b = elbow(m);
+  const RegionEditor ed(m, b.region, b.handle);
+  for (const char* scale : {"1e-6", "1e-5", "[1e-6, 1e6, 1]", "1e6"}) {
+    const std::string text = std::string(R"({"region": {"vertices": [0]}, "handle": {"vertices": [0]}, )") +
+                             R"("transform": {"scale": )" + scale + R"(, "pivot": [0, 0, 2]}})";
+    const EditScript sc = parse_edit_script(text, "scale.json");
+    ASSERT_EQ(sc.edits.size(), 1u);
+    std::vector<Vec3> base;
+    ASSERT_NO_THROW(base = ed.edited_base(sc.edits[0].transform)) << scale;
+    for (const Vec3& v : base) ASSERT_TRUE(v.allFinite()) << scale;
+  }
+  EditTransform flat;
+  flat.linear = Eigen::Vector3d(1.0, 1.0, 1e-16).asDiagonal();
+  try {
+    (void)ed.edited_base(flat);
+    ADD_FAILURE() << "a singular map accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("is singular (determinant 1e-16"), std::string::npos) << e.what();
+  }
 }
 
 TEST(EditScript, RejectsMalformedScriptsNamingTheFileAndThePlace) {
@@ -642,6 +729,10 @@ TEST(EditScript, RejectsMalformedScriptsNamingTheFileAndThePlace) {
       {"{" + sel + R"(, "transform": {"translate": [1e300, 0, 0]}})",
        "edit.transform.translate[0]: 1e+300 is beyond the engine's range"},
       {"{" + sel + R"(, "transform": {"scale": 1e-300}})", "within 1e-6 to 1e6"},
+      // Each part within its limits, the product singular to rounding.
+      {"{" + sel +
+           R"(, "transform": {"scale": [1, 1e6, 1e-6], "matrix": [[1, 0, 0], [0, 1, 0], [0, 0, 1e-9]]}})",
+       "edit.transform: the linear part (rotate * matrix * scale) is singular"},
       {std::string("{}\0", 3), "it holds a NUL byte"},
   };
   for (const auto& [text, expected] : bad) {

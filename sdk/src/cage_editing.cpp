@@ -180,11 +180,15 @@ class CageEditor::Impl {
   // The exact solve as CageEditOptions::drag_end says (RegionEditor::end_drag).
   EditResult end_drag() {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
+    // The drag stays on until the solve returns: a cancelled or failed end leaves it to be
+    // ended (or dragged on) again.
+    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart
+                       ? apply(drag_transform_)
+                       : finish(drag_transform_, [&](const std::vector<Vec3>& cage, EditResult& res) {
+                           return detail_.end_drag(cage, res);
+                         });
     dragging_ = false;
-    if (opt_.drag_end == EditOptions::DragEnd::CleanStart) return apply(drag_transform_);
-    return finish(drag_transform_, [&](const std::vector<Vec3>& cage, EditResult& res) {
-      return detail_.end_drag(cage, res);
-    });
+    return r;
   }
 
   const TriMesh& mesh() const { return mesh_; }

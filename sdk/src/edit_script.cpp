@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "internal/blended_map.h"
 #include "internal/read_file.h"
 #include "strata/exceptions.h"
 #include "strata/json_check.h"
@@ -68,7 +69,8 @@ Selection selection(const Ctx& c, const std::string& where, const json& j) {
   if (it.key() == "halfspace") {
     check_keys(c, w, v, {"point", "normal"});
     const Vec3 n = vec3(c, w + ".normal", required(c, w, v, "normal"));
-    if (!(n.norm() > 0)) c.fail(w + ".normal", "must not be zero");
+    if (!(n.cwiseAbs().maxCoeff() > 0))
+      c.fail(w + ".normal", "must not be zero");  // norm() underflows at 1e-170
     return Selection::halfspace(vec3(c, w + ".point", required(c, w, v, "point")), n);
   }
   if (it.key() == "box") {
@@ -122,11 +124,16 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
     const std::string w = where + ".matrix";
     if (!m.is_array() || m.size() != 3) c.fail(w, "expected three rows of three numbers");
     for (int r = 0; r < 3; ++r) M.row(r) = vec3(c, w + "[" + std::to_string(r) + "]", m[r]).transpose();
-    if (!(M.determinant() > 1e-12))
-      c.fail(w, "must have a positive determinant (no reflection, not singular)");
+    const std::string problem = internal::linear_map_problem(M);
+    if (!problem.empty())
+      c.fail(w, "must have a positive determinant (no reflection, not singular): it " + problem);
   }
   if (j.contains("translate")) t.translation = vec3(c, where + ".translate", j["translate"]);
   t.linear = R * M * S;
+  // Each part may pass and their product still be singular to rounding (a matrix and a scale at
+  // opposite extremes).
+  const std::string problem = internal::linear_map_problem(t.linear);
+  if (!problem.empty()) c.fail(where, "the linear part (rotate * matrix * scale) " + problem);
   return t;
 }
 

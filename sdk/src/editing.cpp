@@ -72,9 +72,13 @@ std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& s
       break;
     }
     case Selection::Kind::Halfspace: {
-      if (!finite(sel.point) || !finite(sel.normal) || !(sel.normal.norm() > 0))
+      // Zero tested on the largest coordinate, and the normal scaled by it: a normal of 1e-170
+      // underflowed norm() (refused as zero) and the dot products.
+      const double largest = finite(sel.normal) ? sel.normal.cwiseAbs().maxCoeff() : 0.0;
+      if (!finite(sel.point) || !(largest > 0))
         throw InvalidInput("halfspace selection needs a finite point and a non-zero normal");
-      for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.point).dot(sel.normal) >= 0;
+      const Vec3 n = sel.normal / largest;
+      for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.point).dot(n) >= 0;
       break;
     }
     case Selection::Kind::Box: {
@@ -92,6 +96,9 @@ std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& s
         out[v] = 1;
       }
       break;
+    default:  // a value cast from outside the enum (an embedder's bad data)
+      throw InvalidInput("selection kind " + std::to_string(static_cast<int>(sel.kind)) +
+                         " is not one of the four");
   }
   return out;
 }
@@ -253,11 +260,15 @@ class RegionEditor::Impl {
   // diagonal away from apply(), and are checked, with apply()'s clean start as the fallback.)
   EditResult end_drag() {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
+    // The drag stays on until the solve returns: a cancelled or failed end leaves it to be
+    // ended (or dragged on) again.
+    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart
+                       ? apply(drag_transform_)
+                       : finish(drag_transform_, [&](const std::vector<Vec3>& sub_base, EditResult& res) {
+                           return detail_.end_drag(sub_base, res);
+                         });
     dragging_ = false;
-    if (opt_.drag_end == EditOptions::DragEnd::CleanStart) return apply(drag_transform_);
-    return finish(drag_transform_, [&](const std::vector<Vec3>& sub_base, EditResult& res) {
-      return detail_.end_drag(sub_base, res);
-    });
+    return r;
   }
 
   const TriMesh& mesh() const { return mesh_; }
@@ -522,7 +533,8 @@ class RegionEditor::Impl {
     const int rings = opt_.handle_solved_rings;
     std::vector<char> outside_handle(n);
     for (int i = 0; i < n; ++i) outside_handle[i] = !in_handle_[i];
-    const std::vector<int> depth = internal::ring_distance(adj, outside_handle, rings + 1);
+    // Capped at 2 at least: the rigid-frame test below asks for depth 2 whatever the rings.
+    const std::vector<int> depth = internal::ring_distance(adj, outside_handle, std::max(rings + 1, 2));
     std::vector<char> nonrigid(n, 0);
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];

@@ -224,7 +224,16 @@ void Worker::end_drag() {
           if (!d.model().dragging()) return std::string();
           d.mutable_model().end_drag(R"({"source": "strata-viewer", "op": "drag"})");
         } else if (mesh_editor_) {
-          EditResult r = mesh_editor_->end_drag();
+          EditResult r;
+          try {
+            r = mesh_editor_->end_drag();
+          } catch (...) {
+            // As a model's failed end_drag(): the mesh as before the drag, and the error shown.
+            d.set_mesh_positions(mesh_editor_->mesh().vertices);
+            mesh_editor_.reset();
+            mesh_dragging_ = false;
+            throw;
+          }
           d.set_mesh_positions(std::move(r.positions));
           mesh_editor_.reset();
           mesh_dragging_ = false;

@@ -44,7 +44,9 @@ struct CageEditOptions {
 };
 
 //! The blend field of an edit on a cage (paper, section 5, with the cage as the base): s is
-//! bi-harmonic (L^2 s = 0 with the uniform Laplacian of the cage graph) on the region's cage
+//! bi-harmonic: (L^T L s)_v = 0, the minimizer of |L s|^2 with L the row-normalized uniform
+//! Laplacian of the cage graph (L^2 s = 0 where the valences are equal, L then symmetric; a
+//! symmetric system everywhere), on the region's cage
 //! vertices outside the handle, 0 outside the region and 1 on the handle (the region vertices
 //! that \p handle flags).
 //! \throw InvalidInput if the flags do not have one entry per cage vertex, the region or the
@@ -111,7 +113,8 @@ class CageEditor {
   //! \throw InvalidInput if no drag is active, or as edited_cage().
   const std::vector<Vec3>& update_drag(const EditTransform& transform);
   //! Ends the drag with the exact solve, as CageEditOptions::drag_end says (RegionEditor::end_drag).
-  //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails.
+  //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails; Cancelled
+  //!        (ReconstructOptions::cancel). After a throw the drag is still active.
   EditResult end_drag();
   bool dragging() const;
 

@@ -257,7 +257,9 @@ class RegionEditor {
   //! from the drag's per-level state (default; checked for convergence and new intersecting
   //! pairs, with apply()'s clean start as the fallback), or apply() itself. A drag back to its
   //! start (the base at rest, as for apply()) gives the mesh back bit for bit.
-  //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails.
+  //! \throw InvalidInput if no drag is active; SolverError if the reconstruction fails; Cancelled
+  //!        (ReconstructOptions::cancel). After a throw the drag is still active: end_drag() can
+  //!        be called again (with the flag cleared) or the drag go on.
   EditResult end_drag();
   bool dragging() const;
 

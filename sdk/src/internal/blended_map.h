@@ -3,12 +3,26 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <sstream>
 #include <string>
 
 #include "strata/editing.h"
 #include "strata/exceptions.h"
 
 namespace strata::internal {
+
+// What makes \p linear unusable as an edit's linear part, or "" if nothing: a reflection, or a
+// map singular relative to its own size (smallest singular value below 1e-14 of the largest), so
+// that a uniform scale of 1e-6 is accepted as one of 1e6 is.
+inline std::string linear_map_problem(const Eigen::Matrix3d& linear) {
+  const double det = linear.determinant();
+  const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(linear).singularValues();
+  if (det > 0 && sv(2) > 1e-14 * sv(0)) return "";
+  std::ostringstream m;
+  m << (det < 0 ? "is a reflection" : "is singular") << " (determinant " << det << ", singular values "
+    << sv(0) << ", " << sv(1) << ", " << sv(2) << ")";
+  return m.str();
+}
 
 // An EditTransform split once into what the blend interpolates: the rotation of the polar
 // decomposition linear = R S as axis and angle, the symmetric stretch S and the translation.
@@ -17,10 +31,8 @@ class BlendedMap {
   explicit BlendedMap(const EditTransform& t) : t_(t) {
     if (!t.linear.allFinite() || !t.translation.allFinite() || !t.pivot.allFinite())
       throw InvalidInput("edit transform has a non-finite value");
-    const double det = t.linear.determinant();
-    if (!(det > 1e-12))
-      throw InvalidInput("edit transform is singular or a reflection (determinant " + std::to_string(det) +
-                         ")");
+    const std::string problem = linear_map_problem(t.linear);
+    if (!problem.empty()) throw InvalidInput("edit transform " + problem);
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(t.linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
     stretch_ = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
