@@ -33,8 +33,24 @@ using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 // taubin_smooth(): a pass may not leave a face with less than this share of its area in the input.
 constexpr double kMinAreaRatio = 0.01;
 
-double double_area(const std::vector<Vec3>& x, const Face& f) {
-  return triangle_area_normal(x[f[0]], x[f[1]], x[f[2]]).norm();
+// Twice the face's area in units of scale^-2: with scale a power of two near 1 / the mesh's
+// extent, so that the cross products neither overflow (coordinates of 1e160) nor underflow
+// (1e-160), where the collapse test would never fire; exact, so at scale 1 it is the plain area.
+double double_area(const std::vector<Vec3>& x, const Face& f, double scale) {
+  const Vec3 a = scale * (x[f[1]] - x[f[0]]), b = scale * (x[f[2]] - x[f[0]]);
+  return a.cross(b).norm();
+}
+
+// The power of two just above 1 / the bounding box's largest side (1 for a mesh of one point).
+double unit_scale(const std::vector<Vec3>& x) {
+  if (x.empty()) return 1.0;
+  Vec3 lo = x[0], hi = x[0];
+  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const double extent = (hi - lo).maxCoeff();
+  if (!(extent > 0) || !std::isfinite(extent)) return 1.0;
+  int exponent = 0;
+  std::frexp(extent, &exponent);
+  return std::ldexp(1.0, -std::clamp(exponent, -1000, 1000));
 }
 
 }  // namespace
@@ -47,14 +63,33 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   if (steps == 0) return x;
   const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
   const std::vector<char> boundary = internal::boundary_vertices(m.num_vertices(), m.faces);
+  // Per neighbour slot of a boundary vertex: whether the edge to it is a boundary edge (one face).
+  // A boundary vertex averages those neighbours only: a chord between two boundary vertices (an
+  // ear's third edge, a fan over a polygon) would pull the rim inwards.
+  std::vector<char> along(adj.neighbors.size(), 0);
+  tbb::parallel_for(0, m.num_vertices(), [&](int v) {
+    if (!boundary[v]) return;
+    for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
+      const int w = adj.neighbors[k];
+      int faces = 0;
+      for (int i = adj.face_offsets[v]; i < adj.face_offsets[v + 1]; ++i) {
+        const Face& f = m.faces[adj.faces[i]];
+        faces += f[0] == w || f[1] == w || f[2] == w;
+      }
+      along[k] = faces == 1;
+    }
+  });
   std::vector<Vec3> next(x.size());
   // Twice each face's area in the mesh: no pass leaves a face below kMinAreaRatio of it.
+  const double scale = unit_scale(x);
   std::vector<double> area0(m.faces.size());
   tbb::parallel_for(std::size_t{0}, m.faces.size(),
-                    [&](std::size_t f) { area0[f] = double_area(x, m.faces[f]); });
+                    [&](std::size_t f) { area0[f] = double_area(x, m.faces[f], scale); });
   std::vector<int> reverted, queue;
   std::vector<char> is_reverted(x.size(), 0);
-  auto collapsed = [&](std::size_t f) { return double_area(next, m.faces[f]) < kMinAreaRatio * area0[f]; };
+  auto collapsed = [&](std::size_t f) {
+    return double_area(next, m.faces[f], scale) < kMinAreaRatio * area0[f];
+  };
   // The faces that the pass into `next` collapses get their vertices back from `x`, and so do the
   // faces around those that collapse then; at worst every vertex, where no face had collapsed.
   auto keep_faces = [&] {
@@ -84,7 +119,7 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
       int n = 0;
       for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
         const int w = adj.neighbors[k];
-        if (boundary[v] && !boundary[w]) continue;
+        if (boundary[v] && !along[k]) continue;
         sum += x[w];
         ++n;
       }

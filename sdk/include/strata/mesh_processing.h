@@ -11,10 +11,11 @@ namespace strata {
 
 //! Taubin's lambda|mu smoothing (lambda 0.5, mu -0.53, uniform weights), \p steps pairs of
 //! passes: a low-pass filter that, unlike plain Laplacian smoothing, does not shrink the surface.
-//! A boundary vertex averages its boundary neighbours only, so open boundaries are smoothed
-//! along themselves instead of pulled inwards. No face collapses: a pass that would leave a face
-//! with less than 1% of its area in \p mesh keeps that face's vertices where the pass before left
-//! them (and so on for the faces around them), so that ears on a boundary and the slivers of CAD
+//! A boundary vertex averages its neighbours along boundary edges only (edges of one face), so
+//! open boundaries are smoothed along themselves instead of pulled inwards (also where an inner
+//! edge joins two boundary vertices: an ear's third edge, a fan over a polygon). No face collapses: a pass
+//! that would leave a face with less than 1% of its area in \p mesh keeps that face's vertices where the pass
+//! before left them (and so on for the faces around them), so that ears on a boundary and the slivers of CAD
 //! meshes, which uniform weights flatten onto a line, stay valid faces. Where no face comes near
 //! that (the scans of assets/scans at the default 10 steps of a cage fit or a band), the result
 //! is plain Taubin smoothing.
