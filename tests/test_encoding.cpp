@@ -125,6 +125,37 @@ TEST(Encoding, FallbackToClosestPointIsCountedAndLossless) {
   for (int i = 0; i < 3; ++i) EXPECT_LE((p[i] - detail.vertices[i]).norm(), 1e-12);
 }
 
+// The same encoding at any scale: the tolerances were partly absolute (1.0 and 1e-12 world
+// units), so at 1e-9 a fallback's tangential offset was zeroed and the vectors lost the vertex.
+TEST(Encoding, ScaledByAPowerOfTwoTheEncodingIsTheSame) {
+  TriMesh base;
+  base.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0.3)};
+  base.faces = {Face{0, 1, 2}, Face{1, 3, 2}};
+  TriMesh detail;
+  detail.vertices = {Vec3(0.1, 0.1, 0.5), Vec3(0.6, 0.1, 0.5), Vec3(3.0, 3.0, 0.2), Vec3(0.7, 0.7, 0.6)};
+  detail.faces = {Face{0, 1, 3}, Face{1, 2, 3}};
+  const DetailEncoding unit = encode_detail(detail, base);
+  ASSERT_EQ(unit.report.num_fallback, 1);
+  for (int e : {-30, -60, 30, 60}) {  // about 1e-9, 1e-18, 1e9, 1e18
+    const double s = std::ldexp(1.0, e);
+    TriMesh b = base, d = detail;
+    for (Vec3& x : b.vertices) x *= s;
+    for (Vec3& x : d.vertices) x *= s;
+    const DetailEncoding enc = encode_detail(d, b);
+    EXPECT_EQ(enc.report.num_projected, unit.report.num_projected) << "2^" << e;
+    EXPECT_EQ(enc.report.num_fallback, unit.report.num_fallback) << "2^" << e;
+    EXPECT_EQ(enc.report.num_ambiguous, unit.report.num_ambiguous) << "2^" << e;
+    for (int i = 0; i < d.num_vertices(); ++i) {
+      EXPECT_EQ(enc.base_points[i].face, unit.base_points[i].face) << "2^" << e << ", vertex " << i;
+      EXPECT_EQ(enc.tangential_offsets[i].isZero(0), unit.tangential_offsets[i].isZero(0))
+          << "2^" << e << ", vertex " << i;
+    }
+    const std::vector<Vec3> p = reconstruct_vectors(enc, b.vertices);
+    for (int i = 0; i < d.num_vertices(); ++i)
+      EXPECT_LE((p[i] - d.vertices[i]).norm(), 1e-12 * s) << "2^" << e;
+  }
+}
+
 TEST(Encoding, VectorsOverTheOriginalBaseReturnTheDetail) {
   const auto& c = small_case();
   const DetailEncoding e = encode_detail(c.detail, c.base);

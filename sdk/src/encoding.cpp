@@ -41,7 +41,8 @@ class Encoder {
         opt_(o),
         normals_(vertex_normals(base.vertices, base.faces)),
         adj_(internal::build_adjacency(base.num_vertices(), base.faces)),
-        tree_(base.vertices, base.faces) {}
+        tree_(base.vertices, base.faces),
+        unit_(std::min(1.0, bbox_diagonal(base.vertices))) {}
 
   // One thread's ring-search state: the faces of the rings, and each base face's last stamp.
   struct Scratch {
@@ -56,7 +57,7 @@ class Encoder {
     std::vector<int>& mark = sc.mark;
     const auto hit = tree_.closest(p);
     const double dc = std::sqrt(hit.distance_sq);
-    const double T = opt_.max_distance_ratio * dc + 1e-12;
+    const double T = opt_.max_distance_ratio * dc + 1e-12 * unit_;
     // Search outwards ring by ring and stop after the first ring (past the closest face's
     // neighbourhood) that yields a projection: nearer solutions lie in the inner rings.
     ring.clear();
@@ -131,7 +132,7 @@ class Encoder {
       const double d = (p - q).norm();
       if (!(d <= T)) continue;
       // The same point found through two faces sharing an edge is not an ambiguity.
-      if (found == 0 || (q - best_q).norm() > 1e-9 * (1.0 + d)) ++found;
+      if (found == 0 || (q - best_q).norm() > 1e-9 * (unit_ + d)) ++found;
       if (d < best) {
         best = d;
         best_q = q;
@@ -146,6 +147,10 @@ class Encoder {
   std::vector<Vec3> normals_;
   internal::Adjacency adj_;
   internal::TriangleTree tree_;
+  // The absolute tolerances' unit: 1, or the base's diagonal if it is smaller, so that a mesh
+  // scaled by 1e-9 encodes as at 1 (T bounds the root search: meshes of diagonal 1 or more keep
+  // their encodings bit for bit).
+  double unit_;
 };
 
 // The regularization weights of the detail at rest (section 4.2): normalized clamped cotangent
@@ -172,6 +177,7 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
   // the same in any order), so the encoding does not depend on them. Serial, these loops and the
   // weights were most of a scattered 1M-prism encoding's time.
   std::vector<double> max_tangential(n, 0.0);
+  const double unit = std::min(1.0, bbox_diagonal(detail.vertices));  // as Encoder::unit_
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i != r.end(); ++i) {
       const Vec3 d = detail.vertices[i] - frames.points[i];
@@ -181,7 +187,9 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
       const Vec3 tang = d - e.normal_offsets[i] * nrm;
       // Normal projections are parallel up to round-off: keep exact zeros for them, so the
       // regularizer's rest state is exactly the paper's.
-      const bool projected = tang.norm() <= 1e-9 * (1.0 + std::abs(e.normal_offsets[i]));
+      // At most relative to the detail's size (an absolute 1.0 here zeroed every offset of a
+      // mesh scaled by 1e-9, whose vectors then no longer gave the detail back).
+      const bool projected = tang.norm() <= 1e-9 * (unit + std::abs(e.normal_offsets[i]));
       e.tangential_offsets[i] =
           projected ? Eigen::Vector2d::Zero() : Eigen::Vector2d(tang.dot(t), tang.dot(nrm.cross(t)));
       if (!projected) max_tangential[i] = tang.norm();
