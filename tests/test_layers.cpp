@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -206,19 +207,33 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   // The material library and the images, as read_companion_files() found them beside the scan.
   t.files = {{"bear textures.mtl", "newmtl fur\nmap_Kd bear.png\n"},
              {"bear.png", std::string("\x89PNG\0\0\xff", 7)}};
-  LayeredModel textured = model;
-  textured.set_attributes(finest, t);
-  layers::write_model(textured, tmp.file("t.strata"));
-  const LayeredModel textured_back = layers::read_model(tmp.file("t.strata"));
-  const MeshAttributes& tb = textured_back.band(finest).attributes;
-  EXPECT_EQ(tb.corner_uv, t.corner_uv);
-  EXPECT_EQ(tb.corner_uv_index, t.corner_uv_index);
-  EXPECT_EQ(tb.face_materials, t.face_materials);
-  EXPECT_EQ(tb.material_names, t.material_names);
-  EXPECT_EQ(tb.material_library, t.material_library);
-  EXPECT_EQ(tb.texture_files, t.texture_files);
-  EXPECT_EQ(tb.face_textures, t.face_textures);
-  EXPECT_EQ(tb.files, t.files);
+  // Each written and read back whole.
+  auto round_trip = [&](const MeshAttributes& a, const std::string& file) {
+    LayeredModel m = model;
+    m.set_attributes(finest, a);
+    layers::write_model(m, tmp.file(file));
+    const MeshAttributes back = layers::read_model(tmp.file(file)).band(finest).attributes;
+    EXPECT_EQ(back.corner_uv, a.corner_uv) << file;
+    EXPECT_EQ(back.corner_uv_index, a.corner_uv_index) << file;
+    EXPECT_EQ(back.face_materials, a.face_materials) << file;
+    EXPECT_EQ(back.material_names, a.material_names) << file;
+    EXPECT_EQ(back.material_library, a.material_library) << file;
+    EXPECT_EQ(back.texture_files, a.texture_files) << file;
+    EXPECT_EQ(back.face_textures, a.face_textures) << file;
+    EXPECT_EQ(back.files, a.files) << file;
+  };
+  round_trip(t, "t.strata");
+  // Names that are not UTF-8 (an OBJ written in Latin-1): kept byte for byte ({"hex": ...} in the
+  // header; dump() threw a JSON library error for them, and `strata build` of the scan failed).
+  MeshAttributes latin1 = t;
+  latin1.material_library = "b\xe4r.mtl";
+  latin1.material_names = {"fur", "mat\xe9riau"};
+  latin1.texture_files = {"\xe9t\xe9.png"};
+  latin1.files = {{"b\xe4r.mtl", "newmtl fur\n"}, {"\xe9t\xe9.png", "x"}};
+  round_trip(latin1, "l.strata");
+  EXPECT_NE(
+      layers::read_strata_container(tmp.file("l.strata")).model_json.find(R"({"hex":"6d6174e972696175"})"),
+      std::string::npos);
 
   // Files of f6fed3b have no texture_files / textures keys: they read as without images.
   {
@@ -235,6 +250,8 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
   }
 
   // Misuse is refused, the model unchanged.
+  LayeredModel textured = model;
+  textured.set_attributes(finest, t);
   MeshAttributes escaping = t;
   escaping.files[1].name = "../bear.png";
   EXPECT_THROW(textured.set_attributes(finest, escaping), InvalidInput);
@@ -534,6 +551,26 @@ TEST(Layers, ProvenanceOverTheFilesLimitsIsKeptAsText) {
   EXPECT_EQ(edit_of(h[h.size() - 3]), nlohmann::json(deep));
   EXPECT_EQ(edit_of(h[h.size() - 2]), nlohmann::json(twice));
   EXPECT_EQ(edit_of(h[h.size() - 1]), nlohmann::json::parse("{\"script\":\"bend.json\"}"));
+  // At the depth limit: provenance of 253 levels is kept as JSON, 254 to 256 as text (they were
+  // kept as JSON, and the model then could not be written, or was written and not read).
+  const auto nested = [](int depth) { return std::string(depth, '[') + std::string(depth, ']'); };
+  LayeredModel at_limit = model_of("camel");
+  for (int depth : {253, 254, 256}) at_limit.edit(1, step, nested(depth));
+  layers::write_model(at_limit, tmp.file("limit.strata"));
+  const std::vector<std::string> hl = layers::read_model(tmp.file("limit.strata")).history();
+  ASSERT_GE(hl.size(), 3u);
+  EXPECT_TRUE(edit_of(hl[hl.size() - 3]).is_array());
+  EXPECT_EQ(edit_of(hl[hl.size() - 2]), nlohmann::json(nested(254)));
+  EXPECT_EQ(edit_of(hl[hl.size() - 1]), nlohmann::json(nested(256)));
+  // An assembled model's own history entries over the limits are written as their text (every
+  // write of the model failed; one of 100k levels was parsed and dumped recursively).
+  std::vector<layers::Band> bands;
+  for (int k = 0; k < at_limit.num_bands(); ++k) bands.push_back(at_limit.band(k));
+  // JSON scalars come back as their text too (the string "\"a\"" came back as a).
+  std::vector<std::string> history = {nested(300), nested(100000), keys, "\"quoted\"", "42"};
+  const LayeredModel assembled = LayeredModel::assemble(bands, at_limit.options(), history);
+  layers::write_model(assembled, tmp.file("assembled.strata"));
+  EXPECT_EQ(layers::read_model(tmp.file("assembled.strata")).history(), history);
   // Every operation, the build too, names the SDK version that ran it.
   EXPECT_EQ(nlohmann::json::parse(h.front()).at("op"), "build");
   for (const std::string& entry : h)
@@ -572,6 +609,11 @@ TEST(Layers, MisuseOfTheApiIsRefused) {
   rings.handle_solved_rings = 1000000000;  // a band-0 edit looped over that many rings
   refused(bands, rings, {}, "handle_solved_rings");
   refused(bands, camel.options(), {"{\"op\":\"build\"}", "\xff"}, "history entry 1 is not UTF-8");
+  {  // more bands than the reader takes (65 were assembled and written, and not read back)
+    std::vector<layers::Band> many = bands;
+    while (many.size() < 65) many.push_back(bands.back());
+    refused(many, camel.options(), {}, "at most 64 bands, not 65");
+  }
   LayeredModel model = camel;
   EXPECT_THROW(model.set_options(rings), InvalidInput);
   layers::ModelOptions nan = camel.options();
@@ -679,6 +721,32 @@ TEST(Layers, DragPreviewsThenEndsWithTheExactEdit) {
   c.update_drag(step.transform);
   c.cancel_drag();
   EXPECT_TRUE(same_bits(c.band(2).mesh.vertices, model_of("camel").band(2).mesh.vertices));
+}
+
+// A band-1 drag previews every finer vertex whose base moves, the detail over the vertices that
+// fill the region's corners (EditOptions::fill_region_corners) too: the preview's parts start
+// from what the editor moves (the selection alone left those to the normals' dependencies, which
+// reach them here as well).
+TEST(Layers, ABandDragPreviewsTheDetailOverEveryMovedVertex) {
+  LayeredModel model = model_of("camel");
+  const EditStep step = camel_neck_bend();
+  const std::vector<Vec3> rest1 = model.band(1).mesh.vertices, rest2 = model.band(2).mesh.vertices;
+  model.begin_drag(1, step.region, step.handle);
+  model.update_drag(EditTransform::rotation(Vec3(1, 0, 0), 30.0, step.transform.pivot));
+  const std::vector<Vec3>& x1 = model.band(1).mesh.vertices;
+  const std::vector<Vec3>& x2 = model.band(2).mesh.vertices;
+  const layers::Band& b2 = model.band(2);
+  int over_moved = 0, still = 0;
+  for (std::size_t v = 0; v < x2.size(); ++v) {
+    bool base_moved = false;
+    for (int c : b2.encoding.base_faces[b2.encoding.base_points[v].face]) base_moved |= x1[c] != rest1[c];
+    if (!base_moved) continue;
+    ++over_moved;
+    still += x2[v] == rest2[v];
+  }
+  EXPECT_GT(over_moved, 100);
+  EXPECT_EQ(still, 0) << "of " << over_moved << " band-2 vertices whose base moved";
+  model.cancel_drag();
 }
 
 // Saving or copying in the middle of a drag (a viewer's autosave, an undo snapshot) keeps the model's
@@ -819,6 +887,11 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
     layers::write_strata_container(v, path);
     expect_rejected(path, name, problem);
   };
+  // Above 2^63 as itself (it read "is -1, outside 3..1073741824").
+  variant("vertex_count_u64", "'vertices' in band 1 is 18446744073709551615, outside",
+          [](nlohmann::json& m, layers::StrataContainer&) {
+            m["bands"][1]["vertices"] = std::numeric_limits<std::uint64_t>::max();
+          });
   variant("vertex_count", "section 'band1.rest' holds [0-9]+ values, expected 36",
           [](nlohmann::json& m, layers::StrataContainer&) { m["bands"][1]["vertices"] = 12; });
   variant("no_bands", "missing 'bands' in the model header",
@@ -886,8 +959,29 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
             with_files(m, v, {"skin.png", "../up.png"});
             v.sections.push_back({"band1.file0", {}});
           });
-  variant("file_name_number", "'files' in band 1's attributes holds a value that is not a string",
+  variant("file_name_number",
+          "a value of 'files' in band 1's attributes is not a string or \\{\"hex\": \"...\"\\}",
           [&](nlohmann::json& m, layers::StrataContainer& v) { with_files(m, v, {3}); });
+  variant("file_name_hex",
+          "a value of 'files' in band 1's attributes has a 'hex' value that is not lower-case",
+          [&](nlohmann::json& m, layers::StrataContainer& v) {
+            with_files(m, v, {{{"hex", "4G"}}});
+          });
+  variant("file_name_odd_hex", "a value of 'files' in band 1's attributes has a 'hex' value of odd length",
+          [&](nlohmann::json& m, layers::StrataContainer& v) {
+            with_files(m, v, {{{"hex", "414"}}});
+          });
+  // A band's base at rest is named as the band's, not as the cage's (band 1's read "band 1: cage
+  // vertex 0 has a non-finite coordinate").
+  // Named as band 1's base at rest (it read "band 1: cage vertex 0 has a non-finite coordinate").
+  variant("base_rest_nan", "band 1: base at rest vertex 0 has a non-finite",
+          [](nlohmann::json&, layers::StrataContainer& v) {
+            for (layers::Section& s : v.sections)
+              if (s.name == "band1.base_rest") {
+                const double nan = std::nan("");
+                std::memcpy(s.bytes.data(), &nan, sizeof nan);
+              }
+          });
   variant("missing_section", "missing section 'band1.rest'", [](nlohmann::json&, layers::StrataContainer& v) {
     v.sections.erase(std::remove_if(v.sections.begin(), v.sections.end(),
                                     [](const layers::Section& s) { return s.name == "band1.rest"; }),
@@ -944,6 +1038,12 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
           [](nlohmann::json& m, layers::StrataContainer&) {
             m["options"]["reconstruct"]["length_lambda"] = 1e308;
           });
+  // Named once (the path came twice: "<path>: band 1: <path>: section ...").
+  variant("short_base_coords", "^[^:]+: section 'band1.base_coords' holds [0-9]+ values, expected [0-9]+$",
+          [](nlohmann::json&, layers::StrataContainer& v) {
+            for (layers::Section& s : v.sections)
+              if (s.name == "band1.base_coords") s.bytes.resize(s.bytes.size() - 8);
+          });
   variant("huge_base_coords", "band 1: encoding: limit point 0 is not on a ptex face",
           [](nlohmann::json&, layers::StrataContainer& v) {
             for (layers::Section& s : v.sections)
@@ -988,6 +1088,40 @@ TEST(LayersFile, ConsistentChecksumsWithBadContentsAreNamed) {
 
 // The reconstruction options travel with the model, the multigrid solver's included; an unknown
 // solver name is rejected and named.
+// Options the SDK takes but a file cannot hold are refused up front (set_options() accepted an
+// infinite tolerance, written as null, and counts above 2^30, and the file then did not read).
+TEST(LayersFile, OptionsAFileCannotHoldAreRefused) {
+  LayeredModel model = model_of("camel");
+  const layers::ModelOptions good = model.options();
+  auto refused = [&](const layers::ModelOptions& o, const std::string& needle) {
+    try {
+      model.set_options(o);
+      ADD_FAILURE() << "accepted; expected an error with '" << needle << "'";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  layers::ModelOptions o = good;
+  o.reconstruct.tolerance = INFINITY;
+  refused(o, "the model's options: 'tolerance' in options.reconstruct is not a finite number");
+  o = good;
+  o.reconstruct.multigrid.polish_tolerance = INFINITY;
+  refused(o, "'polish_tolerance'");
+  o = good;
+  o.reconstruct.coarsest_vertices = (1 << 30) + 1;
+  refused(o, "'coarsest_vertices' in options.reconstruct is 1073741825, outside 1..1073741824");
+  EXPECT_EQ(model.options().reconstruct.tolerance, good.reconstruct.tolerance);  // unchanged
+  layers::BuildOptions b;
+  b.cage.subdiv.max_refined_faces = (1LL << 30) + 1;
+  try {
+    (void)LayeredModel::build(model.band(2).mesh, b);
+    ADD_FAILURE() << "built with a refinement budget the reader refuses";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("max_refined_faces must be at most 2^30"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(LayersFile, SolverOptionsRoundTrip) {
   LayeredModel model = model_of("camel");
   layers::ModelOptions o = model.options();

@@ -426,6 +426,16 @@ TEST(StrataFile, WriteRejectsBadInputAndLeavesTheTargetUntouched) {
     StrataContainer c;
     c.model_json = "{\"a\":" + std::string(300, '[') + std::string(300, ']') + "}";
     expect_rejected(c, "too deep");
+    // The limit is the model's own depth, as FORMAT.md states it, for the writer and the reader
+    // alike: 256 levels are written and read back (the reader counted the header around the
+    // model too, and refused what the writer had written), 257 are refused.
+    c.model_json = "{\"a\":" + std::string(255, '[') + std::string(255, ']') + "}";
+    const std::string at_limit = dir.file("deep256.strata");
+    write_strata_container(c, at_limit);
+    EXPECT_EQ(read_strata_container(at_limit).model_json, c.model_json);
+    std::remove(at_limit.c_str());
+    c.model_json = "{\"a\":" + std::string(256, '[') + std::string(256, ']') + "}";
+    expect_rejected(c, "257 levels");
   }
   {
     // A key twice, at any depth: JSON would keep one of the values silently.

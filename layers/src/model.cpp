@@ -13,6 +13,7 @@
 #include <type_traits>
 #include <unordered_map>
 
+#include "options_io.h"
 #include "strata/cage_editing.h"
 #include "strata/exceptions.h"
 #include "strata/json_check.h"
@@ -427,6 +428,9 @@ void check_model_options(const ModelOptions& options) {
     throw InvalidInput(
         "the model's projection options are out of range (seed_resolution 1-64, max_iterations 1-10000, "
         "0 < orthogonality_tolerance <= seam_tolerance <= 1)");
+  // The file's own ranges: infinite tolerances (written as null) and counts above 2^30 passed
+  // the checks above and made a file the reader refused.
+  internal::check_options_round_trip(options);
 }
 
 void LayeredModel::set_options(const ModelOptions& options) {
@@ -477,6 +481,10 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
     throw InvalidInput("build: band_smoothing_steps must be 0 to 1000, not " +
                        std::to_string(o.band_smoothing_steps));
   check_model_options(o.model);
+  // The bound of assemble() and the reader: a larger budget built a model that did not read back.
+  if (o.cage.subdiv.max_refined_faces > (1LL << 30))
+    throw InvalidInput("build: the cage's max_refined_faces must be at most 2^30, got " +
+                       std::to_string(o.cage.subdiv.max_refined_faces));
   auto progress = [&](const std::string& phase, double f) {
     if (o.progress) o.progress(phase, f);
   };
@@ -575,6 +583,8 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
                                     std::vector<std::string> history) {
   const int nb = static_cast<int>(bands.size());
   if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
+  // The reader's bound (layers/FORMAT.md): more were assembled and written, and not read back.
+  if (nb > 64) throw InvalidInput("a model has at most 64 bands, not " + std::to_string(nb));
   check_model_options(options);
   for (std::size_t i = 0; i < history.size(); ++i) {
     try {
@@ -730,7 +740,12 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   // Provenance that is JSON is kept as JSON, within the file format's limits; otherwise as text
   // (a caller's JSON of 2,000 keys would have made every later write of the model fail).
   try {
-    if (!json_structure_problem(provenance).empty()) throw std::length_error("over the file's JSON limits");
+    // The provenance sits three levels below the model object in the file (history, its entry,
+    // "edit"): at most 253 deep, so that the model is within the header's 256.
+    JsonLimits limits;
+    limits.max_depth -= 3;
+    if (!json_structure_problem(provenance, limits).empty())
+      throw std::length_error("over the file's JSON limits");
     h["edit"] = json::parse(provenance);
   } catch (const std::exception&) {
     h["edit"] = provenance;
@@ -784,7 +799,10 @@ void LayeredModel::begin_drag(int k, const Selection& region, const Selection& h
   } else {
     d->editor = std::make_unique<RegionEditor>(m.bands[k].mesh, rflags, hflags, edit_options(m.options));
     d->editor->begin_drag();
-    moved = rflags;
+    // What the editor moves: the selection with its corners filled (the finer detail over a fill
+    // vertex is reached through its base normal's ring anyway; this says so directly).
+    moved.assign(rflags.size(), 0);
+    for (int v : d->editor->region_vertices()) moved[v] = 1;
   }
   // The finer bands' parts the region reaches, set up once for the whole drag.
   for (int j = k + 1; j < m.n(); ++j) {

@@ -6,7 +6,9 @@
 #include <cstring>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 
+#include "options_io.h"
 #include "strata/exceptions.h"
 #include "strata/json_check.h"
 #include "strata/layers/model.h"
@@ -22,6 +24,33 @@ struct CageFault {
 };
 
 using json = nlohmann::json;
+
+// Whether \p s is valid UTF-8, the only text a JSON header holds.
+bool is_utf8(const std::string& s) {
+  try {
+    (void)json(s).dump();
+    return true;
+  } catch (const json::exception&) {
+    return false;
+  }
+}
+
+// A name of the scan's (a material, a texture or companion file) in the header: as a string, or,
+// if it is not UTF-8 (an OBJ written in Latin-1), as {"hex": "<its bytes>"}, so that nothing is
+// lost (dump() threw a JSON library error for it: `strata build` of such a scan failed).
+json header_string(const std::string& s) {
+  if (is_utf8(s)) return s;
+  static const char* digits = "0123456789abcdef";
+  std::string hex;
+  hex.reserve(2 * s.size());
+  for (unsigned char ch : s) hex.push_back(digits[ch >> 4]), hex.push_back(digits[ch & 15]);
+  return json{{"hex", hex}};
+}
+json header_strings(const std::vector<std::string>& v) {
+  json out = json::array();
+  for (const std::string& s : v) out.push_back(header_string(s));
+  return out;
+}
 
 std::vector<double> flatten(const std::vector<Vec3>& x) {
   std::vector<double> out;
@@ -149,6 +178,10 @@ class HeaderReader {
                     long long hi) const {
     const json& v = at(j, key, where);
     if (!v.is_number_integer()) fail("'" + std::string(key) + "' in " + where + " is not an integer");
+    // Above 2^63 as itself (get<long long>() wrapped 2^64 - 1 to -1).
+    if (v.is_number_unsigned() && v.get<unsigned long long>() > static_cast<unsigned long long>(hi))
+      fail("'" + std::string(key) + "' in " + where + " is " + std::to_string(v.get<unsigned long long>()) +
+           ", outside " + std::to_string(lo) + ".." + std::to_string(hi));
     const long long x = v.get<long long>();
     if (x < lo || x > hi)
       fail("'" + std::string(key) + "' in " + where + " is " + std::to_string(x) + ", outside " +
@@ -165,6 +198,23 @@ class HeaderReader {
     const json& v = at(j, key, where);
     if (!v.is_string()) fail("'" + std::string(key) + "' in " + where + " is not a string");
     return v.get<std::string>();
+  }
+  // A string, or header_string()'s {"hex": ...} form of one that is not UTF-8.
+  std::string name(const json& v, const std::string& what) const {
+    if (v.is_string()) return v.get<std::string>();
+    if (!v.is_object() || v.size() != 1 || !v.contains("hex") || !v["hex"].is_string())
+      fail(what + " is not a string or {\"hex\": \"...\"}");
+    const std::string& hex = v["hex"].get_ref<const std::string&>();
+    auto digit = [&](char ch) {
+      if (ch >= '0' && ch <= '9') return ch - '0';
+      if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
+      fail(what + " has a 'hex' value that is not lower-case hexadecimal digits");
+    };
+    if (hex.size() % 2) fail(what + " has a 'hex' value of odd length");
+    std::string out;
+    for (std::size_t i = 0; i < hex.size(); i += 2)
+      out.push_back(static_cast<char>(16 * digit(hex[i]) + digit(hex[i + 1])));
+    return out;
   }
   bool boolean(const json& j, const char* key, const std::string& where) const {
     const json& v = at(j, key, where);
@@ -330,6 +380,10 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
 
 }  // namespace
 
+void internal::check_options_round_trip(const ModelOptions& options) {
+  (void)read_options(HeaderReader("the model's options"), options_json(options));
+}
+
 void write_model(const LayeredModel& model, const std::string& path) {
   // A default-constructed model has no bands: nothing a reader would take ("band 0 out of range").
   if (model.num_bands() < 2)
@@ -395,14 +449,14 @@ void write_model(const LayeredModel& model, const std::string& path) {
           {"texcoords", !va.texcoords.empty()},
           {"corner_texcoords", va.corner_uv_index.empty() ? 0 : va.corner_uv.size()},
           {"materials", !va.face_materials.empty()},
-          {"material_library", va.material_library},
-          {"material_names", va.material_names},
-          {"texture_files", va.texture_files},
+          {"material_library", header_string(va.material_library)},
+          {"material_names", header_strings(va.material_names)},
+          {"texture_files", header_strings(va.texture_files)},
           {"textures", !va.face_textures.empty()}};
       if (!va.files.empty()) {  // as above: no key where there are none
         json names = json::array();
         for (std::size_t i = 0; i < va.files.size(); ++i) {
-          names.push_back(va.files[i].name);
+          names.push_back(header_string(va.files[i].name));
           const std::string& bytes = va.files[i].bytes();
           c.sections.push_back(
               {p + "file" + std::to_string(i), std::vector<std::uint8_t>(bytes.begin(), bytes.end())});
@@ -450,11 +504,20 @@ void write_model(const LayeredModel& model, const std::string& path) {
     c.sections.push_back({p + "base_coords", pack_f64(coords)});
     c.sections.push_back({p + "base_rest", pack_f64(flatten(b.base_rest))});
   }
+  // An entry is stored as JSON where it is JSON within the header's limits (an entry is two levels
+  // below the model object: at most 254 deep), otherwise as its text: a caller's entry deeper or
+  // wider made every write fail (and one of 100k levels was parsed, and dumped, recursively).
   json history = json::array();
+  JsonLimits entry_limits;
+  entry_limits.max_depth -= 2;
   for (const std::string& h : model.history()) {
     try {
-      history.push_back(json::parse(h));
-    } catch (const json::exception&) {
+      if (!json_structure_problem(h, entry_limits).empty()) throw std::length_error("over the limits");
+      json v = json::parse(h);
+      // An object or array as JSON; a scalar as its text, which reads back the same (a string
+      // entry "\"a\"" stored as the JSON string "a" read back as a, its quotes lost).
+      history.push_back(v.is_structured() ? std::move(v) : json(h));
+    } catch (const std::exception&) {
       history.push_back(h);
     }
   }
@@ -494,7 +557,6 @@ LayeredModel read_model(const std::string& path) {
   for (const json& e : hist) history.push_back(e.is_string() ? e.get<std::string>() : e.dump());
 
   auto section = [&](const std::string& name) -> const Section& { return c.require(name, path); };
-  auto what = [&](const std::string& name) { return path + ": section '" + name + "'"; };
   std::vector<Band> bands(bands_j.size());
   // Band 0: the cage.
   {
@@ -505,11 +567,9 @@ LayeredModel read_model(const std::string& path) {
     const long long nf = h.integer(b, "faces", w, 1, kMaxCount);
     const long long nc = h.integer(b, "face_corners", w, 3, kMaxCount);
     Band& cage = bands[0];
-    cage.cage.vertices = unflatten(unpack_f64(section("band0.points"), 3 * nv, what("band0.points")));
-    const std::vector<std::int32_t> sizes =
-        unpack_i32(section("band0.face_sizes"), nf, what("band0.face_sizes"));
-    const std::vector<std::int32_t> idx =
-        unpack_i32(section("band0.face_indices"), nc, what("band0.face_indices"));
+    cage.cage.vertices = unflatten(unpack_f64(section("band0.points"), 3 * nv, path));
+    const std::vector<std::int32_t> sizes = unpack_i32(section("band0.face_sizes"), nf, path);
+    const std::vector<std::int32_t> idx = unpack_i32(section("band0.face_indices"), nc, path);
     long long at = 0;
     for (std::int32_t s : sizes) {
       if (s < 3 || at + s > nc) h.fail("band 0: face sizes do not match the face corner count");
@@ -564,18 +624,21 @@ LayeredModel read_model(const std::string& path) {
     if (base_kind != (k == 1 ? "limit" : "mesh"))
       h.fail(w + ": its base must be " +
              (k == 1 ? "the cage's limit surface" : "the next coarser band's mesh"));
-    const std::vector<std::int32_t> f = unpack_i32(section(p + "faces"), 3 * nf, what(p + "faces"));
+    const std::vector<std::int32_t> f = unpack_i32(section(p + "faces"), 3 * nf, path);
     TriMesh rest;
     for (long long j = 0; j < nf; ++j) rest.faces.push_back({f[3 * j], f[3 * j + 1], f[3 * j + 2]});
-    rest.vertices = unflatten(unpack_f64(section(p + "rest"), 3 * nv, what(p + "rest")));
-    band.base_rest = unflatten(unpack_f64(section(p + "base_rest"), 3 * nb, what(p + "base_rest")));
-    const std::vector<std::int32_t> bf = unpack_i32(section(p + "base_faces"), nv, what(p + "base_faces"));
+    rest.vertices = unflatten(unpack_f64(section(p + "rest"), 3 * nv, path));
+    band.base_rest = unflatten(unpack_f64(section(p + "base_rest"), 3 * nb, path));
+    const std::vector<std::int32_t> bf = unpack_i32(section(p + "base_faces"), nv, path);
+    // Patch (u, v) over band 1's limit surface, barycentric coordinates over a mesh. Read before
+    // the block below, which prefixes its errors with the file again.
+    const std::vector<double> bc = unpack_f64(section(p + "base_coords"), (k == 1 ? 2 : 3) * nv, path);
     try {
+      // Named as this band's (band 1's went into a copy of the cage, and read "cage vertex 0").
+      check_coordinates(band.base_rest, "base at rest");
       if (k == 1) {
-        const std::vector<double> uv =
-            unpack_f64(section(p + "base_coords"), 2 * nv, what(p + "base_coords"));
         std::vector<LimitPoint> lp(nv);
-        for (long long i = 0; i < nv; ++i) lp[i] = LimitPoint{bf[i], uv[2 * i], uv[2 * i + 1]};
+        for (long long i = 0; i < nv; ++i) lp[i] = LimitPoint{bf[i], bc[2 * i], bc[2 * i + 1]};
         PolyMesh base_cage = bands[0].cage;
         if (static_cast<long long>(base_cage.vertices.size()) != nb)
           throw InvalidInput("base_vertices differs from the cage");  // prefixed below
@@ -583,19 +646,17 @@ LayeredModel read_model(const std::string& path) {
         std::unique_ptr<SubdivSurface> surface;
         try {
           surface = std::make_unique<SubdivSurface>(base_cage, bands[0].tags, bands[0].subdiv);
-        } catch (const InvalidInput&) {
+        } catch (const Error&) {  // InvalidInput or SolverError
           // Band 0's fault (its faces, tags or options) or band 1's (its base points at rest).
           try {
             const SubdivSurface cage(bands[0].cage, bands[0].tags, bands[0].subdiv);
-          } catch (const InvalidInput& own) {
+          } catch (const Error& own) {
             throw CageFault{own.what()};
           }
           throw;
         }
         band.encoding = encode_detail_at(rest, *surface, std::move(lp));
       } else {
-        const std::vector<double> bc =
-            unpack_f64(section(p + "base_coords"), 3 * nv, what(p + "base_coords"));
         std::vector<BasePoint> bp(nv);
         for (long long i = 0; i < nv; ++i)
           bp[i] = BasePoint{bf[i], Vec3(bc[3 * i], bc[3 * i + 1], bc[3 * i + 2])};
@@ -621,43 +682,37 @@ LayeredModel read_model(const std::string& path) {
       const std::string wa = w + "'s attributes";
       MeshAttributes& va = band.attributes;
       if (h.boolean(at, "colors", wa)) {
-        const std::vector<double> v = unpack_f64(section(p + "colors"), 4 * nv, what(p + "colors"));
+        const std::vector<double> v = unpack_f64(section(p + "colors"), 4 * nv, path);
         va.colors.resize(nv);
         for (long long i = 0; i < nv; ++i) std::copy(&v[4 * i], &v[4 * i] + 4, va.colors[i].begin());
       }
       va.colors_have_alpha = h.boolean(at, "alpha", wa);
       if (h.boolean(at, "texcoords", wa)) {
-        const std::vector<double> v = unpack_f64(section(p + "texcoords"), 2 * nv, what(p + "texcoords"));
+        const std::vector<double> v = unpack_f64(section(p + "texcoords"), 2 * nv, path);
         va.texcoords.resize(nv);
         for (long long i = 0; i < nv; ++i) va.texcoords[i] = {v[2 * i], v[2 * i + 1]};
       }
       const long long nuv = h.integer(at, "corner_texcoords", wa, 0, kMaxCount);
       if (nuv > 0) {
-        const std::vector<double> v =
-            unpack_f64(section(p + "corner_texcoords"), 2 * nuv, what(p + "corner_texcoords"));
+        const std::vector<double> v = unpack_f64(section(p + "corner_texcoords"), 2 * nuv, path);
         va.corner_uv.resize(nuv);
         for (long long i = 0; i < nuv; ++i) va.corner_uv[i] = {v[2 * i], v[2 * i + 1]};
         const std::vector<std::int32_t> index =
-            unpack_i32(section(p + "corner_texcoord_indices"), 3 * nf, what(p + "corner_texcoord_indices"));
+            unpack_i32(section(p + "corner_texcoord_indices"), 3 * nf, path);
         va.corner_uv_index.resize(nf);
         for (long long j = 0; j < nf; ++j)
           va.corner_uv_index[j] = {index[3 * j], index[3 * j + 1], index[3 * j + 2]};
       }
       if (h.boolean(at, "materials", wa)) {
-        const std::vector<std::int32_t> m =
-            unpack_i32(section(p + "face_materials"), nf, what(p + "face_materials"));
+        const std::vector<std::int32_t> m = unpack_i32(section(p + "face_materials"), nf, path);
         va.face_materials.assign(m.begin(), m.end());
       }
-      va.material_library = h.text(at, "material_library", wa);
+      va.material_library = h.name(h.at(at, "material_library", wa), "'material_library' in " + wa);
       auto strings = [&](const char* key) {
         const json& list = h.at(at, key, wa);
         if (!list.is_array()) h.fail(std::string("'") + key + "' in " + wa + " is not an array");
         std::vector<std::string> out;
-        for (const json& n : list) {
-          if (!n.is_string())
-            h.fail(std::string("'") + key + "' in " + wa + " holds a value that is not a string");
-          out.push_back(n.get<std::string>());
-        }
+        for (const json& n : list) out.push_back(h.name(n, std::string("a value of '") + key + "' in " + wa));
         return out;
       };
       va.material_names = strings("material_names");
@@ -672,15 +727,14 @@ LayeredModel read_model(const std::string& path) {
         }
       }
       if (at.contains("textures") && h.boolean(at, "textures", wa)) {
-        const std::vector<std::int32_t> t =
-            unpack_i32(section(p + "face_textures"), nf, what(p + "face_textures"));
+        const std::vector<std::int32_t> t = unpack_i32(section(p + "face_textures"), nf, path);
         va.face_textures.assign(t.begin(), t.end());
       }
     }
     band.mesh.faces = rest.faces;
     band.mesh.vertices = h.boolean(b, "positions_at_rest", w)
                              ? rest.vertices
-                             : unflatten(unpack_f64(section(p + "positions"), 3 * nv, what(p + "positions")));
+                             : unflatten(unpack_f64(section(p + "positions"), 3 * nv, path));
   }
   try {
     return LayeredModel::assemble(std::move(bands), options, std::move(history));

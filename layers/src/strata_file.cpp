@@ -84,9 +84,9 @@ std::string name_problem(const std::string& name) {
 //! Parses \p text; returns "" or, if it is outside the format's JsonLimits (too deep, an object
 //! with too many keys or a key twice), the problem (\p out is then left unset; no value is
 //! built). Throws nlohmann's exceptions on malformed JSON.
-std::string parse_json_limited(const char* begin, const char* end, Json& out) {
+std::string parse_json_limited(const char* begin, const char* end, Json& out, const JsonLimits& limits = {}) {
   std::string problem =
-      json_structure_problem(std::string_view(begin, static_cast<std::size_t>(end - begin)));
+      json_structure_problem(std::string_view(begin, static_cast<std::size_t>(end - begin)), limits);
   if (problem.empty()) out = Json::parse(begin, end);
   return problem;
 }
@@ -170,7 +170,11 @@ class Reader {
     Json header;
     std::string problem;
     try {
-      problem = parse_json_limited(begin, end, header);
+      // The model object is at most 256 levels deep, as the writer checks it: the header around
+      // it is one level more (a model of 256 was written and then refused).
+      JsonLimits limits;
+      limits.max_depth += 1;
+      problem = parse_json_limited(begin, end, header, limits);
     } catch (const Json::exception& e) {
       malformed("invalid JSON: " + json_error_text(e.what()));
     }

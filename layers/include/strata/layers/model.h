@@ -49,8 +49,8 @@ namespace strata::layers {
 struct ModelOptions {
   //! Detail rebuilt by displacement volumes (the paper) or vectors (the baseline, for comparison).
   EditOptions::Method method = EditOptions::Method::Volumes;
-  //! The volume reconstruction of every band (its progress callback and cancel flag are not
-  //! stored: a model outlives the calls that set them).
+  //! The volume reconstruction of every band (its progress callback, cancel flag and thread
+  //! count are not stored: a model outlives the calls that set them, and a file the machine).
   ReconstructOptions reconstruct;
   //! Edits of triangle bands (RegionEditor): the region's cut-off wavelength relative to its
   //! bounding-box diagonal, and the handle's solved rings (see EditOptions).
@@ -64,8 +64,9 @@ struct ModelOptions {
 
 //! Checks \p options against the ranges a .strata file's are read with (check_reconstruct_options()
 //! for the reconstruction; smoothing_fraction 0.001-100; handle_solved_rings 0-1000; the
-//! projection's and encoding's ranges in layers/FORMAT.md), so that a model written with them
-//! reads back. LayeredModel::build(), assemble() and set_options() call it.
+//! projection's and encoding's ranges in layers/FORMAT.md; and the file's own: every number
+//! finite, every count at most 2^30), so that a model written with them reads back.
+//! LayeredModel::build(), assemble() and set_options() call it.
 //! \throw InvalidInput naming the option ("the model's ...").
 void check_model_options(const ModelOptions& options);
 
@@ -141,7 +142,9 @@ class LayeredModel {
   //! surface, that every triangle band's faces have 3 distinct vertices and each directed edge
   //! in one face at most (no repeated face, no edge of more than two faces, one orientation), and
   //! that every band's encoding fits its mesh and its base (check_encoding() too), that the cage's
-  //! scheme is Loop or Catmull-Clark, and the options (check_model_options()).
+  //! scheme is Loop or Catmull-Clark, the options (check_model_options()), 2 to 64 bands and
+  //! history entries of UTF-8 text (write_model() stores an entry beyond the header's JSON limits
+  //! as its text).
   //! \throw InvalidInput naming the band and the problem.
   static LayeredModel assemble(std::vector<Band> bands, ModelOptions options,
                                std::vector<std::string> history);
@@ -205,6 +208,8 @@ class LayeredModel {
   //! \throw InvalidInput if no drag is active or the transform is bad.
   void update_drag(const EditTransform& transform);
   //! The exact edit() with the last transform, from the state before the drag.
+  //! \throw InvalidInput if no drag is active; otherwise as edit(), and the drag is then over
+  //!        with the model as it was before it (as after cancel_drag()).
   CascadeReport end_drag(const std::string& provenance = "{}");
   //! Restores the state before the drag.
   void cancel_drag();
