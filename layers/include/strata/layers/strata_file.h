@@ -46,7 +46,9 @@ void write_strata_container(const StrataContainer& container, const std::string&
 
 //! Reads and checks a container: the magic, the format version, the header's and every
 //! section's CRC-32, the section table (in range, in order, not overlapping) and the file's exact
-//! length. Never reads beyond the file, never allocates more than the file's size.
+//! length. Never reads beyond the file, and sizes no allocation from a number it has not checked
+//! against the file's length. The file's bytes and its sections take about twice the file's size;
+//! the parsed JSON header can take tens of times the header's length (layers/FORMAT.md).
 //! \throw IoError "<path>: <problem>" if the file cannot be opened or read, is not a Strata file
 //!        (wrong magic), was written by a newer format version, is truncated, has trailing bytes,
 //!        a corrupted header or section (checksum mismatch, naming the section), or a malformed
