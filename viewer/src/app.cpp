@@ -33,14 +33,24 @@ App* app_of(GLFWwindow* w) {
   return static_cast<App*>(glfwGetWindowUserPointer(w));
 }
 
+// An exception must not unwind through GLFW's C frames: it is shown in the status line.
+template <class F>
+void guarded(GLFWwindow* w, F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    app_of(w)->show_error(e.what());
+  }
+}
 void key_callback(GLFWwindow* w, int key, int, int action, int mods) {
-  if (action == GLFW_PRESS && !ImGui::GetIO().WantCaptureKeyboard) app_of(w)->on_key(key, mods);
+  if (action == GLFW_PRESS && !ImGui::GetIO().WantCaptureKeyboard)
+    guarded(w, [&] { app_of(w)->on_key(key, mods); });
 }
 void scroll_callback(GLFWwindow* w, double, double dy) {
-  if (!ImGui::GetIO().WantCaptureMouse) app_of(w)->on_scroll(dy);
+  if (!ImGui::GetIO().WantCaptureMouse) guarded(w, [&] { app_of(w)->on_scroll(dy); });
 }
 void drop_callback(GLFWwindow* w, int count, const char** paths) {
-  if (count > 0) app_of(w)->on_drop(paths[0]);
+  if (count > 0) guarded(w, [&] { app_of(w)->on_drop(paths[0]); });
 }
 
 //! The transform \p t applied to the fraction \p f: rotation angle, stretch and translation
@@ -229,7 +239,11 @@ void App::frame() {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
-  handle_mouse();
+  try {  // a bad pick or brush (the selection's band gone) is shown, not fatal
+    handle_mouse();
+  } catch (const std::exception& e) {
+    show_error(e.what());
+  }
   draw_ui();
   ImGui::Render();
   lap(1);
@@ -259,6 +273,15 @@ void App::frame() {
   lap(4);
 }
 
+void App::set_committed(std::shared_ptr<const Document> document) {
+  committed_ = std::move(document);
+  amplitudes_.assign(static_cast<std::size_t>(committed_->num_bands()), 1.0f);
+  for (int k = 0; k < committed_->num_bands(); ++k)
+    amplitudes_[static_cast<std::size_t>(k)] = static_cast<float>(committed_->amplitude(k));
+  edit_band_ = std::clamp(edit_band_, 0, committed_->num_bands() - 1);
+  update_selection_points();
+}
+
 void App::take_snapshot() {
   std::optional<Snapshot> s = worker_->take(version_);
   if (!s) return;
@@ -268,14 +291,10 @@ void App::take_snapshot() {
     status_ = s->message;
     status_error_ = s->error;
   }
+  const bool message_only = s->message_only;
   if (s->committed) {
     if (!committed_) first_picture_frame_ = frames_;
-    committed_ = s->committed;
-    amplitudes_.assign(static_cast<std::size_t>(committed_->num_bands()), 1.0f);
-    for (int k = 0; k < committed_->num_bands(); ++k)
-      amplitudes_[static_cast<std::size_t>(k)] = static_cast<float>(committed_->amplitude(k));
-    edit_band_ = std::clamp(edit_band_, 0, committed_->num_bands() - 1);
-    update_selection_points();
+    set_committed(s->committed);
     if (recolor_on_load_ && committed_->name() == open_path_.data()) {
       recolor_on_load_ = false;
       const ColorMode initial = initial_color_mode(*committed_);
@@ -286,6 +305,7 @@ void App::take_snapshot() {
       }
     }
   }
+  if (message_only) return;  // the worker could not make the scenes: the panels stay
   // Same panels and connectivity: move the vertices only; else upload anew.
   const bool same =
       s->panels.size() == panels_.size() &&
@@ -769,6 +789,9 @@ void App::gizmo_end() {
   if (!dragging_) return;
   worker_->end_drag();
   dragging_ = false;
+  // The next drag starts from the identity (the sliders' next drag re-applied this one's).
+  translation_ = {0, 0, 0};
+  angle_ = 0;
 }
 
 void App::checkpoint() {
@@ -781,7 +804,10 @@ void App::checkpoint() {
 void App::undo() {
   if (undo_.empty() || dragging_ || worker_->busy()) return;
   redo_.push_back(committed_);
-  committed_ = undo_.back();
+  // Through set_committed(): the band to edit, the amplitudes and the selection follow the
+  // document (a brush stroke after undoing a build read band 2 of a one-band mesh and ended the
+  // program).
+  set_committed(undo_.back());
   undo_.pop_back();
   worker_->replace(*committed_);
   status_ = "undo";
@@ -791,7 +817,7 @@ void App::undo() {
 void App::redo() {
   if (redo_.empty() || dragging_ || worker_->busy()) return;
   undo_.push_back(committed_);
-  committed_ = redo_.back();
+  set_committed(redo_.back());
   redo_.pop_back();
   worker_->replace(*committed_);
   status_ = "redo";
@@ -895,6 +921,8 @@ void App::on_key(int key, int mods) {
         worker_->cancel_drag();
         dragging_ = false;
         if (!undo_.empty()) undo_.pop_back();
+        translation_ = {0, 0, 0};
+        angle_ = 0;
       }
       gizmo_part_ = -1;
       pick_ = Pick::None;

@@ -38,6 +38,11 @@ class App {
   void on_key(int key, int mods);
   void on_scroll(double dy);
   void on_drop(const std::string& path);
+  //! Shows \p message as an error in the status line (a callback's exception).
+  void show_error(const std::string& message) {
+    status_ = message;
+    status_error_ = true;
+  }
 
  private:
   struct Panel {
@@ -52,6 +57,9 @@ class App {
 
   void frame();
   void take_snapshot();
+  //! The document the UI shows as committed (a snapshot's, or undo's and redo's): the band to
+  //! edit, the amplitudes and the selection's points follow it.
+  void set_committed(std::shared_ptr<const Document> document);
   void layout_panels(bool refit);
   void handle_mouse();
   void draw_scene(int width, int height);

@@ -48,6 +48,7 @@ void App::draw_band_panel() {
   if (static_cast<int>(view_.visible.size()) != n) {
     view_.visible.assign(static_cast<std::size_t>(n), 0);
     view_.visible[static_cast<std::size_t>(n - 1)] = 1;
+    push_view();  // the worker draws what the boxes say (it kept the old document's flags)
   }
   for (int k = 0; k < n; ++k) {
     ImGui::PushID(k);

@@ -152,6 +152,11 @@ Options parse_options(int argc, char** argv) {
     }
   }
   if (!o.screenshot.empty() && o.input.empty()) throw UsageError("--screenshot needs an input file");
+  // The window saves and exports from its own panel (Ctrl+S, Ctrl+E); these were ignored there.
+  if ((o.screenshot.empty() || !o.script_drag.empty()) && (!o.save.empty() || !o.export_mesh.empty()))
+    throw UsageError(
+        "--save and --export are for --screenshot renders without --script-drag (the window saves with "
+        "Ctrl+S and exports with Ctrl+E)");
   return o;
 }
 

@@ -23,7 +23,7 @@ SceneData make_scene(const Document& document, const SceneSettings& settings) {
   } else if (settings.color == ColorMode::Texture) {
     s.texture = document.texture(s.shown_band);  // the vectors' mesh has the same faces
   }
-  if (settings.cage || s.shown_band == 0) s.net = document.control_net();
+  if (settings.cage || (s.shown_band == 0 && settings.band0_net)) s.net = document.control_net();
   return s;
 }
 

@@ -17,6 +17,8 @@ struct SceneSettings {
   ColorMode color = ColorMode::None;
   double error_scale = 0.05;
   bool cage = false;
+  //! Band 0's control net where band 0 is shown (the window's "Cage net (C)" toggles it).
+  bool band0_net = true;
 };
 
 struct SceneData {

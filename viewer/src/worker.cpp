@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <utility>
@@ -14,6 +15,22 @@
 #include "strata/mesh_io.h"
 
 namespace strata::viewer {
+namespace {
+
+// A message not yet taken by the UI is kept: an empty new one takes it over, and an error is not
+// replaced by a later success (a failed save followed within a frame by an export showed only
+// "exported ...").
+void keep_untaken_message(Snapshot& old, Snapshot& s) {
+  if (s.message.empty() && !s.error) {
+    s.message = std::move(old.message);
+    s.error = old.error;
+  } else if (old.error && !old.message.empty() && !s.error) {
+    s.message = old.message + "; then " + s.message;
+    s.error = true;
+  }
+}
+
+}  // namespace
 
 Worker::Worker(Document document, const ViewSettings& view) : doc_(std::move(document)), view_(view) {
   publish(true, "", false);
@@ -24,19 +41,24 @@ Worker::~Worker() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
-    queue_.clear();
+    // The jobs up to the last save or export run (a Ctrl+S behind a long solve, then the window
+    // closed, wrote nothing); the others are dropped.
+    std::size_t keep = 0;
+    for (std::size_t i = 0; i < queue_.size(); ++i)
+      if (queue_[i].writes_file) keep = i + 1;
+    queue_.resize(keep);
   }
   wake_.notify_all();
   thread_.join();
 }
 
-void Worker::post(Job job, bool commits, const std::string& coalesce_key) {
+void Worker::post(Job job, bool commits, const std::string& coalesce_key, bool writes_file) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!coalesce_key.empty() && !queue_.empty() && queue_.back().key == coalesce_key) {
       queue_.back().job = std::move(job);  // only the newest step of a run of them waits
     } else {
-      queue_.push_back({std::move(job), commits, coalesce_key});
+      queue_.push_back({std::move(job), commits, coalesce_key, writes_file});
     }
   }
   wake_.notify_one();
@@ -61,7 +83,7 @@ void Worker::run() {
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-      if (stop_) return;
+      if (stop_ && queue_.empty()) return;
       p = std::move(queue_.front());
       queue_.pop_front();
       running_job_ = true;
@@ -75,10 +97,23 @@ void Worker::run() {
       message = e.what();
       error = true;
     }
-    try {
-      publish(p.commits && !error, message, error);
-    } catch (const std::exception& e) {
-      publish(false, e.what(), true);
+    bool stopping = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping = stop_;
+    }
+    if (stopping) {
+      // The window is gone: a failed save or export is said on stderr.
+      if (error) std::fprintf(stderr, "strata-viewer: %s\n", message.c_str());
+    } else {
+      try {
+        publish(p.commits && !error, message, error);
+      } catch (const std::exception& e) {
+        // Not the scenes again (they may fail the same way): the message, and the job's commit,
+        // whose document has changed (a load, a build or an edit).
+        publish_message(message.empty() ? std::string(e.what()) : message + "; " + e.what(), true,
+                        p.commits && !error);
+      }
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -109,7 +144,7 @@ void Worker::publish(bool commit, std::string message, bool error) {
     settings.vectors = view_.vectors;
     settings.color = dragging ? drag_color : view_.color;
     settings.error_scale = view_.error_scale;
-    settings.cage = view_.cage && k == 0;
+    settings.band0_net = view_.cage;
     s.panels.push_back(make_scene(doc_, settings));
   }
   if (view_.compare && !view_.vectors) {
@@ -128,11 +163,31 @@ void Worker::publish(bool commit, std::string message, bool error) {
   s.version = snapshot_.version + 1;
   // A commit not yet taken by the UI survives later drag-step snapshots.
   if (!s.committed) s.committed = std::move(snapshot_.committed);
-  if (s.message.empty() && !s.error) {
-    s.message = std::move(snapshot_.message);
-    s.error = snapshot_.error;
-  }
+  keep_untaken_message(snapshot_, s);
   snapshot_ = std::move(s);
+}
+
+void Worker::publish_message(std::string message, bool error, bool commit) noexcept {
+  try {
+    Snapshot s;
+    s.message_only = true;
+    s.message = std::move(message);
+    s.error = error;
+    if (commit) s.committed = std::make_shared<const Document>(doc_);
+    std::lock_guard<std::mutex> lock(mutex_);
+    s.version = snapshot_.version + 1;
+    if (!s.committed) s.committed = std::move(snapshot_.committed);
+    // Panels not yet taken stay (the UI draws the newest it has).
+    if (snapshot_.version > 0 && !snapshot_.message_only && !snapshot_.panels.empty()) {
+      s.panels = std::move(snapshot_.panels);
+      s.drag_step = snapshot_.drag_step;
+      s.message_only = false;
+    }
+    keep_untaken_message(snapshot_, s);
+    snapshot_ = std::move(s);
+  } catch (...) {
+    std::fprintf(stderr, "strata-viewer: out of memory publishing: %s\n", message.c_str());
+  }
 }
 
 std::optional<Snapshot> Worker::take(long long version) {
@@ -180,6 +235,7 @@ void Worker::set_view(const ViewSettings& settings) {
 void Worker::begin_drag(int band, const Selection& region, const Selection& handle) {
   post(
       [this, band, region, handle](Document& d) {
+        drag_failed_ = true;  // until it succeeds
         d.check_band(band);
         if (d.is_model()) {
           d.mutable_model().begin_drag(band, region, handle);
@@ -190,6 +246,7 @@ void Worker::begin_drag(int band, const Selection& region, const Selection& hand
           mesh_editor_->begin_drag();
           mesh_dragging_ = true;
         }
+        drag_failed_ = false;
         return std::string();
       },
       false);
@@ -198,6 +255,7 @@ void Worker::begin_drag(int band, const Selection& region, const Selection& hand
 void Worker::update_drag(const EditTransform& transform) {
   post(
       [this, transform](Document& d) {
+        if (drag_failed_) return std::string();  // the begin's error stays the one shown
         const auto t0 = std::chrono::steady_clock::now();
         if (d.is_model()) {
           if (!d.model().dragging()) throw InvalidInput("no drag is active");
@@ -219,6 +277,10 @@ void Worker::update_drag(const EditTransform& transform) {
 void Worker::end_drag() {
   post(
       [this](Document& d) {
+        if (drag_failed_) {  // nothing was dragged: no exact solve to report
+          drag_failed_ = false;
+          return std::string();
+        }
         const auto t0 = std::chrono::steady_clock::now();
         if (d.is_model()) {
           if (!d.model().dragging()) return std::string();
@@ -237,6 +299,8 @@ void Worker::end_drag() {
           d.set_mesh_positions(std::move(r.positions));
           mesh_editor_.reset();
           mesh_dragging_ = false;
+        } else {
+          return std::string();
         }
         return "exact solve: " +
                std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()) +
@@ -248,6 +312,7 @@ void Worker::end_drag() {
 void Worker::cancel_drag() {
   post(
       [this](Document& d) {
+        drag_failed_ = false;
         if (d.is_model()) {
           d.mutable_model().cancel_drag();
         } else if (mesh_editor_) {
@@ -323,12 +388,16 @@ void Worker::save(const std::string& path) {
         layers::write_model(d.model(), path);
         return "saved " + path;
       },
-      false);
+      false, "", true);
 }
 
 void Worker::export_meshes(const std::string& prefix, const std::string& extension) {
   post(
-      [prefix, extension](Document& d) {
+      [this, prefix, extension](Document& d) {
+        // The preview is no result (Ctrl+E while Ctrl-dragging wrote the unconverged step; a save
+        // writes the state before the drag).
+        if ((d.is_model() && d.model().dragging()) || mesh_dragging_)
+          throw InvalidInput("export during a drag: release or cancel it first");
         std::string notes;
         for (int k = 0; k < d.num_bands(); ++k) {
           const std::string path = prefix + "_band" + std::to_string(k) + extension;
@@ -343,7 +412,7 @@ void Worker::export_meshes(const std::string& prefix, const std::string& extensi
         return "exported " + std::to_string(d.num_bands()) + " meshes to " + prefix + "_band*" + extension +
                notes;
       },
-      false);
+      false, "", true);
 }
 
 }  // namespace strata::viewer

@@ -30,7 +30,8 @@ struct Snapshot {
   std::shared_ptr<const Document> committed;
   std::string message;  //!< the last operation's outcome or error ("" if none)
   bool error = false;
-  bool drag_step = false;  //!< the panels show a drag step's preview
+  bool drag_step = false;     //!< the panels show a drag step's preview
+  bool message_only = false;  //!< no panels: only the message (and the commit) are new
 };
 
 //! What the panels show (the UI's settings, applied by the worker).
@@ -49,7 +50,10 @@ class Worker {
   //! texture is decoded here, so that the first picture is the one asked for), then starts the
   //! thread.
   explicit Worker(Document document, const ViewSettings& view = {});
-  ~Worker();  //!< stops the thread after the running job (pending ones are dropped)
+  //! Stops the thread after the running job; pending jobs are dropped, but for saves and exports
+  //! and the jobs queued before them (the file the user asked for is written; an error is printed
+  //! on stderr, as no window shows it).
+  ~Worker();
   Worker(const Worker&) = delete;
   Worker& operator=(const Worker&) = delete;
 
@@ -81,14 +85,17 @@ class Worker {
  private:
   //! A job returns its success message ("" for none) or throws.
   using Job = std::function<std::string(Document&)>;
-  void post(Job job, bool commits, const std::string& coalesce_key = "");
+  void post(Job job, bool commits, const std::string& coalesce_key = "", bool writes_file = false);
   void run();
   void publish(bool commit, std::string message, bool error);
+  //! A snapshot with \p message only (Snapshot::message_only): when publish() itself failed.
+  void publish_message(std::string message, bool error, bool commit) noexcept;
 
   struct Pending {
     Job job;
     bool commits = false;
     std::string key;
+    bool writes_file = false;  // a save or an export: run even when the window closes
   };
 
   Document doc_;  // worker thread only (and the constructor)
@@ -97,6 +104,9 @@ class Worker {
   std::unique_ptr<RegionEditor> mesh_editor_;
   EditTransform last_transform_;
   bool mesh_dragging_ = false;
+  // The last begin_drag() failed: its drag's steps and end do nothing (their "no drag is active"
+  // replaced the cause, and a plain mesh's end reported an exact solve that never ran).
+  bool drag_failed_ = false;
 
   mutable std::mutex mutex_;
   std::condition_variable wake_, idle_;

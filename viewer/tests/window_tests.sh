@@ -61,6 +61,28 @@ cat >"$T/fold.json" <<'JSON'
 JSON
 "$VIEWER" "$T/plane/plane.obj" --layers 2 --save "$T/plane.strata" --screenshot "$T/plane_rest.png" --size 320x240 >/dev/null
 drag_keeps "$T/plane.strata" 1 "$T/fold.json" 30 texture texture texture
+# A drag whose region selects nothing on a plain mesh: the status names the cause (it read
+# "exact solve: 0.000000 s", no solve having run).
+cat >"$T/nowhere.json" <<'JSON'
+{"region": {"sphere": {"center": [100, 100, 100], "radius": 0.1}},
+ "handle": {"sphere": {"center": [100, 100, 100], "radius": 0.05}},
+ "transform": {"rotate": {"axis": [1, 0, 0], "degrees": 10, "pivot": [0, 0, 3.5]}}}
+JSON
+set +e
+xvfb-run -a -s "-screen 0 1280x800x24" "$VIEWER" "$ROOT/assets/bumps-75/detail.obj" --script-drag "$T/nowhere.json" \
+  --frames 5 --benchmark --size 320x240 --screenshot "$T/nowhere.png" >"$T/out" 2>"$T/err"
+rc=$?
+set -e
+echo "window, a drag selecting nothing: exit $rc, $(cat "$T/err")"
+[ "$rc" = 1 ] && grep -q "the region selects no vertex" "$T/err" && ! grep -q "exact solve" "$T/out" ||
+  { echo "a drag selecting nothing was not reported: exit $rc"; cat "$T/out"; exit 1; }
+# --save and --export are refused where nothing would write them (the scripted window ignored them).
+set +e
+"$VIEWER" "$T/model.strata" --script-drag "$T/bend.json" --screenshot "$T/x.png" --save "$T/never.strata" 2>"$T/err"
+rc=$?
+set -e
+[ "$rc" = 1 ] && grep -q -- "--save and --export are for --screenshot renders" "$T/err" && [ ! -e "$T/never.strata" ] ||
+  { echo "--save with --script-drag: exit $rc, $(cat "$T/err")"; exit 1; }
 s=$(python3 "$(dirname "$0")/png_stats.py" "$T/window.png")
 python3 -c "
 import json, sys
