@@ -266,6 +266,12 @@ TEST(CageIo, ParsesTagsAndNamesTheProblem) {
   EXPECT_NE(message(R"({"corners": [{"vertex": 1, "sharpness": -1}]})").find("corners[0].sharpness"),
             std::string::npos);
   EXPECT_NE(message(R"({"corners": [{"sharpness": 1}]})").find("missing \"vertex\""), std::string::npos);
+  // A key twice: the parser kept the last value (two "corners" lists read as the second).
+  EXPECT_NE(message(R"({"corners": [{"vertex": 1, "sharpness": 2}], "corners": [{"vertex": 7}]})")
+                .find("t.json: the key \"corners\" appears twice in one object"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"corners": [{"vertex": 1, "sharpness": 2, "sharpness": 9}]})").find("appears twice"),
+            std::string::npos);
   EXPECT_THROW(read_subdiv_tags("/nonexistent/tags.json"), IoError);
   // Not a regular file (a FIFO or device would block the reader): refused, naming the path.
   try {

@@ -2094,6 +2094,23 @@ TEST(MeshIoAtomicFile, WritesAndReplacesWithoutLeftovers) {
   EXPECT_EQ(read_bytes(path), "third");
   EXPECT_FALSE(fs::exists(seen_tmp));
   EXPECT_EQ(dir.listing(), (std::set<std::string>{"out.txt"}));
+
+  // A read-only or write-only target keeps its mode, given to the temporary file only once it is
+  // written and synced: given first, the writer (0444) or the sync (0200) could not open it (as
+  // any user but root), and set-id bits are not copied.
+  for (const mode_t mode : {0444, 0200, 04755}) {
+    ASSERT_EQ(::chmod(path.c_str(), mode), 0);
+    write_file_atomically(path, [&](const std::string& tmp) {
+      struct stat t;
+      ASSERT_EQ(::stat(tmp.c_str(), &t), 0);
+      EXPECT_EQ(t.st_mode & 0600, 0600u) << std::oct << mode;  // the owner reads and writes it
+      std::ofstream(tmp) << "fourth";
+    });
+    ASSERT_EQ(::stat(path.c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 07777, mode & 0777u) << std::oct << mode;
+    ::chmod(path.c_str(), 0600);
+    EXPECT_EQ(read_bytes(path), "fourth");
+  }
 }
 
 TEST(MeshIoAtomicFile, ThrowingWriterLeavesTargetAndNoTempFile) {
@@ -2254,6 +2271,18 @@ TEST(MeshIoCompanionFiles, TheLibrariesAndTheirImagesAreWrittenBesideTheOutput) 
   EXPECT_TRUE(write_companion_files(p, dir.file("ply/x.ply")).empty());
   EXPECT_EQ(read_bytes(dir.file("ply/tex/bump.png")), "BUMP");
   EXPECT_EQ(read_bytes(dir.file("ply/shared.png")), "SHARED");
+  // A directory of the name that is a symbolic link out of the mesh's directory is not written
+  // through (it was, where the reader refuses to read through one): a note says so.
+  fs::create_directories(dir.file("linked"));
+  fs::create_directories(dir.file("elsewhere"));
+  fs::create_directory_symlink("../elsewhere", dir.file("linked/tex"));
+  const std::vector<std::string> through = write_companion_files(p, dir.file("linked/x.ply"));
+  ASSERT_EQ(through.size(), 1u);
+  EXPECT_NE(through[0].find("tex/bump.png is not written: it leads out of the directory of"),
+            std::string::npos)
+      << through[0];
+  EXPECT_EQ(files_under(dir.file("elsewhere")), 0u);
+  EXPECT_EQ(read_bytes(dir.file("linked/shared.png")), "SHARED");
 }
 
 TEST(MeshIoCompanionFiles, BadNamesAndFilesAreNotesAndNothingIsReplaced) {

@@ -647,4 +647,12 @@ TEST(Subdiv, LimitPointSetReevaluatesAfterCageEdits) {
   Vec3 p, du, dv;
   EXPECT_THROW(set.evaluate(other, 0, 1, &p, &du, &dv), InvalidInput);
   EXPECT_THROW(LimitPointSet(cube, {{99, 0.5, 0.5}}), InvalidInput);
+  // The same patch count is not the same patches: each face's corners rotated by one evaluated
+  // silently to other points. A cage of the same faces (its points moved) is taken.
+  PolyMesh rotated = cube_cage();
+  for (std::vector<int>& f : rotated.faces) std::rotate(f.begin(), f.begin() + 1, f.end());
+  EXPECT_THROW(set.evaluate(SubdivSurface(rotated), P, Du, Dv), InvalidInput);
+  PolyMesh moved = cube_cage();
+  moved.vertices[0].x() -= 0.3;
+  EXPECT_NO_THROW(set.evaluate(SubdivSurface(moved), P, Du, Dv));
 }

@@ -61,9 +61,6 @@ std::string create_temp_file(const fs::path& target) {
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
       FdGuard guard(fd);
-      // Replacing a file should not silently change its permissions.
-      struct stat st;
-      if (::stat(target.c_str(), &st) == 0 && S_ISREG(st.st_mode)) (void)::fchmod(fd, st.st_mode & 07777);
       if (guard.close_now() != 0) {
         const int err = errno;
         ::unlink(tmp.c_str());
@@ -119,10 +116,16 @@ void write_file_atomically(const std::string& path,
     throw IoError("'" + path + "': not a file path (empty or ends with a directory separator)");
   check_replaceable(path);
 
+  // Replacing a file should not silently change its permissions (without set-id bits). They are
+  // given to the temporary file after it is written and synced: given first, a read-only target
+  // (0444) made the writer fail to open it, and a write-only one (0200) the sync.
+  struct stat st;
+  const bool keep_mode = ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
   const std::string tmp = create_temp_file(target);
   try {
     writer(tmp);
     sync_file(path, tmp);
+    if (keep_mode) (void)::chmod(tmp.c_str(), st.st_mode & 0777);
     if (::rename(tmp.c_str(), path.c_str()) != 0)
       throw IoError(path + ": cannot replace it with temporary file " + tmp + ": " + errno_text(errno));
   } catch (...) {

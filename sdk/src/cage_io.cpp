@@ -54,6 +54,10 @@ SubdivTags parse_subdiv_tags(const std::string& text, const std::string& name) {
   // The JSON parser stops at a NUL byte and took what came before (a tags file with one was read).
   if (text.find('\0') != std::string::npos)
     throw InvalidInput(name + ": not valid JSON: it holds a NUL byte");
+  // A key twice (the parser kept the last value silently: two "corners" lists gave the second),
+  // and depth and width, as for edit scripts.
+  const std::string problem = json_structure_problem(text);
+  if (!problem.empty()) throw InvalidInput(name + ": " + problem);
   json j;
   try {
     j = json::parse(text);

@@ -262,11 +262,23 @@ std::vector<std::string> write_companion_files(const MeshAttributes& attributes,
                         mesh_path + " names it");
       continue;
     }
+    // As the reader refuses it: a directory of the name that is a symbolic link out of the mesh's
+    // directory (the file was written through it).
+    const std::string outside = path.string() + " is not written: it leads out of the directory of " +
+                                mesh_path + " (a symbolic link)";
+    if (!inside(path, dir)) {
+      notes.push_back(outside);
+      continue;
+    }
     ec.clear();
     if (!path.parent_path().empty()) fs::create_directories(path.parent_path(), ec);
     if (ec) {  // something else is where the directory would go: left as it is too
       notes.push_back(path.string() + " is not written: cannot create the directory " +
                       path.parent_path().string() + " (" + ec.message() + ")");
+      continue;
+    }
+    if (!inside(path, dir)) {  // a link made meanwhile
+      notes.push_back(outside);
       continue;
     }
     if (write)

@@ -83,6 +83,30 @@ class SubdivSurface::Impl {
     build_refiner();
     build_ptex();
     update_points();
+    topology_id_ = topology_fingerprint();
+  }
+
+  // FNV-1a over what the patch table is made from (the faces, the tags, the options): equal for a
+  // surface after set_control_points() or one built on the same cage topology, different (but for
+  // a 2^-64 chance) where the patches differ.
+  std::uint64_t topology_fingerprint() const {
+    std::uint64_t h = 1469598103934665603ull;
+    auto add = [&](const void* data, std::size_t n) {
+      const auto* b = static_cast<const unsigned char*>(data);
+      for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    };
+    auto add_int = [&](long long x) { add(&x, sizeof x); };
+    add_int(static_cast<int>(scheme_));  // as resolved (Auto is Loop or Catmull-Clark)
+    add_int(static_cast<int>(opt_.boundary));
+    add_int(opt_.isolation_level);
+    for (const std::vector<int>& f : cage_.faces) {
+      add_int(static_cast<long long>(f.size()));
+      add(f.data(), f.size() * sizeof(int));
+    }
+    for (const SubdivTags::Crease& c : tags_.creases)
+      add_int(c.v0), add_int(c.v1), add(&c.sharpness, sizeof(double));
+    for (const SubdivTags::Corner& c : tags_.corners) add_int(c.vertex), add(&c.sharpness, sizeof(double));
+    return h;
   }
 
   // ---- construction ----
@@ -578,7 +602,8 @@ class SubdivSurface::Impl {
   std::unique_ptr<Far::PatchTable> table_;
   std::unique_ptr<Far::PatchMap> map_;
   std::unique_ptr<const Far::StencilTableReal<double>> stencils_;  // refined and local points from the cage
-  std::vector<Vec3> points_;  // the patches' points: control, refined, local
+  std::vector<Vec3> points_;       // the patches' points: control, refined, local
+  std::uint64_t topology_id_ = 0;  // topology_fingerprint()
   int num_ptex_ = 0, corners_ = 3;
   std::vector<int> first_ptex_;
   struct EdgeLine {
@@ -661,6 +686,7 @@ SubdivSurface::EdgeCrossing SubdivSurface::across_edge(int face, int edge, doubl
 LimitPointSet::LimitPointSet(const SubdivSurface& surface, const std::vector<LimitPoint>& points) {
   const SubdivSurface::Impl& S = *surface.impl_;
   num_patch_points_ = static_cast<int>(S.points_.size());
+  topology_id_ = S.topology_id_;
   offsets_.assign(points.size() + 1, 0);
   index_.reserve(points.size() * 16);
   wp_.reserve(points.size() * 16);
@@ -685,6 +711,10 @@ void LimitPointSet::check(const SubdivSurface& surface) const {
   if (static_cast<int>(surface.impl_->points_.size()) != num_patch_points_)
     throw InvalidInput("limit point set was built on a surface with " + vtx(num_patch_points_) +
                        " patch points, this one has " + vtx(static_cast<int>(surface.impl_->points_.size())));
+  // The same count is not the same patches (a cage with its faces' corners rotated evaluated
+  // silently to other points).
+  if (surface.impl_->topology_id_ != topology_id_)
+    throw InvalidInput("limit point set was built on a surface of another topology (faces, tags or options)");
 }
 
 void LimitPointSet::evaluate_unchecked(const std::vector<Vec3>& P, int begin, int end, Vec3* positions,

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -195,12 +196,13 @@ class LimitPointSet {
   int size() const { return static_cast<int>(offsets_.size()) - 1; }
   //! Positions and first derivatives of the points on \p surface, which must have the topology
   //! the set was built on (e.g. the same SubdivSurface after set_control_points()). In parallel.
-  //! \throw InvalidInput if the surface's patch layout differs.
+  //! \throw InvalidInput if the surface's patch layout differs (another patch count, or another
+  //!        topology: faces, tags or options).
   void evaluate(const SubdivSurface& surface, std::vector<Vec3>& positions, std::vector<Vec3>& du,
                 std::vector<Vec3>& dv) const;
   //! The same for the points [begin, end) into the arrays given (end - begin entries each), on
   //! the calling thread: for callers that use each point's values right away.
-  //! 	hrow InvalidInput if the surface's patch layout differs or the range is out of bounds.
+  //! \throw InvalidInput if the surface's patch layout differs or the range is out of bounds.
   void evaluate(const SubdivSurface& surface, int begin, int end, Vec3* positions, Vec3* du, Vec3* dv) const;
 
  private:
@@ -208,8 +210,9 @@ class LimitPointSet {
   void evaluate_unchecked(const std::vector<Vec3>& patch_points, int begin, int end, Vec3* positions,
                           Vec3* du, Vec3* dv) const;
   int num_patch_points_ = 0;
-  std::vector<int> offsets_;  // per point: its entries [offsets_[i], offsets_[i+1])
-  std::vector<int> index_;    // per entry: patch point; the first entry of a point is its origin
+  std::uint64_t topology_id_ = 0;  // the surface's fingerprint of its faces, tags and options
+  std::vector<int> offsets_;       // per point: its entries [offsets_[i], offsets_[i+1])
+  std::vector<int> index_;         // per entry: patch point; the first entry of a point is its origin
   std::vector<float> wp_, wu_, wv_;
 };
 
