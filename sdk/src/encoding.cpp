@@ -177,7 +177,8 @@ void finish_encoding(DetailEncoding& e, const TriMesh& detail, const BaseFrames&
   // the same in any order), so the encoding does not depend on them. Serial, these loops and the
   // weights were most of a scattered 1M-prism encoding's time.
   std::vector<double> max_tangential(n, 0.0);
-  const double unit = std::min(1.0, bbox_diagonal(detail.vertices));  // as Encoder::unit_
+  // The tolerance's unit, as Encoder::unit_ (of the detail here, whose offsets these are).
+  const double unit = std::min(1.0, bbox_diagonal(detail.vertices));
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i != r.end(); ++i) {
       const Vec3 d = detail.vertices[i] - frames.points[i];

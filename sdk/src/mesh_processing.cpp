@@ -41,12 +41,9 @@ double double_area(const std::vector<Vec3>& x, const Face& f, double scale) {
   return a.cross(b).norm();
 }
 
-// The power of two just above 1 / the bounding box's largest side (1 for a mesh of one point).
+// The power of two just above 1 / the bounding box's diagonal (1 for a mesh of one point).
 double unit_scale(const std::vector<Vec3>& x) {
-  if (x.empty()) return 1.0;
-  Vec3 lo = x[0], hi = x[0];
-  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const double extent = (hi - lo).maxCoeff();
+  const double extent = bbox_diagonal(x);
   if (!(extent > 0) || !std::isfinite(extent)) return 1.0;
   int exponent = 0;
   std::frexp(extent, &exponent);

@@ -143,9 +143,7 @@ void App::draw_edit_panel() {
   }
   if (changed && dragging_) gizmo_update();
   if (released && !active) {
-    gizmo_end();
-    translation_ = {0, 0, 0};
-    angle_ = 0;
+    gizmo_end();  // which starts the next drag from the identity
   }
   ImGui::EndDisabled();
   ImGui::BeginDisabled(undo_.empty());

@@ -171,7 +171,7 @@ void Worker::publish_message(std::string message, bool error, bool commit) noexc
   try {
     Snapshot s;
     s.message_only = true;
-    s.message = std::move(message);
+    s.message = message;  // a copy: the catch below prints it
     s.error = error;
     if (commit) s.committed = std::make_shared<const Document>(doc_);
     std::lock_guard<std::mutex> lock(mutex_);
@@ -188,6 +188,12 @@ void Worker::publish_message(std::string message, bool error, bool commit) noexc
   } catch (...) {
     std::fprintf(stderr, "strata-viewer: out of memory publishing: %s\n", message.c_str());
   }
+}
+
+void Worker::drop_mesh_drag(Document& d, std::vector<Vec3> positions) {
+  d.set_mesh_positions(std::move(positions));
+  mesh_editor_.reset();
+  mesh_dragging_ = false;
 }
 
 std::optional<Snapshot> Worker::take(long long version) {
@@ -291,14 +297,10 @@ void Worker::end_drag() {
             r = mesh_editor_->end_drag();
           } catch (...) {
             // As a model's failed end_drag(): the mesh as before the drag, and the error shown.
-            d.set_mesh_positions(mesh_editor_->mesh().vertices);
-            mesh_editor_.reset();
-            mesh_dragging_ = false;
+            drop_mesh_drag(d, mesh_editor_->mesh().vertices);
             throw;
           }
-          d.set_mesh_positions(std::move(r.positions));
-          mesh_editor_.reset();
-          mesh_dragging_ = false;
+          drop_mesh_drag(d, std::move(r.positions));
         } else {
           return std::string();
         }
@@ -316,9 +318,7 @@ void Worker::cancel_drag() {
         if (d.is_model()) {
           d.mutable_model().cancel_drag();
         } else if (mesh_editor_) {
-          d.set_mesh_positions(mesh_editor_->mesh().vertices);
-          mesh_editor_.reset();
-          mesh_dragging_ = false;
+          drop_mesh_drag(d, mesh_editor_->mesh().vertices);
         }
         return std::string("drag cancelled");
       },

@@ -90,6 +90,8 @@ class Worker {
   void publish(bool commit, std::string message, bool error);
   //! A snapshot with \p message only (Snapshot::message_only): when publish() itself failed.
   void publish_message(std::string message, bool error, bool commit) noexcept;
+  //! Ends a plain mesh's drag: \p positions into the document, the editor dropped.
+  void drop_mesh_drag(Document& d, std::vector<Vec3> positions);
 
   struct Pending {
     Job job;
