@@ -223,6 +223,12 @@ TEST(Layers, TheScansColoursAndTextureCoordinatesFollowItsVertices) {
     EXPECT_EQ(back.files, a.files) << file;
   };
   round_trip(t, "t.strata");
+  // Material names alone (no face uses one): kept too (empty() did not count them, so the band
+  // was written without attributes).
+  MeshAttributes names_only;
+  names_only.material_names = {"fur", "claws"};
+  ASSERT_FALSE(names_only.empty());
+  round_trip(names_only, "n.strata");
   // Names that are not UTF-8 (an OBJ written in Latin-1): kept byte for byte ({"hex": ...} in the
   // header; dump() threw a JSON library error for them, and `strata build` of the scan failed).
   MeshAttributes latin1 = t;

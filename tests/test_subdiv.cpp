@@ -540,6 +540,17 @@ TEST(Subdiv, RejectsBadCages) {
   t = {};
   t.corners.push_back({8, 10.0});
   EXPECT_NE(msg(cube_cage(), t).find("vertex 8"), std::string::npos);
+  // One edge tagged twice, the second time reversed and with another sharpness; a corner twice.
+  const std::vector<int> f0 = cube_cage().faces[0];
+  t = {};
+  t.creases.push_back({f0[0], f0[1], 2.0});
+  t.creases.push_back({f0[2], f0[3], 2.0});
+  t.creases.push_back({f0[1], f0[0], 5.0});
+  EXPECT_NE(msg(cube_cage(), t).find("is tagged twice (creases 0 and 2)"), std::string::npos);
+  t = {};
+  t.corners.push_back({3, 10.0});
+  t.corners.push_back({3, 1.0});
+  EXPECT_NE(msg(cube_cage(), t).find("corner tag on vertex 3 is given twice"), std::string::npos);
   SubdivOptions iso;
   iso.isolation_level = 0;
   EXPECT_NE(msg(cube_cage(), {}, iso).find("isolation level"), std::string::npos);

@@ -177,19 +177,33 @@ class SubdivSurface::Impl {
       scheme_ = all_triangles ? SubdivScheme::Loop : SubdivScheme::CatmullClark;
     if (scheme_ == SubdivScheme::Loop && !all_triangles)
       throw InvalidInput("the Loop scheme needs an all-triangle cage");
-    for (const SubdivTags::Crease& c : tags_.creases) {
+    // A tag given twice (with sharpnesses that may differ) would leave which one counts to
+    // OpenSubdiv's internals: refused, naming both.
+    std::unordered_map<std::uint64_t, std::size_t> tagged;
+    for (std::size_t k = 0; k < tags_.creases.size(); ++k) {
+      const SubdivTags::Crease& c = tags_.creases[k];
       if (!(c.sharpness >= 0))
         throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") has a " +
                            (std::isnan(c.sharpness) ? "NaN" : "negative") + " sharpness");
       if (c.v0 < 0 || c.v1 < 0 || c.v0 >= nv || c.v1 >= nv || !edge_ids_.count(pair_key(c.v0, c.v1)))
         throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") is not an edge of the cage");
+      const auto [it, fresh] = tagged.emplace(pair_key(c.v0, c.v1), k);
+      if (!fresh)
+        throw InvalidInput("crease (" + vtx(c.v0) + "," + vtx(c.v1) + ") is tagged twice (creases " +
+                           std::to_string(it->second) + " and " + std::to_string(k) + ")");
     }
-    for (const SubdivTags::Corner& c : tags_.corners) {
+    tagged.clear();
+    for (std::size_t k = 0; k < tags_.corners.size(); ++k) {
+      const SubdivTags::Corner& c = tags_.corners[k];
       if (c.vertex < 0 || c.vertex >= nv)
         throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + ", which the cage does not have");
       if (!(c.sharpness >= 0))
         throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + " has a " +
                            (std::isnan(c.sharpness) ? "NaN" : "negative") + " sharpness");
+      const auto [it, fresh] = tagged.emplace(static_cast<std::uint64_t>(c.vertex), k);
+      if (!fresh)
+        throw InvalidInput("corner tag on vertex " + vtx(c.vertex) + " is given twice (corners " +
+                           std::to_string(it->second) + " and " + std::to_string(k) + ")");
     }
     if (opt_.isolation_level < 1 || opt_.isolation_level > 10)
       throw InvalidInput("subdivision isolation level must be in 1..10, got " + vtx(opt_.isolation_level));

@@ -92,7 +92,8 @@ struct MeshAttributes {
 
   bool empty() const {
     return colors.empty() && texcoords.empty() && corner_uv_index.empty() && face_materials.empty() &&
-           material_library.empty() && texture_files.empty() && face_textures.empty() && files.empty();
+           material_names.empty() && material_library.empty() && texture_files.empty() &&
+           face_textures.empty() && files.empty();
   }
 };
 
