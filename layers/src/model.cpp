@@ -577,10 +577,72 @@ bool same_subdivision(const DetailEncoding& e, const Band& cage) {
          x.max_refined_faces == y.max_refined_faces;
 }
 
+// Relative difference allowed between an encoding's derived values and those its base points
+// give: encode_detail_at() restores them bit for bit, so this only absorbs another compiler's
+// rounding.
+constexpr double kDerivedTolerance = 1e-9;
+
+// The encoding's values that follow from its base points over the base at rest (band.base_rest)
+// and its rest detail are those values: a file stores only the base points and base_rest, and the
+// reader computes the rest again, so an encoding that disagreed (base_rest scaled by 1.01 after
+// encoding, target volumes doubled) was assembled and then changed by a save and a load (an
+// amplitude of 0.5 then moved the finest band by 0.8% of its diagonal).
+void check_derived_values(const std::string& name, const Band& b, const Band& base_band) {
+  const DetailEncoding& e = b.encoding;
+  const TriMesh rest{e.detail_rest, e.detail_faces};
+  DetailEncoding d;
+  try {
+    if (e.over_limit_surface()) {
+      PolyMesh cage = base_band.cage;
+      cage.vertices = b.base_rest;
+      d = encode_detail_at(rest, SubdivSurface(cage, base_band.tags, base_band.subdiv), e.limit_points);
+    } else {
+      d = encode_detail_at(rest, TriMesh{b.base_rest, base_band.mesh.faces}, e.base_points);
+    }
+  } catch (const Error& x) {
+    throw InvalidInput(name + ": its base points over its base at rest: " + x.what());
+  }
+  auto compare = [&](const auto& have, const auto& want, const char* what) {
+    double scale = 0.0;
+    for (const auto& w : want) {
+      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(w)>>)
+        scale = std::max(scale, std::abs(w));
+      else
+        scale = std::max(scale, w.cwiseAbs().maxCoeff());
+    }
+    const double tol = kDerivedTolerance * std::max(scale, 1e-300);
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      double diff;
+      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(want[i])>>)
+        diff = std::abs(have[i] - want[i]);
+      else
+        diff = (have[i] - want[i]).cwiseAbs().maxCoeff();
+      if (!(diff <= tol))
+        throw InvalidInput(name + ": the encoding's " + what + " " + std::to_string(i) +
+                           " is not the one its base point over the base at rest gives (a file keeps "
+                           "only the base points and base_rest)");
+    }
+  };
+  if (e.weight_offsets != d.weight_offsets || e.weight_neighbors != d.weight_neighbors)
+    throw InvalidInput(name + ": the encoding's regularization neighbours are not its rest detail's");
+  compare(e.base_rest_points, d.base_rest_points, "rest base point");
+  compare(e.base_rest_normals, d.base_rest_normals, "rest base normal");
+  compare(e.base_rest_tangents, d.base_rest_tangents, "rest base tangent");
+  compare(e.normal_offsets, d.normal_offsets, "normal offset");
+  compare(e.tangential_offsets, d.tangential_offsets, "tangential offset");
+  compare(e.target_volumes, d.target_volumes, "target volume");
+  compare(e.weights, d.weights, "regularization weight");
+}
+
 }  // namespace
 
 LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions options,
                                     std::vector<std::string> history) {
+  return assemble_parts(std::move(bands), std::move(options), std::move(history), true);
+}
+
+LayeredModel LayeredModel::assemble_parts(std::vector<Band> bands, ModelOptions options,
+                                          std::vector<std::string> history, bool check_derived) {
   const int nb = static_cast<int>(bands.size());
   if (nb < 2) throw InvalidInput("a model needs at least 2 bands, not " + std::to_string(nb));
   // The reader's bound (layers/FORMAT.md): more were assembled and written, and not read back.
@@ -696,10 +758,15 @@ LayeredModel LayeredModel::assemble(std::vector<Band> bands, ModelOptions option
         throw InvalidInput(name + ": the encoding's " + x.what());
       }
     }
+    if (check_derived) check_derived_values(name, b, k == 1 ? bands[0] : bands[k - 1]);
   }
   LayeredModel model;
   model.impl_->bands = std::move(bands);
   model.impl_->options = std::move(options);
+  // As build() and set_options(): a model keeps no caller's callback or flag (a callback that
+  // captured a caller's local was called by later edits).
+  model.impl_->options.reconstruct.progress = nullptr;
+  model.impl_->options.reconstruct.cancel = nullptr;
   model.impl_->history = std::move(history);
   return model;
 }
@@ -719,13 +786,16 @@ CascadeReport LayeredModel::edit(int k, const EditStep& step, const std::string&
   change.old = work.points(k);
   if (k == 0) {
     // The handle's cage vertices (s = 1) move by exactly the transform; so do the parts of the
-    // finer bands that depend on them only.
+    // finer bands that depend on them only, if the transform is rigid: a scale of 1.5 carried
+    // the detail over the handle with 1.5^3 its volumes. Other maps solve those parts too.
     Band& c = work.bands[0];
     const std::vector<double> s = cage_blend_field(c.cage, region, handle);
     c.cage.vertices = blend_transform(c.cage.vertices, s, step.transform);
-    change.rigid.resize(s.size());
-    for (std::size_t v = 0; v < s.size(); ++v) change.rigid[v] = s[v] == 1.0;
-    change.map = &step.transform;
+    if (step.transform.is_rigid()) {
+      change.rigid.resize(s.size());
+      for (std::size_t v = 0; v < s.size(); ++v) change.rigid[v] = s[v] == 1.0;
+      change.map = &step.transform;
+    }
   } else {
     RegionEditor editor(work.bands[k].mesh, region, handle, edit_options(work.options));
     EditResult r = editor.apply(step.transform);
@@ -764,6 +834,11 @@ CascadeReport LayeredModel::set_amplitude(int k, double amplitude) {
   if (impl_->drag) throw InvalidInput("set_amplitude() during a drag: end or cancel the drag first");
   check_band_index(k, impl_->n(), false);
   check_amplitude(amplitude, "the amplitude");
+  CascadeReport unchanged;
+  unchanged.edited_band = k;
+  // The same amplitude again (a slider released where it was) changes nothing: a rebuild would
+  // solve every vertex off its rest again from the clean start, and move it within the tolerance.
+  if (std::memcmp(&amplitude, &impl_->bands[k].amplitude, sizeof amplitude) == 0) return unchanged;
   const auto t0 = Clock::now();
   Impl work(*impl_);
   work.deps = impl_->deps;

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "model_access.h"
 #include "options_io.h"
 #include "strata/exceptions.h"
 #include "strata/json_check.h"
@@ -737,7 +738,7 @@ LayeredModel read_model(const std::string& path) {
                              : unflatten(unpack_f64(section(p + "positions"), 3 * nv, path));
   }
   try {
-    return LayeredModel::assemble(std::move(bands), options, std::move(history));
+    return internal::ModelAccess::assemble_derived(std::move(bands), options, std::move(history));
   } catch (const InvalidInput& e) {
     h.fail(e.what());
   }

@@ -122,6 +122,12 @@ Vec3 EditTransform::apply(const Vec3& x) const {
   return pivot + linear * (x - pivot) + translation;
 }
 
+bool EditTransform::is_rigid(double tolerance) const {
+  if (!linear.allFinite() || !translation.allFinite() || !pivot.allFinite()) return false;
+  const double off = (linear.transpose() * linear - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  return off <= tolerance && linear.determinant() > 0.0;
+}
+
 Vec3 EditTransform::apply_blended(const Vec3& x, double s) const {
   if (!std::isfinite(s)) throw InvalidInput("blend weight is not finite");
   return BlendedMap(*this).apply(x, s);

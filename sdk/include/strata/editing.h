@@ -72,6 +72,10 @@ struct EditTransform {
                                 const Vec3& translation = Vec3::Zero());
   //! The full map applied to \p x.
   Vec3 apply(const Vec3& x) const;
+  //! Whether the map is rigid (a rotation and a translation): the linear part is orthonormal to
+  //! within \p tolerance (max |L^T L - I|) and keeps orientation. Prism volumes and the
+  //! regularization are invariant only under such maps. False if the map is not finite.
+  bool is_rigid(double tolerance = 1e-9) const;
   //! The map blended with weight \p s (0: identity, 1: the full map). Decomposes the linear part
   //! on every call (an SVD); RegionEditor decomposes once per transform for all vertices.
   //! \throw InvalidInput if the map is not finite or its linear part is singular or reflecting.

@@ -45,6 +45,10 @@
 
 namespace strata::layers {
 
+namespace internal {
+struct ModelAccess;  // the file reader's way in (layers/src/model_access.h)
+}
+
 //! Options of edits and rebuilds, kept with the model (and in its file).
 struct ModelOptions {
   //! Detail rebuilt by displacement volumes (the paper) or vectors (the baseline, for comparison).
@@ -141,10 +145,13 @@ class LayeredModel {
   //! Assembles a model from its parts (the file reader): checks that the cage makes a limit
   //! surface, that every triangle band's faces have 3 distinct vertices and each directed edge
   //! in one face at most (no repeated face, no edge of more than two faces, one orientation), and
-  //! that every band's encoding fits its mesh and its base (check_encoding() too), that the cage's
+  //! that every band's encoding fits its mesh and its base (check_encoding() too) and holds the
+  //! values its base points give over its base at rest (band.base_rest; encode_detail_at(), to a
+  //! relative 1e-9: a file keeps only the base points), that the cage's
   //! scheme is Loop or Catmull-Clark, the options (check_model_options()), 2 to 64 bands and
   //! history entries of UTF-8 text (write_model() stores an entry beyond the header's JSON limits
   //! as its text).
+  //! The progress callback and cancel flag of the options are not kept (as in set_options()).
   //! \throw InvalidInput naming the band and the problem.
   static LayeredModel assemble(std::vector<Band> bands, ModelOptions options,
                                std::vector<std::string> history);
@@ -192,7 +199,11 @@ class LayeredModel {
   //!        editors); SolverError if a solve fails. On any error the model is unchanged.
   CascadeReport edit(int k, const EditStep& step, const std::string& provenance = "{}");
 
-  //! Sets band k's amplitude (k >= 1) and rebuilds bands k .. N-1.
+  //! Sets band k's amplitude (k >= 1) and rebuilds bands k .. N-1. The same amplitude again
+  //! (bit for bit) changes nothing and returns a report with nothing rebuilt. A vertex whose base
+  //! is not at rest, or whose band's amplitude is not 1, is solved from the clean start, so two
+  //! paths to the same amplitudes and cage (muting and unmuting an edited model) agree to the
+  //! solver's volume tolerance, not bit for bit.
   //! \throw InvalidInput if k is 0 or out of range or the amplitude is not finite or beyond
   //!        +-kMaxAmplitude.
   CascadeReport set_amplitude(int k, double amplitude);
@@ -216,6 +227,12 @@ class LayeredModel {
   bool dragging() const;
 
  private:
+  friend struct internal::ModelAccess;
+  // assemble(), without the check of the encodings' derived values when \p check_derived is false
+  // (the reader computes them from the base points itself).
+  static LayeredModel assemble_parts(std::vector<Band> bands, ModelOptions options,
+                                     std::vector<std::string> history, bool check_derived);
+
   class Impl;
   std::unique_ptr<Impl> impl_;
 };
