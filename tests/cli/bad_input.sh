@@ -158,8 +158,22 @@ expect_fail "2^31 volume scales"    "volume_scales = 2147483647 is out of range 
 expect_fail "missing assets dir"    "nodir: --assets-dir is not a directory" demo --assets-dir nodir --out-dir out/demo
 mkdir -p assets_clash/bumps
 cp $G/detail.obj $G/base.obj $G/edited_base.obj assets_clash/bumps/
-expect_fail "asset named as a case" "the case name 'bumps' is taken" demo --assets-dir assets_clash --out-dir out/demo
+expect_fail "asset named as a case" "assets_clash/bumps: its output bumps_detail.obj would also be written by case 'bumps'" \
+  demo --assets-dir assets_clash --out-dir out/demo
+# A name that a suffix completes into another case's output (the generated bumps' edited base is
+# bumps_edited_base.obj, as is bumps_edited's base, which replaced it).
+rm -rf assets_clash/bumps && mkdir -p assets_clash/bumps_edited
+cp $G/detail.obj $G/base.obj $G/edited_base.obj assets_clash/bumps_edited/
+expect_fail "asset outputs of a case" "its output bumps_edited_base.obj would also be written by case 'bumps'" \
+  demo --assets-dir assets_clash --out-dir out/demo
 rm -rf out/demo
+# Numbers are decimal: CLI11 read "0100" triangles as octal 64 and "0x10" as 16.
+expect_fail "hexadecimal number"    "--triangles: '0x10' is not a decimal number" generate --case bumps \
+  --triangles 0x10 --out-dir out/gen
+expect_fail "leading zeros"         "--bands: must be 2 to 8, not 10" build $G/detail.obj --bands 010 -o out/m.strata
+# --out-dir's models count as outputs: a report named as one was written over the model, exit 0.
+expect_fail "report over a model"   "out/detail.strata: two outputs would be written to the same file" \
+  build $G/detail.obj --out-dir out --report out/detail.strata
 # A cage face of 300 corners (its patches took 30 s to build): a prism with 300-corner caps.
 python3 - <<'PY'
 import math
@@ -218,6 +232,14 @@ for m in sheared combs; do
     echo "FAIL [quadratic $m]: no lower bound or no warning" >&2; cat stdout.txt stderr.txt >&2; failures=$((failures + 1))
   fi
 done
+# Standard output that cannot be written (a full disk) is a failure: stats --json exited 0.
+if [ -w /dev/full ]; then
+  rc=0
+  "$STRATA" stats $G/detail.obj --json >/dev/full 2>stderr.txt || rc=$?
+  if [ "$rc" -ne 1 ] || ! grep -q "strata: error: writing to standard output failed" stderr.txt; then
+    echo "FAIL [full stdout]: exit $rc" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+  fi
+fi
 if [ "$failures" -ne 0 ]; then
   echo "bad_input: $failures check(s) failed" >&2
   exit 1

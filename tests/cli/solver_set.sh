@@ -41,10 +41,17 @@ for bad in "frob=1:unknown reconstruction option 'frob'" "volume_scales=two:'two
   grep -qF -- "$want" <<<"$err" || fail "--set $kv: message does not say '$want': $err"
   [ ! -e "$TMP/bad.obj" ] || fail "--set $kv wrote an output"
 done
-# Parsed, but out of the solver's range: an error (not a usage error), no output.
+# Parsed, but out of the solver's range: a usage error too, found before any input is read (it
+# was found in the solve, after reading, encoding and counting intersections), and with
+# --method vectors, which runs no volume solve (it passed unused).
 set -e
-expect_exit 1 "reconstruction option volume_scales = 0 is out of range (1-1000)" "$TMP/err.txt" rec range --set volume_scales=0
+expect_exit 2 "reconstruction option volume_scales = 0 is out of range (1-1000) (with the legacy solver)" \
+  "$TMP/err.txt" rec range --set volume_scales=0
 [ ! -e "$TMP/range.obj" ] || fail "--set volume_scales=0 wrote an output"
+expect_exit 2 "tolerance = -1 is out of range" "$TMP/err.txt" rec range --method vectors --set tolerance=-1
+expect_exit 2 "tolerance = -1 is out of range" "$TMP/err.txt" \
+  "$STRATA" reconstruct --detail "$TMP/missing.obj" --base "$TMP/missing.obj" --edited-base "$TMP/missing.obj" \
+  -o "$TMP/m.obj" --set tolerance=-1
 # deform takes it too.
 expect_exit 2 "unknown reconstruction option 'frob'" "$TMP/err.txt" \
   "$STRATA" deform "$TMP/case/detail.obj" --edit "$DATA/edits/man_arm.json" --set frob=1 -o "$TMP/d.obj"

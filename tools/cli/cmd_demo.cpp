@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -82,6 +83,19 @@ struct Row {
   std::string error;  //!< non-empty: the case failed
 };
 
+// A case's output file: <case>_<suffix>.obj in the output directory.
+std::string case_output(const std::string& case_name, const std::string& suffix) {
+  return case_name + "_" + suffix + ".obj";
+}
+// Every output file name a case writes (run_case()).
+std::vector<std::string> case_outputs(const std::string& case_name) {
+  std::vector<std::string> names;
+  for (const char* suffix :
+       {"detail", "base", "edited_base", to_string(Method::Volumes), to_string(Method::Vectors)})
+    names.push_back(case_output(case_name, suffix));
+  return names;
+}
+
 //! Runs one case; appends its table rows and returns its JSON block. Throws on failure.
 json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, std::vector<Row>& rows) {
   PhaseTimes shared;  // read/generate, encode, input intersections: once for both methods
@@ -106,9 +120,7 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
   shared.metrics = input.seconds;
 
   const fs::path dir(o.out_dir);
-  auto out_path = [&](const std::string& suffix) {
-    return (dir / (src.name + "_" + suffix + ".obj")).string();
-  };
+  auto out_path = [&](const std::string& suffix) { return (dir / case_output(src.name, suffix)).string(); };
   json files = json::array();
   sw.restart();
   for (const auto& [mesh, suffix] : {std::pair<const TriMesh*, const char*>{&detail.mesh, "detail"},
@@ -198,15 +210,20 @@ int run_demo(const DemoCmdOptions& o) {
     std::error_code ec;
     if (o.assets_dir_given && !fs::is_directory(o.assets_dir, ec))
       throw IoError(o.assets_dir + ": --assets-dir is not a directory");
-    for (CaseSource& s : find_asset_cases(o.assets_dir, log)) {
-      // Outputs are named after the case: an asset named as a generated case overwrote its files.
-      for (const CaseSource& other : sources)
-        if (other.name == s.name)
-          throw InvalidInput((fs::path(o.assets_dir) / s.name).string() + ": the case name '" + s.name +
-                             "' is taken by a generated case; rename the directory");
-      sources.push_back(std::move(s));
-    }
+    for (CaseSource& s : find_asset_cases(o.assets_dir, log)) sources.push_back(std::move(s));
   }
+  // Outputs are named after the case: an asset named as a generated case overwrote its files, and
+  // so did one whose name and a suffix make another case's name (bumps_edited's base is
+  // bumps_edited_base.obj, as is bumps' edited base).
+  std::map<std::string, std::string> writer;  // output name -> its case
+  for (const CaseSource& s : sources)
+    for (const std::string& name : case_outputs(s.name)) {
+      const auto [it, fresh] = writer.emplace(name, s.name);
+      if (!fresh)
+        throw InvalidInput((s.kind ? s.name : (fs::path(o.assets_dir) / s.name).string()) + ": its output " +
+                           name + " would also be written by case '" + it->second +
+                           "'; rename the case's directory");
+    }
 
   // After the cases are known: a bad --assets-dir leaves no output directory behind.
   ensure_directory(o.out_dir);

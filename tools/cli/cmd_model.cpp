@@ -116,7 +116,11 @@ int run_build(const BuildCmdOptions& o) {
   if (!o.out_dir.empty()) ensure_directory(o.out_dir);
   if (!o.output.empty()) check_model_output_path(o.output);
   if (!o.report.empty()) check_output_path(o.report);
-  check_output_names({o.output, o.report}, o.scans);
+  // Every model's path, not only -o's: `--out-dir od --report od/scan.strata` wrote the report over
+  // the model just built and exited 0.
+  std::vector<std::string> outputs{o.report};
+  for (const std::string& scan : o.scans) outputs.push_back(model_path(scan));
+  check_output_names(outputs, o.scans);
   // With -o, the model lands only with its report; with --out-dir each model is written as it is
   // built (a batch keeps what it built), the report at the end.
   StagedOutputs staged;
@@ -214,13 +218,20 @@ int run_info(const InfoCmdOptions& o) {
   const double diag = bbox_diagonal(model.band(model.num_bands() - 1).mesh.vertices);
   if (o.as_json) {
     json h = json::array();
-    for (const std::string& e : model.history()) h.push_back(json::parse(e, nullptr, false));
+    // An entry that is not JSON (a file may keep text) is shown as a string: parse() without
+    // exceptions gave a "discarded" value, printed as <discarded>, and the output was no JSON.
+    for (const std::string& e : model.history()) {
+      json v = json::parse(e, nullptr, false);
+      h.push_back(v.is_discarded() ? json(e) : std::move(v));
+    }
+    // Paths and text that are not UTF-8 are printed with U+FFFD (the strict dump threw a JSON
+    // library error naming no file).
     std::cout << json{{"model", o.model},
                       {"bytes", fs::file_size(o.model)},
                       {"bands", bands},
                       {"finest_bbox_diagonal", diag},
                       {"history", h}}
-                     .dump(2)
+                     .dump(2, ' ', false, json::error_handler_t::replace)
               << std::endl;
     return 0;
   }
@@ -422,7 +433,8 @@ int run_edit(const EditCmdOptions& o) {
                 std::to_string(o.band));
       const json prov{{"script", o.edit}, {"index", i}, {"edit", i < raw.size() ? raw[i] : json()}};
       try {
-        const layers::CascadeReport c = model.edit(o.band, script.edits[i], prov.dump());
+        const layers::CascadeReport c =
+            model.edit(o.band, script.edits[i], prov.dump(-1, ' ', false, json::error_handler_t::replace));
         print_cascade(c);
         out.push_back(cascade_json(c, model));
         add_cascade_warnings(c, model, "edit " + std::to_string(i + 1), warnings);

@@ -53,7 +53,18 @@ Method parse_method(const std::string& text) {
 
 namespace {
 // A numeric option's text as a number, or the message that it is not one.
-std::string parse_number(const std::string& text, double& v) {
+// Numbers are decimal: CLI11 converts integers in base 0, so "0100" was 64, "08" failed to
+// convert and "0x10" was 16, while the range checks read the same text as decimal. Leading
+// zeros are dropped from \p text (validators may rewrite it) and 0x / 0b / 0o are refused.
+std::string parse_number(std::string& text, double& v) {
+  const std::size_t sign = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+  if (text.size() > sign + 1 && text[sign] == '0' && std::strchr("xXbBoO", text[sign + 1]))
+    return "'" + text + "' is not a decimal number";
+  std::size_t zeros = sign;
+  while (zeros + 1 < text.size() && text[zeros] == '0' &&
+         std::isdigit(static_cast<unsigned char>(text[zeros + 1])))
+    ++zeros;
+  text.erase(sign, zeros - sign);
   if (text.empty() || !CLI::detail::lexical_cast(text, v) || std::isnan(v))
     return "'" + text + "' is not a number";
   return {};
@@ -187,7 +198,7 @@ void require_numbers(CLI::App& app) {
   for (CLI::Option* option : app.get_options()) {
     // The type name, then ':' and the validators' descriptions ("FLOAT:FLOAT in [0 - 360]").
     const std::string type = option->get_type_name().substr(0, option->get_type_name().find(':'));
-    if (type == "INT" || type == "UINT" || type == "FLOAT" || type == "NUMBER") option->check(number);
+    if (type == "INT" || type == "UINT" || type == "FLOAT" || type == "NUMBER") option->transform(number);
   }
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) require_numbers(*sub);
 }
@@ -327,8 +338,11 @@ void StagedOutputs::write(const std::string& target,
   check_replaceable(target);
   const fs::path t(target);
   const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
-  const std::string name = "." + t.filename().string() + ".staged." + std::to_string(::getpid()) + "." +
-                           std::to_string(staged_.size()) + t.extension().string();
+  // The name cut as create_temp_file() cuts it: a 240-byte target name made a staging name past
+  // NAME_MAX, refused after the whole computation. The extension stays (it picks the format).
+  const std::string name = "." + t.filename().string().substr(0, 180) + ".staged." +
+                           std::to_string(::getpid()) + "." + std::to_string(staged_.size()) +
+                           t.extension().string();
   const std::string staging = (dir / name).string();
   staged_.emplace_back(staging, target);
   // The writers name the file they write; the user named the target.
@@ -421,6 +435,22 @@ void add_solver_option(CLI::App* app, SolverChoice& choice, bool with_auto) {
             return {};
           },
           "NAME=VALUE"));
+  // The values' ranges and their combinations, against each preset the choice can resolve to,
+  // before any input is read: `--set tolerance=-1` was refused only after reading, encoding and
+  // counting intersections (and passed unused with --method vectors).
+  app->callback([&choice] {
+    if (choice.sets.empty()) return;
+    const std::vector<std::string> presets = choice.solver == "auto"
+                                                 ? std::vector<std::string>{"legacy", "multigrid"}
+                                                 : std::vector<std::string>{choice.solver};
+    for (const std::string& preset : presets) {
+      try {
+        check_reconstruct_options(solver_options({preset, choice.sets}, 0));
+      } catch (const Error& e) {
+        throw CLI::ValidationError("--set", std::string(e.what()) + " (with the " + preset + " solver)");
+      }
+    }
+  });
 }
 
 std::string resolve_solver(const SolverChoice& choice, std::size_t prisms) {

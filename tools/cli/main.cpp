@@ -32,7 +32,17 @@ int main(int argc, char** argv) {
     require_numbers(app);
     app.parse(argc, argv);
     for (const Subcommand& c : commands)
-      if (c.app->parsed()) return c.run();
+      if (c.app->parsed()) {
+        const int rc = c.run();
+        // Output that did not reach standard output (a full disk, a closed pipe) is a failure: a
+        // `stats --json > /dev/full` exited 0 with nothing written.
+        std::cout.flush();
+        if (!std::cout) {
+          std::cerr << "strata: error: writing to standard output failed" << std::endl;
+          return 1;
+        }
+        return rc;
+      }
     std::cerr << "strata: error: no subcommand given" << std::endl;
     return 2;
   } catch (const CLI::ParseError& e) {
