@@ -298,6 +298,29 @@ TEST(Layers, AmplitudeScalesTheBandsPrismVolumes) {
   }
 }
 
+// A scan's point in no face (scans have them) follows its base by displacement vectors: it spans
+// no prism, and it stayed where it was while the band around it moved (found by a review,
+// 2026-11-30: a translated bumps scan left it behind).
+TEST(Layers, APointInNoFaceFollowsItsBase) {
+  TriMesh scan = read_scan("bear");
+  const double diag = bbox_diagonal(scan.vertices);
+  const Vec3 p = scan.vertices[0] + 0.01 * diag * Vec3(1, 1, 1).normalized();
+  scan.vertices.push_back(p);
+  const int loose = scan.num_vertices() - 1;
+  LayeredModel model = LayeredModel::build(scan);
+  const int finest = model.num_bands() - 1;
+  ASSERT_TRUE(same_bits(model.band(finest).mesh.vertices[loose], p));
+  // Muted, it lies on its base point, as every other vertex of the band does.
+  model.set_amplitude(finest, 0.0);
+  const layers::Band& b = model.band(finest);
+  const BaseFrames f = evaluate_base_frames(b.encoding, model.band(finest - 1).mesh.vertices);
+  EXPECT_LT((b.mesh.vertices[loose] - f.points[loose]).norm(), 1e-9 * diag);
+  EXPECT_GT((b.mesh.vertices[loose] - p).norm(), 1e-3 * diag);
+  // Unmuted, it is back at rest exactly.
+  model.set_amplitude(finest, 1.0);
+  EXPECT_TRUE(same_bits(model.band(finest).mesh.vertices[loose], p));
+}
+
 EditStep camel_neck_bend();
 
 // The same amplitude again changes nothing: on an edited model a rebuild solved every vertex off

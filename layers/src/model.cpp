@@ -115,13 +115,30 @@ struct PartSolve {
   std::unique_ptr<VolumeReconstructor> reconstructor;
   std::vector<Vec3> current;  // part positions (pinned ones fixed), warm start of drag steps
   DragState drag;             // every multigrid level's last drag solution
+  // Vertices to solve that lie in no face (a scan's unreferenced points): no prism holds them, so
+  // they follow their base point by displacement vectors, over the band's whole encoding (held
+  // only if there are any). The part above has only vertices of faces: they stayed where they
+  // were while their base moved away.
+  std::vector<int> loose;
+  std::vector<Vec3> loose_positions;
+  std::optional<DetailEncoding> whole;
 
   PartSolve(const Band& band, const std::vector<char>& solve, const ModelOptions& o) {
     std::vector<int> faces;
+    std::vector<char> in_face(band.mesh.vertices.size(), 0);
     for (int j = 0; j < band.mesh.num_faces(); ++j) {
       const Face& f = band.mesh.faces[j];
+      in_face[f[0]] = in_face[f[1]] = in_face[f[2]] = 1;
       if (solve[f[0]] || solve[f[1]] || solve[f[2]]) faces.push_back(j);
     }
+    for (std::size_t i = 0; i < in_face.size(); ++i)
+      if (solve[i] && !in_face[i]) loose.push_back(static_cast<int>(i));
+    if (!loose.empty()) {
+      whole = band.encoding;
+      loose_positions.resize(loose.size());
+      for (std::size_t l = 0; l < loose.size(); ++l) loose_positions[l] = band.mesh.vertices[loose[l]];
+    }
+    if (faces.empty()) return;  // loose vertices only
     part = restrict_encoding(band.encoding, faces, vertices);
     part.pinned.resize(vertices.size());
     current.resize(vertices.size());
@@ -141,6 +158,8 @@ struct PartSolve {
   // The exact solve from the clean start (volumes) or the vectors' placement.
   BandRebuild solve_exact(const std::vector<Vec3>& base, double amplitude) {
     BandRebuild r;
+    place_loose(base, amplitude);
+    if (vertices.empty()) return r;
     const BaseFrames frames = evaluate_base_frames(part, base);
     std::vector<Vec3> x;
     if (reconstructor) {
@@ -161,6 +180,12 @@ struct PartSolve {
     return r;
   }
 
+  void place_loose(const std::vector<Vec3>& base, double amplitude) {
+    if (loose.empty()) return;
+    const std::vector<Vec3> v = reconstruct_vectors(*whole, evaluate_base_frames(*whole, base), amplitude);
+    for (std::size_t l = 0; l < loose.size(); ++l) loose_positions[l] = v[loose[l]];
+  }
+
   // Starts a drag from the current positions over \p base, the band's base before the drag.
   void begin_drag(const std::vector<Vec3>& base) {
     if (reconstructor) drag.reset(evaluate_base_frames(part, base), current);
@@ -170,6 +195,8 @@ struct PartSolve {
   // carried along with the base frames (DragState), volumes on the coarse levels only, with the
   // editors' step budget (EditOptions::drag).
   void solve_drag(const std::vector<Vec3>& base, double amplitude) {
+    place_loose(base, amplitude);
+    if (vertices.empty()) return;
     const BaseFrames frames = evaluate_base_frames(part, base);
     if (reconstructor) {
       ReconstructRequest req;
@@ -186,6 +213,7 @@ struct PartSolve {
   void scatter(std::vector<Vec3>& band_positions) const {
     for (std::size_t v = 0; v < vertices.size(); ++v)
       if (!part.pinned[v]) band_positions[vertices[v]] = current[v];
+    for (std::size_t l = 0; l < loose.size(); ++l) band_positions[loose[l]] = loose_positions[l];
   }
 };
 
