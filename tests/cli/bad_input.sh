@@ -171,6 +171,13 @@ rm -rf out/demo
 expect_fail "hexadecimal number"    "--triangles: '0x10' is not a decimal number" generate --case bumps \
   --triangles 0x10 --out-dir out/gen
 expect_fail "leading zeros"         "--bands: must be 2 to 8, not 10" build $G/detail.obj --bands 010 -o out/m.strata
+# Options that the rest of the command line makes unused are refused, not ignored (the model file
+# need not exist: usage is checked first).
+expect_fail "export --cage --band"  "--band excludes --cage" export none.strata --cage --band 1 -o out/c.obj
+expect_fail "--resolution, band 2"  "--resolution applies to band 0" export none.strata --resolution 7 -o out/c.obj
+expect_fail "--no-assets and dir"   "--assets-dir excludes --no-assets" demo --no-assets --assets-dir x --out-dir out/d
+expect_fail "subdiv --smoothing"    "--smoothing apply to --base faired" deform $G/detail.obj --edit edit.json \
+  --base subdiv --smoothing 0.5 -o out/d.obj
 # --out-dir's models count as outputs: a report named as one was written over the model, exit 0.
 expect_fail "report over a model"   "out/detail.strata: two outputs would be written to the same file" \
   build $G/detail.obj --out-dir out --report out/detail.strata

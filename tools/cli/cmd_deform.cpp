@@ -25,6 +25,7 @@ struct DeformCmdOptions {
   std::string base_output;  // empty: not written
   std::string report;       // empty: no report
   double smoothing = 0.25;
+  bool smoothing_given = false;
   std::string base = "faired";  // or "subdiv"
   std::string cage;             // subdiv: given cage (empty: fitted)
   std::string cage_tags;        // subdiv: its sharpness tags (optional)
@@ -102,6 +103,8 @@ int run_deform(const DeformCmdOptions& o) {
   if (!subdiv && o.handle_rings < 0)
     throw CLI::ValidationError(
         "--handle-rings must be >= 0 with --base faired (negative: solve every vertex, --base subdiv)");
+  if (subdiv && (o.exact_region || o.smoothing_given))
+    throw CLI::ValidationError("--exact-region and --smoothing apply to --base faired, not to --base subdiv");
   if (!o.cage.empty() && o.cage_faces > 0)
     throw CLI::ValidationError("--cage-faces applies to a fitted cage, not to --cage");
   Stopwatch total;
@@ -360,7 +363,8 @@ Subcommand register_deform(CLI::App& parent) {
          "Base cut-off wavelength as a fraction of the region's size: shape longer than this stays in "
          "the smooth base, shorter becomes detail")
       ->check(in_range(1e-3, 100.0))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->smoothing_given = true; });
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   app->add_flag(
       "--strict", o->strict,

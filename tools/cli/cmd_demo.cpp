@@ -295,11 +295,12 @@ Subcommand register_demo(CLI::App& parent) {
                   "resolution)")
       ->check(in_range(0, 50000000))
       ->capture_default_str();
-  app->add_option("--assets-dir", o->assets_dir,
-                  "Also run every subdirectory holding detail.*, base.* and edited_base.* meshes")
-      ->capture_default_str()
-      ->each([o](const std::string&) { o->assets_dir_given = true; });
-  app->add_flag("--no-assets", o->no_assets, "Run the generated cases only");
+  CLI::Option* assets =
+      app->add_option("--assets-dir", o->assets_dir,
+                      "Also run every subdirectory holding detail.*, base.* and edited_base.* meshes")
+          ->capture_default_str()
+          ->each([o](const std::string&) { o->assets_dir_given = true; });
+  app->add_flag("--no-assets", o->no_assets, "Run the generated cases only")->excludes(assets);
   app->add_flag("-q,--quiet", o->quiet, "No progress lines on stderr");
   return {app, [o] { return run_demo(*o); }};
 }

@@ -467,10 +467,13 @@ struct ExportCmdOptions {
   std::string output;
   int band = -1;
   int resolution = 4;
+  bool resolution_given = false;
   bool cage = false;
 };
 
 int run_export(const ExportCmdOptions& o) {
+  if (o.resolution_given && o.band != 0)
+    throw CLI::ValidationError("--resolution applies to band 0 (the limit surface) only; add --band 0");
   check_mesh_output_path(o.output);
   check_output_names({o.output}, {o.model});
   const LayeredModel model = layers::read_model(o.model);
@@ -589,11 +592,14 @@ std::vector<Subcommand> register_model_commands(CLI::App& parent) {
         "export", "Write one band of a layered model as a mesh (default: the finest band, the edited scan).");
     app->add_option("model", o->model, "Model (.strata)")->required();
     app->add_option("-o,--output", o->output, "Mesh to write (.obj, .off, .ply, .stl)")->required();
-    app->add_option("--band", o->band, "Band (0: the cage's limit surface, tessellated)")->check(at_least(0));
-    app->add_option("--resolution", o->resolution, "Band 0: segments per ptex edge")
-        ->check(above(0))
-        ->capture_default_str();
-    app->add_flag("--cage", o->cage, "Write the control cage itself");
+    CLI::Option* band = app->add_option("--band", o->band, "Band (0: the cage's limit surface, tessellated)")
+                            ->check(at_least(0));
+    CLI::Option* resolution = app->add_option("--resolution", o->resolution, "Band 0: segments per ptex edge")
+                                  ->check(above(0))
+                                  ->capture_default_str()
+                                  ->each([o](const std::string&) { o->resolution_given = true; });
+    // Options the cage does not use are refused rather than ignored.
+    app->add_flag("--cage", o->cage, "Write the control cage itself")->excludes(band)->excludes(resolution);
     out.push_back({app, [o] { return run_export(*o); }});
   }
   return out;
