@@ -233,7 +233,12 @@ void App::frame() {
     t = now;
   };
   glfwPollEvents();
+  // Idle before the snapshot is taken: then every job's snapshot is in it, and a file still
+  // opening failed (its error is the snapshot's message).
+  const bool idle = !worker_->busy();
   take_snapshot();
+  take_checkpoints();
+  if (idle) opening_.clear();
   if (!options_.script_drag.empty()) run_script_step();
   lap(0);
   ImGui_ImplOpenGL3_NewFrame();
@@ -294,9 +299,17 @@ void App::take_snapshot() {
   const bool message_only = s->message_only;
   if (s->committed) {
     if (!committed_) first_picture_frame_ = frames_;
+    const bool opened = !opening_.empty() && s->committed->name() == opening_;
+    if (opened) {  // another document: the old one's selection and layout do not apply
+      region_set_ = handle_set_ = false;
+      clear_brush();
+      selection_points_ = GpuLines();
+      view_.visible.clear();
+      fitted_ = false;
+    }
     set_committed(s->committed);
-    if (recolor_on_load_ && committed_->name() == open_path_.data()) {
-      recolor_on_load_ = false;
+    if (opened) {
+      opening_.clear();
       const ColorMode initial = initial_color_mode(*committed_);
       if (initial == ColorMode::Scan || initial == ColorMode::Texture || view_.color == ColorMode::Scan ||
           view_.color == ColorMode::Texture) {
@@ -318,6 +331,15 @@ void App::take_snapshot() {
                           (!a.vertex_colors || a.colors == b->scene.colors) &&
                           (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
                  });
+  // The same bands at the same sizes (a colour map changed): uploaded anew, but the camera stays
+  // where the user put it (it refitted on every colour change).
+  const bool same_layout = s->panels.size() == panels_.size() &&
+                           std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
+                                      [](const SceneData& a, const std::unique_ptr<Panel>& b) {
+                                        return a.shown_band == b->band &&
+                                               a.mesh.faces.size() == b->scene.mesh.faces.size() &&
+                                               a.mesh.vertices.size() == b->scene.mesh.vertices.size();
+                                      });
   if (!same) panels_.clear();
   for (std::size_t i = 0; i < s->panels.size(); ++i) {
     if (!same) panels_.push_back(std::make_unique<Panel>());
@@ -342,10 +364,10 @@ void App::take_snapshot() {
     else
       p.net = GpuLines();
   }
-  layout_panels(!same || !fitted_);
+  layout_panels(!same || !fitted_, !same_layout || !fitted_);
 }
 
-void App::layout_panels(bool refit) {
+void App::layout_panels(bool refit, bool camera) {
   // Side by side along x, in panel order, with a gap of 10% of the widest.
   double x = 0, widest = 0;
   std::vector<std::pair<Vec3, Vec3>> boxes;
@@ -364,11 +386,11 @@ void App::layout_panels(bool refit) {
     all_hi = all_hi.cwiseMax((hi + panels_[i]->offset).cast<float>());
     x += (hi.x() - lo.x()) + 0.1 * widest;
   }
-  if (!panels_.empty() && (refit && !fitted_)) {
+  if (!panels_.empty() && !fitted_) {
     camera_.fit(all_lo, all_hi);
     camera_.set_view(options_.view);
     fitted_ = true;
-  } else if (!panels_.empty() && refit) {
+  } else if (!panels_.empty() && camera) {
     camera_.fit(all_lo, all_hi);
   }
 }
@@ -796,13 +818,27 @@ void App::gizmo_end() {
 
 void App::checkpoint() {
   if (!committed_) return;
-  undo_.push_back(committed_);
-  if (undo_.size() > 32) undo_.erase(undo_.begin());
+  // Recorded by the worker when it gets there (take_checkpoints()): committed_ is older while a
+  // job is queued or runs.
+  worker_->checkpoint();
   redo_.clear();
 }
 
+void App::take_checkpoints() {
+  for (std::shared_ptr<const Document>& d : worker_->take_checkpoints()) {
+    if (!d) {  // a cancelled drag's
+      if (!undo_.empty()) undo_.pop_back();
+      continue;
+    }
+    undo_.push_back(std::move(d));
+    if (undo_.size() > 32) undo_.erase(undo_.begin());
+  }
+}
+
 void App::undo() {
-  if (undo_.empty() || dragging_ || worker_->busy()) return;
+  if (dragging_ || worker_->busy()) return;
+  take_checkpoints();  // one the worker recorded since this frame took them
+  if (undo_.empty()) return;
   redo_.push_back(committed_);
   // Through set_committed(): the band to edit, the amplitudes and the selection follow the
   // document (a brush stroke after undoing a build read band 2 of a one-band mesh and ended the
@@ -815,7 +851,9 @@ void App::undo() {
 }
 
 void App::redo() {
-  if (redo_.empty() || dragging_ || worker_->busy()) return;
+  if (dragging_ || worker_->busy()) return;
+  take_checkpoints();
+  if (redo_.empty()) return;
   undo_.push_back(committed_);
   set_committed(redo_.back());
   redo_.pop_back();
@@ -918,9 +956,8 @@ void App::on_key(int key, int mods) {
       break;
     case GLFW_KEY_ESCAPE:
       if (dragging_) {
-        worker_->cancel_drag();
+        worker_->cancel_drag();  // drops the drag's checkpoint (take_checkpoints())
         dragging_ = false;
-        if (!undo_.empty()) undo_.pop_back();
         translation_ = {0, 0, 0};
         angle_ = 0;
       }
@@ -941,12 +978,7 @@ void App::on_drop(const std::string& path) {
   if (dragging_) return;
   checkpoint();
   copy_to(open_path_, path);
-  region_set_ = handle_set_ = false;
-  clear_brush();
-  selection_points_ = GpuLines();
-  view_.visible.clear();
-  fitted_ = false;
-  recolor_on_load_ = true;  // the new document's own colours, if any (take_snapshot())
+  opening_ = path;  // the selection and the view change once it is in (take_snapshot())
   worker_->load(path);
 }
 

@@ -60,7 +60,9 @@ class App {
   //! The document the UI shows as committed (a snapshot's, or undo's and redo's): the band to
   //! edit, the amplitudes and the selection's points follow it.
   void set_committed(std::shared_ptr<const Document> document);
-  void layout_panels(bool refit);
+  //! Places the panels side by side if \p refit (new panels); fits the camera to them if
+  //! \p camera or on the first picture (fitted_ false).
+  void layout_panels(bool refit, bool camera = true);
   void handle_mouse();
   void draw_scene(int width, int height);
   void draw_ui();
@@ -115,9 +117,13 @@ class App {
   long long version_ = 0;
   std::shared_ptr<const Document> committed_;
   std::vector<std::shared_ptr<const Document>> undo_, redo_;
+  void take_checkpoints();  // the worker's, onto undo_
   Camera camera_;
   bool fitted_ = false;
-  bool recolor_on_load_ = false;  // a dropped file is loading: show its own colours once it is in
+  // A dropped or opened file being loaded: once it is in, the selection and the visible bands are
+  // reset, the camera refits and its own colours show (take_snapshot()); if it fails, nothing
+  // changes.
+  std::string opening_;
   ViewSettings view_;
   MeshStyle style_;
   std::string status_;

@@ -52,13 +52,13 @@ Worker::~Worker() {
   thread_.join();
 }
 
-void Worker::post(Job job, bool commits, const std::string& coalesce_key, bool writes_file) {
+void Worker::post(Job job, bool commits, const std::string& coalesce_key, bool writes_file, bool silent) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!coalesce_key.empty() && !queue_.empty() && queue_.back().key == coalesce_key) {
       queue_.back().job = std::move(job);  // only the newest step of a run of them waits
     } else {
-      queue_.push_back({std::move(job), commits, coalesce_key, writes_file});
+      queue_.push_back({std::move(job), commits, coalesce_key, writes_file, silent});
     }
   }
   wake_.notify_one();
@@ -105,6 +105,8 @@ void Worker::run() {
     if (stopping) {
       // The window is gone: a failed save or export is said on stderr.
       if (error) std::fprintf(stderr, "strata-viewer: %s\n", message.c_str());
+    } else if (p.silent && !error) {
+      // Nothing shown changed.
     } else {
       try {
         publish(p.commits && !error, message, error);
@@ -155,7 +157,7 @@ void Worker::publish(bool commit, std::string message, bool error) {
     settings.error_scale = view_.error_scale;
     s.panels.push_back(make_scene(doc_, settings));
   }
-  if (commit) s.committed = std::make_shared<const Document>(doc_);
+  if (commit) s.committed = last_commit_ = std::make_shared<const Document>(doc_);
   s.drag_step = dragging;
   s.message = std::move(message);
   s.error = error;
@@ -173,7 +175,7 @@ void Worker::publish_message(std::string message, bool error, bool commit) noexc
     s.message_only = true;
     s.message = message;  // a copy: the catch below prints it
     s.error = error;
-    if (commit) s.committed = std::make_shared<const Document>(doc_);
+    if (commit) s.committed = last_commit_ = std::make_shared<const Document>(doc_);
     std::lock_guard<std::mutex> lock(mutex_);
     s.version = snapshot_.version + 1;
     if (!s.committed) s.committed = std::move(snapshot_.committed);
@@ -320,9 +322,27 @@ void Worker::cancel_drag() {
         } else if (mesh_editor_) {
           drop_mesh_drag(d, mesh_editor_->mesh().vertices);
         }
+        // Its checkpoint goes: the document is the one before the drag again.
+        std::lock_guard<std::mutex> lock(mutex_);
+        checkpoints_.push_back(nullptr);
         return std::string("drag cancelled");
       },
       false);
+}
+
+void Worker::checkpoint() {
+  post(
+      [this](Document&) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        checkpoints_.push_back(last_commit_);
+        return std::string();
+      },
+      false, "", false, /*silent=*/true);
+}
+
+std::vector<std::shared_ptr<const Document>> Worker::take_checkpoints() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(checkpoints_, {});
 }
 
 void Worker::set_amplitude(int band, double amplitude) {
@@ -358,7 +378,16 @@ void Worker::replace(Document document) {
 void Worker::load(const std::string& path) {
   post(
       [this, path](Document& d) {
-        Document loaded = Document::load(path);
+        Document loaded = [&] {
+          try {
+            return Document::load(path);
+          } catch (...) {
+            // The document stays: so does the undo stack (drop the open's checkpoint).
+            std::lock_guard<std::mutex> lock(mutex_);
+            checkpoints_.push_back(nullptr);
+            throw;
+          }
+        }();
         mesh_editor_.reset();
         mesh_dragging_ = false;
         view_.visible.clear();

@@ -66,6 +66,11 @@ class Worker {
   void set_amplitude(int band, double amplitude);  //!< coalesced per band
   void edit(int band, const EditStep& step);
   void replace(Document document);  //!< undo, redo, open
+  //! Records an undo checkpoint when the worker reaches this request: the document as committed
+  //! after every request before it (take_checkpoints()). The UI's own last commit can be older,
+  //! when a job is queued or running (an amplitude change, then a drag started at once, left the
+  //! amplitude change without an undo step of its own).
+  void checkpoint();
   void load(const std::string& path);
   void build_layers(int bands);
   void save(const std::string& path);
@@ -73,6 +78,9 @@ class Worker {
 
   //! The newest snapshot if it is newer than \p version, else nothing.
   std::optional<Snapshot> take(long long version);
+  //! The checkpoints recorded since the last call, in order: a document to push on the undo
+  //! stack, or null where a cancelled drag drops the last one (its checkpoint() went before it).
+  std::vector<std::shared_ptr<const Document>> take_checkpoints();
   //! Whether a job runs or waits, and for how long the current one has run.
   bool busy(double* seconds = nullptr) const;
   //! Drag steps completed since the start (for the benchmark).
@@ -85,7 +93,8 @@ class Worker {
  private:
   //! A job returns its success message ("" for none) or throws.
   using Job = std::function<std::string(Document&)>;
-  void post(Job job, bool commits, const std::string& coalesce_key = "", bool writes_file = false);
+  void post(Job job, bool commits, const std::string& coalesce_key = "", bool writes_file = false,
+            bool silent = false);
   void run();
   void publish(bool commit, std::string message, bool error);
   //! A snapshot with \p message only (Snapshot::message_only): when publish() itself failed.
@@ -98,9 +107,13 @@ class Worker {
     bool commits = false;
     std::string key;
     bool writes_file = false;  // a save or an export: run even when the window closes
+    bool silent = false;       // no snapshot after it (a checkpoint changes nothing shown)
   };
 
   Document doc_;  // worker thread only (and the constructor)
+  // The last document published as committed (worker thread only): what a checkpoint records.
+  std::shared_ptr<const Document> last_commit_;
+  std::vector<std::shared_ptr<const Document>> checkpoints_;  // under mutex_
   ViewSettings view_;
   // Plain meshes are dragged with a RegionEditor kept between steps.
   std::unique_ptr<RegionEditor> mesh_editor_;
