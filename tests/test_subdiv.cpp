@@ -253,6 +253,15 @@ TEST(Subdiv, ContinuousAcrossPtexEdges) {
     const int nc = s.ptex_corners();
     int shared = 0, open = 0;
     double worst = 0.0;
+    std::vector<int> ptex_cage_face;
+    for (int cf = 0; cf < c.cage.num_faces(); ++cf) {
+      const int count =
+          static_cast<int>(c.cage.faces[cf].size()) == nc ? 1 : static_cast<int>(c.cage.faces[cf].size());
+      ASSERT_EQ(s.first_ptex_face(cf), static_cast<int>(ptex_cage_face.size()));
+      ptex_cage_face.insert(ptex_cage_face.end(), count, cf);
+    }
+    auto cage_face_of = [&](int ptex) { return ptex_cage_face.at(ptex); };
+    auto cage_face_size = [&](int ptex) { return static_cast<int>(c.cage.faces[cage_face_of(ptex)].size()); };
     for (int f = 0; f < s.num_ptex_faces(); ++f)
       for (int e = 0; e < nc; ++e) {
         static const double tri[3][2][2] = {{{0, 0}, {1, 0}}, {{1, 0}, {0, 1}}, {{0, 1}, {0, 0}}};
@@ -276,6 +285,14 @@ TEST(Subdiv, ContinuousAcrossPtexEdges) {
           const Vec3 y = s.evaluate(point(nb.face, nb.edge, nb.t)).position;
           const Vec3 z = s.evaluate(point(back.face, back.edge, back.t)).position;
           worst = std::max({worst, (x - y).norm(), (x - z).norm()});
+          // The neighbour lies across the edge: in another cage face for a cage edge (a whole
+          // face's edge, or a non-quad sub-face's outer edges 0 and 3), in the same one for a
+          // sub-face's inner edges 1 and 2 (at a non-quad's edge midpoint the other half of the
+          // same edge, on this side, was returned).
+          const bool sub_face = cage_face_size(f) != nc;
+          const bool inner = sub_face && (e == 1 || e == 2);
+          EXPECT_EQ(cage_face_of(nb.face) == cage_face_of(f), inner)
+              << "ptex edge (" << f << "," << e << ") at t = " << t << " -> face " << nb.face;
         }
       }
     EXPECT_GT(shared, 0);

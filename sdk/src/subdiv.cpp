@@ -369,13 +369,25 @@ class SubdivSurface::Impl {
       for (int e = 0; e < corners_; ++e) line_edges_[edge_line_[4 * p + e].line].push_back({p, e});
   }
 
+  // The cage face whose ptex face (or sub-face) \p ptex is.
+  int cage_face_of(int ptex) const {
+    return static_cast<int>(std::upper_bound(first_ptex_.begin(), first_ptex_.end(), ptex) -
+                            first_ptex_.begin()) -
+           1;
+  }
+
   EdgeCrossing across(int face, int edge, double t) const {
     const EdgeLine& a = edge_line_[4 * face + edge];
     const double s = a.s0 + t * (a.s1 - a.s0);
+    // On a cage edge, the other half of the edge in the same non-quad (at the edge's midpoint,
+    // where the two halves meet) is on this side of it, not across: only other faces count.
+    const bool cage_edge = line_kind_[a.line] < 0;
+    const int own = cage_edge ? cage_face_of(face) : -1;
     EdgeCrossing best;
     double best_gap = 1e-9;
     for (const auto& fe : line_edges_[a.line]) {
       if (fe[0] == face && fe[1] == edge) continue;
+      if (cage_edge && cage_face_of(fe[0]) == own) continue;
       const EdgeLine& b = edge_line_[4 * fe[0] + fe[1]];
       const double lo = std::min(b.s0, b.s1), hi = std::max(b.s0, b.s1);
       const double gap = s < lo ? lo - s : s > hi ? s - hi : 0.0;
