@@ -421,6 +421,75 @@ TEST(MeshIoRoundTrip, OffAndPlySyntaxVariants) {
   EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
 }
 
+// OFF is free-form: a record's values may run over lines, and records without optional fields may
+// share a line where the file has too few lines for one record each.
+TEST(MeshIoRoundTrip, OffRecordsMaySpanAndShareLines) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  write_bytes(dir.file("lines.off"),
+              "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  const TriMesh want = read_mesh(dir.file("lines.off"));
+  ASSERT_EQ(want.num_vertices(), 4);
+  ASSERT_EQ(want.num_faces(), 4);
+  const std::pair<std::string, std::string> layouts[] = {
+      // The reviewer's file: the vertices on one line, the faces on the next.
+      {"oneline.off", "OFF\n4 4\n0 0 0 1 0 0 0 1 0 0 0 1\n3 0 2 1 3 0 1 3 3 1 2 3 3 0 3 2\n"},
+      // Everything after the counts on one line, with a comment and CRLF.
+      {"all.off", "OFF 4 4 0 # counts\r\n0 0 0 1 0 0 0 1 0 0 0 1 3 0 2 1 3 0 1 3 3 1 2 3 3 0 3 2\r\n"},
+      // Records running over lines (a line's last record too), some sharing one, blank and
+      // comment lines between; a face alone on its line still has its colour.
+      {"wrapped.off",
+       "OFF\n4 4 0\n0 0\n\n0 1 0 0 0 1 # v0 ends, v1, v2 starts\n0 0 0 1\n3 0 2 1 3 0 1 3 3 1\n# x\n2 3\n"
+       "3 0 3 2 255 0 0\n"},
+  };
+  for (const auto& [name, text] : layouts) {
+    write_bytes(dir.file(name), text);
+    EXPECT_TRUE(identical(read_mesh(dir.file(name)), want)) << name;
+  }
+  // One record per line reads as it always did: the numbers after a face are its colour, even
+  // where they would make a face (3 1 2 3).
+  write_bytes(
+      dir.file("color.off"),
+      "OFF\n4 4 0\n0 0 0\n1 0 0 9 9 9\n0 1 0\n0 0 1\n3 0 2 1 3 1 2 3\n3 0 1 3 0 0 0\n3 1 2 3\n3 0 3 2\n");
+  EXPECT_TRUE(identical(read_mesh(dir.file("color.off")), want));
+  // Vertices of COFF keep their colours after them, one per line; its faces may share one.
+  write_bytes(dir.file("c.off"),
+              "COFF\n4 4\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 51 51 51\n"
+              "3 0 2 1 3 0 1 3 3 1 2 3 3 0 3 2\n");
+  const MeshFile c = read_mesh_file(dir.file("c.off"));
+  EXPECT_TRUE(identical(c.mesh, want));
+  ASSERT_EQ(c.attributes.colors.size(), 4u);
+  EXPECT_EQ(c.attributes.colors[2], (std::array<double, 4>{0.0, 0.0, 1.0, 1.0}));
+}
+
+// A line ending in '\' continues on the next (the OBJ spec); messages name the statement's
+// first line.
+TEST(MeshIoRoundTrip, ObjBackslashContinuesALine) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  write_bytes(
+      dir.file("cont.obj"),
+      "v 0 0 0\nv 1 0 \\\n0\nv 0 1 0\nv 0 0 1\nf 1 3 \\\n 2\nf 1 2\\\r\n 4 # a comment\nf \\\n1 \\  \n"
+      "4\\\n3\n# a comment's '\\' continues nothing \\\nf 2 3 4\n");
+  const TriMesh r = read_mesh(dir.file("cont.obj"));
+  ASSERT_EQ(r.num_vertices(), 4);
+  EXPECT_EQ(r.vertices[1], Vec3(1, 0, 0));
+  EXPECT_EQ(r.faces, (std::vector<Face>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+  write_bytes(dir.file("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n2 \\\nx\n");
+  EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("bad.obj")); },
+                                   {dir.file("bad.obj") + ": line 4: cannot parse face corner 'x'"}));
+  // The count comment counts statements.
+  write_bytes(dir.file("count.obj"),
+              "# 4 vertices, 4 faces\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 \\\n1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 "
+              "\\\n3 4\n");
+  EXPECT_TRUE(identical(read_mesh(dir.file("count.obj")), r));
+  // A material name ending in '\' would take the next line with it: refused before writing.
+  MeshAttributes a;
+  a.material_names = {"dir\\"};
+  a.face_materials.assign(r.faces.size(), 0);
+  EXPECT_TRUE(throws_with<InvalidInput>([&] { write_mesh(r, a, dir.file("m.obj")); },
+                                        {"material name 'dir\\' cannot be written to OBJ as it is"}));
+  EXPECT_FALSE(fs::exists(dir.file("m.obj")));
+}
+
 // Elements the reader does not use, however many, are skipped; the same name twice is refused.
 // What is read is asserted here, not the time: 200k empty ones took 24 s to read before the names
 // went into a set (each was compared with all the earlier ones), 0.2 s since.
@@ -1185,6 +1254,32 @@ TEST(MeshIoErrors, TruncatedFiles) {
   write_bytes(dir.file("x.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
   EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(dir.file("x.off")); },
                                    {"line 7: unexpected data after the 1 faces"}));
+}
+
+// Free-form OFF cut short: the whole records read are counted, and a record cut in two is named.
+TEST(MeshIoErrors, TruncatedFreeFormOff) {
+  test::ScratchDir dir{"strata_mesh_io"};
+  const std::string head = "OFF\n4 4\n", vertices = "0 0 0 1 0 0 0 1 0 0 0 1\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {head + "0 0 0 1 0 0 0 1 0\n", "truncated: header declares 4 vertices, file holds 3"},
+      {head + "0 0 0 1 0 0 0 1 0 0 0", "line 3: vertex 3 has 2 coordinates, needs 3 (file truncated?)"},
+      {head + vertices + "3 0 2 1 3 0 1 3 3 1 2 3\n", "truncated: header declares 4 faces, file holds 3"},
+      {head + vertices + "3 0 2 1 3 0 1 3 3 1 2 3 3 0",
+       "line 4 (face 3): face declares 3 corners but lists 1 (file truncated?)"},
+      // Alone after a face, the start of another is that face's colour.
+      {head + vertices + "3 0 2 1\n3 0 1 3 3 1", "truncated: header declares 4 faces, file holds 2"},
+      {head + vertices + "3 0 2 1 3 0 1 3 3 1 2 3 3 0 3 2 3 0 2 1\n",
+       "line 4: unexpected data after the 4 faces the header declares"},
+      // COFF's vertices do not share lines (their colours follow them).
+      {"COFF\n4 4\n0 0 0 1 0 0 0 1 0 0 0 1\n3 0 2 1 3 0 1 3 3 1 2 3 3 0 3 2\n",
+       "truncated: header declares 4 vertices, file holds 2"},
+  };
+  int k = 0;
+  for (const auto& [text, expected] : cases) {
+    const std::string path = dir.file("t" + std::to_string(k++) + ".off");
+    write_bytes(path, text);
+    EXPECT_TRUE(throws_with<IoError>([&] { read_mesh(path); }, {path + ": " + expected})) << text;
+  }
 }
 
 TEST(MeshIoErrors, MissingFileAndUnknownExtension) {

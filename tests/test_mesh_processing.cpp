@@ -9,10 +9,13 @@
 #include <set>
 #include <vector>
 
+#include "strata/cage_fit.h"
 #include "strata/exceptions.h"
+#include "strata/layers/model.h"
 #include "strata/mesh.h"
 #include "strata/mesh_io.h"
 #include "strata/mesh_processing.h"
+#include "test_files.h"
 #include "test_meshes.h"
 
 using namespace strata;
@@ -253,4 +256,57 @@ TEST(OrientFaces, AMoebiusStripIsRefused) {
         << e.what();
   }
   EXPECT_EQ(m.faces, before.faces);
+}
+
+// Two tetrahedra touching at vertex 3 only: every edge has two faces, but the faces around
+// vertex 3 form two fans, which OpenMesh cannot hold (its add_face dropped a face of them, with
+// only a line on stderr, and a cage fit went on with the rest).
+namespace {
+TriMesh bowtie() {
+  TriMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {0, 0, 2}};
+  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {3, 5, 4}, {3, 4, 6}, {3, 6, 5}, {4, 5, 6}};
+  return m;
+}
+}  // namespace
+
+TEST(DecimateMesh, ANonManifoldVertexIsRefusedNamingIt) {
+  const TriMesh m = bowtie();
+  EXPECT_NO_THROW(validate_mesh(m, "bowtie"));  // the core has no use for manifold vertices
+  const std::string message = "vertex 3 is non-manifold: its faces form 2 separate fans";
+  ::testing::internal::CaptureStderr();
+  EXPECT_TRUE(test::throws_with<InvalidInput>([&] { decimate_mesh(m, 4); }, {"decimate_mesh: " + message}));
+  CageFitOptions cage;
+  cage.faces = 4;
+  EXPECT_TRUE(test::throws_with<InvalidInput>([&] { fit_cage(m, cage); }, {message}));
+  for (int bands : {2, 3}) {
+    layers::BuildOptions build;
+    build.bands = bands;
+    build.cage = cage;
+    EXPECT_TRUE(test::throws_with<InvalidInput>([&] { layers::LayeredModel::build(m, build); }, {message}))
+        << bands << " bands";
+  }
+  // Refused before OpenMesh sees it: nothing on stderr.
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
+// What validate_mesh() refuses too (decimate_mesh() has it as a precondition) is refused, not
+// left to OpenMesh's add_face to drop.
+TEST(DecimateMesh, AnEdgeTwoFacesRunAlongAlikeIsRefused) {
+  TriMesh m = bowtie();
+  m.vertices.resize(4);
+  m.faces.resize(4);
+  std::swap(m.faces[3][1], m.faces[3][2]);  // face 3 against the others
+  ::testing::internal::CaptureStderr();
+  EXPECT_TRUE(test::throws_with<InvalidInput>([&] { decimate_mesh(m, 4); },
+                                              {"decimate_mesh: faces ", "the same way"}));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  // Its manifold half decimates as before.
+  const TriMesh tetra = [] {
+    TriMesh t = bowtie();
+    t.vertices.resize(4);
+    t.faces.resize(4);
+    return t;
+  }();
+  EXPECT_EQ(decimate_mesh(tetra, 4).num_faces(), 4);
 }

@@ -460,6 +460,56 @@ std::vector<int> triangle_polygons(std::size_t num_triangles, const std::vector<
   return out;
 }
 
+//! The statements of an OBJ file: its lines with '#' comments cut, and a line that ends in '\'
+//! joined with the next one (the spec's line continuation; a '\' in a comment continues nothing).
+//! Messages name the line a statement starts on.
+class ObjStatements {
+ public:
+  explicit ObjStatements(std::string_view text) : lines_(text) {}
+  bool next(std::string_view& statement) {
+    std::string_view raw;
+    if (!lines_.next(raw)) return false;
+    first_line_ = lines_.line_no();
+    first_raw_ = raw;
+    std::string_view s = strip_comment(raw);
+    if (!continued(s)) {
+      statement = s;
+      return true;
+    }
+    joined_.assign(s.data(), s.size());
+    // A last line ending in '\' continues into nothing: the statement ends there.
+    while (lines_.next(raw)) {
+      s = strip_comment(raw);
+      const bool more = continued(s);
+      joined_ += ' ';  // in place of the '\', so that the lines' last and first words stay apart
+      joined_.append(s.data(), s.size());
+      if (!more) break;
+    }
+    statement = joined_;
+    return true;
+  }
+  //! The statement's first line as it is (comment and all).
+  std::string_view first_raw() const { return first_raw_; }
+  long long line_no() const { return first_line_; }
+  std::string where() const { return "line " + std::to_string(first_line_); }
+  bool last_line_unterminated() const { return lines_.last_line_unterminated(); }
+
+ private:
+  //! Whether \p s ends in a '\' (blanks after it allowed); if so, cuts it off.
+  static bool continued(std::string_view& s) {
+    std::string_view t = s;
+    while (!t.empty() && is_blank(t.back())) t.remove_suffix(1);
+    if (t.empty() || t.back() != '\\') return false;
+    t.remove_suffix(1);
+    s = t;
+    return true;
+  }
+  LineReader lines_;
+  std::string_view first_raw_;
+  std::string joined_;
+  long long first_line_ = 0;
+};
+
 TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OBJ");
   TriMesh mesh;
@@ -474,12 +524,12 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
 
   // Pass 1: vertices (and counts), so faces can refer to vertices defined later in the file.
   {
-    LineReader lines(text);
-    std::string_view raw;
-    while (lines.next(raw)) {
-      if (!seen_data && !declared.present && parse_obj_count_comment(raw, declared))
+    ObjStatements lines(text);
+    std::string_view statement;
+    while (lines.next(statement)) {
+      if (!seen_data && !declared.present && parse_obj_count_comment(lines.first_raw(), declared))
         declared.line = lines.line_no();
-      LineTokens tok(strip_comment(raw));
+      LineTokens tok(statement);
       std::string_view key;
       if (!tok.next(key)) continue;
       seen_data = true;
@@ -544,8 +594,8 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
   // Pass 2: faces. Negative indices count back from the last vertex defined before the line.
   FaceBuilder faces(name, mesh.num_vertices(), 1, record);
   std::vector<long long> corners;
-  LineReader lines(text);
-  std::string_view raw;
+  ObjStatements lines(text);
+  std::string_view statement;
   long long vertices_so_far = 0, texcoords_so_far = 0;
   // Per vertex, the vt its corners use (-1: none yet); corners with and without one; vertices
   // whose corners use different texture coordinates (seams).
@@ -567,8 +617,8 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
     while (t.next(w)) out += (out.empty() ? "" : " ") + std::string(w);
     return out;
   };
-  while (lines.next(raw)) {
-    LineTokens tok(strip_comment(raw));
+  while (lines.next(statement)) {
+    LineTokens tok(statement);
     std::string_view key;
     if (!tok.next(key)) continue;
     if (key == "v") {
@@ -707,8 +757,112 @@ TriMesh read_obj(const std::string& name, std::string_view text, FaceRecord* rec
 }
 
 // ---------------------------------------------------------------------------------------------
-// OFF (ASCII; optional ST/C/N prefixes, whose extra per-vertex values are ignored). One vertex or
-// face per line, as written by all common tools; '#' starts a comment.
+// OFF (ASCII; optional ST/C/N prefixes: vertex colours and texture coordinates are kept, normals
+// ignored); '#' starts a comment.
+
+//! The vertex and face records of an OFF body, read as a token stream. OFF is free-form, but its
+//! writers put a record on a line of its own, followed there by its optional fields (a vertex's
+//! normal, colour and texture coordinates; a face's colour), whose number the reader cannot know
+//! beforehand. So a record's required values (3 coordinates; a corner count and the corners) run
+//! over as many lines as they need, and the numbers after them on the line where they end are the
+//! record's optional fields; only when the data lines left are too few to give every record still
+//! to come a line of its own, and those numbers are whole records without optional fields
+//! (vertices of a plain OFF, faces of at least 3 corners), perhaps followed by the start of one
+//! more that runs on over the next lines, are they those records instead. A file of one record
+//! per line thus reads as it always did.
+class OffRecords {
+ public:
+  //! \p lines is just after the counts; \p shared_vertices: whether vertex records may share a
+  //! line (a prefix C, N or ST gives them values after their positions).
+  OffRecords(LineReader& lines, long long num_vertices, long long num_faces, bool shared_vertices)
+      : lines_(lines),
+        nv_(num_vertices),
+        total_(num_vertices + num_faces),
+        shared_vertices_(shared_vertices) {
+    LineReader scan = lines;
+    std::string_view raw;
+    while (scan.next(raw)) lines_left_ += !is_blank_line(strip_comment(raw));
+  }
+  //! Starts record \p r (the vertices', then the faces'): false at the end of the data.
+  bool start(long long r) {
+    record_ = r;
+    if (shared_ > 0)
+      --shared_;
+    else if (!next_line())
+      return false;
+    start_line_ = lines_.line_no();
+    return true;
+  }
+  //! The record's next required value: false at the end of the data.
+  bool need(std::string_view& tok) {
+    while (!tokens_.next(tok))
+      if (!next_line()) return false;
+    return true;
+  }
+  //! Ends the record: \p optional gets its optional fields (none if the line's rest is records).
+  void finish(std::vector<std::string_view>& optional) {
+    optional.clear();
+    if (shared_ > 0) return;  // records follow it on its line: it has no optional fields
+    if (lines_left_ < total_ - record_ - 1) {
+      shared_ = line_records(tokens_, record_ + 1);
+      if (shared_ > 0) return;
+    }
+    std::string_view tok;
+    while (tokens_.next(tok)) optional.push_back(tok);
+  }
+  //! Whether data follows the last record (where() names its line then).
+  bool more() {
+    LineTokens rest = tokens_;
+    std::string_view tok;
+    return rest.next(tok) || next_line();
+  }
+  //! The line being read.
+  std::string where() const { return lines_.where(); }
+  //! The line the record started on.
+  std::string start_where() const { return "line " + std::to_string(start_line_); }
+
+ private:
+  bool next_line() {
+    std::string_view raw;
+    while (lines_.next(raw)) {
+      const std::string_view line = strip_comment(raw);
+      if (is_blank_line(line)) continue;
+      tokens_ = LineTokens(line);
+      --lines_left_;
+      return true;
+    }
+    return false;
+  }
+  //! How many records from record \p r on \p t holds, all without optional fields, the last
+  //! perhaps cut short by the line's end (it runs on over the next lines); 0 if \p t holds
+  //! anything else, or no whole record.
+  long long line_records(LineTokens t, long long r) const {
+    long long whole = 0;
+    std::string_view tok;
+    for (; t.next(tok); ++r) {
+      const bool vertex = r < nv_;
+      double x = 0.0;
+      long long values = 2, i = 0;  // after the first
+      if (vertex ? !shared_vertices_ || parse_double(tok, x) != Parsed::Ok
+                 : parse_int(tok, values) != Parsed::Ok || values < 3)
+        return 0;
+      long long got = 0;
+      for (; got < values && t.next(tok); ++got)
+        if ((vertex ? parse_double(tok, x) : parse_int(tok, i)) != Parsed::Ok) return 0;
+      if (got < values) return whole > 0 ? whole + 1 : 0;
+      ++whole;
+    }
+    return whole;
+  }
+
+  LineReader& lines_;
+  long long nv_, total_;
+  bool shared_vertices_;
+  LineTokens tokens_{std::string_view()};
+  long long lines_left_ = 0;  // data lines not yet started
+  long long record_ = 0, start_line_ = 0;
+  long long shared_ = 0;  // records left on the line being read (the last may run on)
+};
 
 TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* record) {
   reject_nul_bytes(text, name, "OFF");
@@ -769,10 +923,8 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
   std::vector<std::array<double, 2>> texcoords;
   bool alpha = false, colors_ok = true, texcoords_ok = true;
   std::string color_problem, st_problem;
-  auto read_off_vertex_extras = [&](LineTokens& t, long long v, const std::string& where) {
-    std::vector<std::string_view> extra;
-    std::string_view x;
-    while (t.next(x)) extra.push_back(x);
+  auto read_off_vertex_extras = [&](const std::vector<std::string_view>& extra, long long v,
+                                    const std::string& where) {
     std::size_t first = has_normal ? 3 : 0;
     std::size_t end = extra.size();
     if (has_st) {
@@ -809,23 +961,25 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
     colors.push_back(c);
     alpha = alpha || n == 4;
   };
+  OffRecords records(lines, nv, nf, !has_color && !has_normal && !has_st);
+  std::vector<std::string_view> extra;
   // Each vertex needs at least 6 bytes of text; never trust a header count for allocation.
   mesh.vertices.reserve(
       static_cast<size_t>(std::min<long long>(nv, static_cast<long long>(text.size() / 6))));
   for (long long v = 0; v < nv; ++v) {
-    if (!next_data_line(line))
+    if (!records.start(v))
       fail_io(name, "truncated: header declares " + std::to_string(nv) + " vertices, file holds " +
                         std::to_string(v));
-    LineTokens t(line);
     Vec3 p;
     for (int k = 0; k < 3; ++k) {
-      if (!t.next(tok))
-        fail_io(name, lines.where() + ": vertex " + std::to_string(v) + " has " + std::to_string(k) +
-                          " coordinates, needs 3");
-      p[k] = need_double(tok, name, lines.where());
+      if (!records.need(tok))
+        fail_io(name, records.start_where() + ": vertex " + std::to_string(v) + " has " + std::to_string(k) +
+                          " coordinates, needs 3 (file truncated?)");
+      p[k] = need_double(tok, name, records.where());
     }
     mesh.vertices.push_back(p);
-    if (want_attributes && (has_color || has_st)) read_off_vertex_extras(t, v, lines.where());
+    records.finish(extra);
+    if (want_attributes && (has_color || has_st)) read_off_vertex_extras(extra, v, records.where());
   }
   if (want_attributes) {
     MeshAttributes& a = *record->attributes;
@@ -844,25 +998,26 @@ TriMesh read_off(const std::string& name, std::string_view text, FaceRecord* rec
   FaceBuilder faces(name, nv, 0, record);
   std::vector<long long> corners;
   for (long long f = 0; f < nf; ++f) {
-    if (!next_data_line(line))
+    if (!records.start(nv + f))
       fail_io(name,
               "truncated: header declares " + std::to_string(nf) + " faces, file holds " + std::to_string(f));
-    LineTokens t(line);
-    t.next(tok);
-    const long long k = need_int(tok, name, lines.where());
-    auto where = [&] { return lines.where() + " (face " + std::to_string(f) + ")"; };
+    records.need(tok);  // a record starts with a value
+    const long long k = need_int(tok, name, records.where());
+    const std::string start = records.start_where();
+    auto where = [&] { return start + " (face " + std::to_string(f) + ")"; };
     if (k < 0) fail_io(name, where() + ": negative corner count");
     corners.clear();
     for (long long c = 0; c < k; ++c) {
-      if (!t.next(tok))
+      if (!records.need(tok))
         fail_io(name, where() + ": face declares " + std::to_string(k) + " corners but lists " +
-                          std::to_string(c) + (lines.last_line_unterminated() ? " (file truncated?)" : ""));
-      corners.push_back(need_int(tok, name, lines.where()));
+                          std::to_string(c) + " (file truncated?)");
+      corners.push_back(need_int(tok, name, records.where()));
     }
-    faces.add_checked(corners, where);  // numbers after the corners (a face color) are ignored
+    records.finish(extra);  // numbers after the corners (a face colour) are ignored
+    faces.add_checked(corners, where);
   }
-  if (next_data_line(line))
-    fail_io(name, lines.where() + ": unexpected data after the " + std::to_string(nf) +
+  if (records.more())
+    fail_io(name, records.where() + ": unexpected data after the " + std::to_string(nf) +
                       " faces the header declares (wrong counts?)");
   mesh.faces = faces.finish(mesh.vertices);
   return mesh;
@@ -2156,6 +2311,16 @@ void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std
   const Format format = format_of(path);
   check_mesh_attributes(attributes, mesh, path);
   const MeshAttributes* a = attributes.empty() ? nullptr : &attributes;
+  // A name ends its line in OBJ, where a last '\' continues the line (read_obj()).
+  if (format == Format::Obj) {
+    auto check_end = [&](const std::string& name, const char* which) {
+      if (!name.empty() && name.back() == '\\')
+        fail_input(path, std::string(which) + " " + quote_token(name) +
+                             " cannot be written to OBJ as it is (a '\\' at the end of a line continues it)");
+    };
+    check_end(attributes.material_library, "material library");
+    for (const std::string& n : attributes.material_names) check_end(n, "material name");
+  }
   if (encoding == MeshEncoding::Binary && (format == Format::Obj || format == Format::Off))
     fail_input(path, "OBJ and OFF have no binary encoding");
   validate_mesh(mesh, path);

@@ -50,6 +50,76 @@ double unit_scale(const std::vector<Vec3>& x) {
   return std::ldexp(1.0, -std::clamp(exponent, -1000, 1000));
 }
 
+// The checks of the mesh OpenMesh is given (the adapter): its add_face refuses a face whose
+// directed edge another face holds already (an edge of three faces, or two faces that disagree in
+// orientation), and a vertex whose faces form more than one fan (two surfaces touching at a point),
+// with only a line on stderr; the face is then missing from the result. validate_mesh() rejects
+// the first but accepts the second (the flat-array core has no use for it), so the adapter
+// refuses both, naming the edge or vertex. Faces' indices are in range and distinct.
+void check_openmesh_can_hold(const TriMesh& mesh, const char* what) {
+  const int nv = mesh.num_vertices();
+  const internal::Adjacency adj = internal::build_adjacency(nv, mesh.faces);
+  // Per vertex v, each of its faces' corners after and before v: two faces joined at an edge
+  // through v have its other end, one as the corner after v and the other as the corner before
+  // (their orientations agree), and v's faces form one fan if those joins connect them all.
+  struct Corner {
+    int next, prev;
+  };
+  std::vector<Corner> corners;
+  std::vector<int> parent, by_next, by_prev;
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int v = 0; v < nv; ++v) {
+    const int first = adj.face_offsets[v], n = adj.face_offsets[v + 1] - first;
+    if (n == 0) continue;
+    corners.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const Face& f = mesh.faces[adj.faces[first + i]];
+      const int c = adj.corners[first + i];
+      corners[i] = {f[(c + 1) % 3], f[(c + 2) % 3]};
+    }
+    auto sorted_by = [&](std::vector<int>& order, int Corner::*key) {
+      order.resize(n);
+      for (int i = 0; i < n; ++i) order[i] = i;
+      std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return corners[a].*key != corners[b].*key ? corners[a].*key < corners[b].*key : a < b;
+      });
+      // Two faces leaving v towards the same vertex (or arriving from it) hold the same directed edge.
+      for (int i = 1; i < n; ++i)
+        if (corners[order[i]].*key == corners[order[i - 1]].*key) {
+          const int w = corners[order[i]].*key;
+          const bool out = key == &Corner::next;
+          throw InvalidInput(std::string(what) + ": faces " +
+                             std::to_string(adj.faces[first + order[i - 1]]) + " and " +
+                             std::to_string(adj.faces[first + order[i]]) + " both run along edge (" +
+                             std::to_string(out ? v : w) + "," + std::to_string(out ? w : v) +
+                             ") the same way (an edge of more than two faces, or faces oriented "
+                             "inconsistently; OpenMesh cannot hold it)");
+        }
+    };
+    sorted_by(by_next, &Corner::next);
+    sorted_by(by_prev, &Corner::prev);
+    // Join each face to the one whose previous corner is its next corner (the face across the
+    // edge from v to that corner).
+    parent.resize(n);
+    for (int i = 0; i < n; ++i) parent[i] = i;
+    int fans = n;
+    for (int i = 0, j = 0; i < n; ++i) {
+      const int w = corners[by_next[i]].next;
+      while (j < n && corners[by_prev[j]].prev < w) ++j;
+      if (j == n || corners[by_prev[j]].prev != w) continue;
+      const int a = find(by_next[i]), b = find(by_prev[j]);
+      if (a != b) parent[a] = b, --fans;
+    }
+    if (fans > 1)
+      throw InvalidInput(std::string(what) + ": vertex " + std::to_string(v) +
+                         " is non-manifold: its faces form " + std::to_string(fans) +
+                         " separate fans (OpenMesh cannot hold it)");
+  }
+}
+
 }  // namespace
 
 std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
@@ -143,6 +213,7 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
                          ")");
   }
   check_finite(mesh.vertices, "decimate_mesh");
+  check_openmesh_can_hold(mesh, "decimate_mesh");
   // Relative to the centre of the bounding box: the quadrics' error terms are squares of plane
   // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
   // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed
@@ -164,9 +235,15 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
     vh[i] = om.add_vertex(OMesh::Point(std::ldexp(p.x(), -exponent), std::ldexp(p.y(), -exponent),
                                        std::ldexp(p.z(), -exponent)));
   }
-  // validate_mesh() guarantees manifold edges; a vertex where two fans touch (non-manifold vertex)
-  // is rejected by OpenMesh's add_face, and that face is left out of the decimation input.
-  for (const Face& f : mesh.faces) om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
+  // check_openmesh_can_hold() leaves add_face nothing to refuse; were it to refuse a face still,
+  // the decimation would run on a mesh with a hole.
+  for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
+    const Face& f = mesh.faces[j];
+    if (!om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]).is_valid())
+      throw InvalidInput("decimate_mesh: OpenMesh could not add face " + std::to_string(j) + " (" +
+                         std::to_string(f[0]) + "," + std::to_string(f[1]) + "," + std::to_string(f[2]) +
+                         ") to the faces before it");
+  }
   // Unreferenced and isolated vertices would survive as stray points. Deleting needs the status
   // attributes (without them OpenMesh aborted on a scan with one unreferenced vertex).
   om.request_vertex_status();
