@@ -514,6 +514,38 @@ TEST(Subdiv, ProjectionOfPointsBeyondTheOpenBoundaryEndsOnTheBoundaryCurve) {
   EXPECT_NEAR(x.position.x(), 0.0, 0.2);
 }
 
+// Beyond a corner of the open boundary (outside both boundary edges) the closest point lies on
+// the boundary curve, which rounds the corner: the projection got stuck at the domain's corner
+// when it lay along the other edge, and counted a fallback.
+TEST(Subdiv, ProjectionOfPointsBeyondABoundaryCornerEndsOnTheBoundary) {
+  const SubdivSurface s(open_quad_grid(4));
+  const std::vector<Vec3> pts = {Vec3(-3, -2.5, 0.2), Vec3(7, 6.5, -0.3), Vec3(-2.5, -3, 0.1),
+                                 Vec3(6.5, -2, 0.0)};
+  const Projection pr = project_to_limit(s, pts);
+  EXPECT_EQ(pr.num_converged, 4);
+  EXPECT_EQ(pr.num_fallback, 0);
+  EXPECT_EQ(pr.num_on_boundary, 4);
+  const LimitTessellation t = s.tessellate(32);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const double dist = (pts[i] - s.evaluate(pr.points[i]).position).norm();
+    double closest = 1e300;
+    for (const Vec3& y : t.mesh.vertices) closest = std::min(closest, (pts[i] - y).norm());
+    EXPECT_LE(dist, closest + 1e-9) << i;
+  }
+  // With sharp boundary corners (edge-and-corner) the closest point is the corner itself.
+  SubdivOptions sharp;
+  sharp.boundary = BoundaryRule::EdgeAndCorner;
+  const SubdivSurface c(open_quad_grid(4), {}, sharp);
+  const Projection pc = project_to_limit(c, {pts[0], pts[1]});
+  EXPECT_EQ(pc.num_converged, 2);
+  EXPECT_EQ(pc.num_on_boundary, 2);
+  for (const LimitPoint& q : pc.points) {
+    EXPECT_TRUE((q.u <= 1e-12 || q.u >= 1 - 1e-12) && (q.v <= 1e-12 || q.v >= 1 - 1e-12))
+        << q.face << " " << q.u << " " << q.v;
+  }
+  EXPECT_LT((c.evaluate(pc.points[0]).position - Vec3(0, 0, c.cage().vertices[0].z())).norm(), 1e-9);
+}
+
 TEST(Subdiv, RejectsBadCages) {
   auto msg = [](const PolyMesh& m, const SubdivTags& t = {}, const SubdivOptions& o = {}) -> std::string {
     try {

@@ -74,19 +74,26 @@ class Projector {
         // On an open boundary with the step pointing out: the foot point is constrained to the
         // boundary curve, so take the 1D Newton step along the edge instead (the orthogonality
         // along the boundary can still be met, e.g. for detail on the boundary).
+        // At a corner of the open boundary the step along one edge can point out through the
+        // other (the foot point lies along that one): then the other edge is taken (stuck at
+        // the corner, a point beyond a rounded corner ended there and counted a fallback).
         int edge = -1;
-        const double frac = internal::exit_fraction(corners_, r.point.u, r.point.v, step.x(), step.y(), edge);
-        if (edge >= 0 && frac < 1e-12) {
-          double eu = r.point.u, ev = r.point.v;
-          const double t = internal::edge_param(corners_, edge, eu, ev);
-          if (surface_.across_edge(r.point.face, edge, t).face < 0) {
-            const Eigen::Vector2d dir =
-                internal::edge_point(corners_, edge, 1.0) - internal::edge_point(corners_, edge, 0.0);
-            const double ht = dir.dot(H * dir);
-            step = ht > 0 ? Eigen::Vector2d(-(g.dot(dir) / ht) * dir) : Eigen::Vector2d::Zero();
-            if (step.norm() < 1e-14) break;  // a fixed point on the boundary
-          }
+        double frac = internal::exit_fraction(corners_, r.point.u, r.point.v, step.x(), step.y(), edge);
+        bool along_boundary = false;
+        for (int tried = 0; tried < 2 && edge >= 0 && frac < 1e-12; ++tried) {
+          const double t = internal::edge_param(corners_, edge, r.point.u, r.point.v);
+          if (surface_.across_edge(r.point.face, edge, std::clamp(t, 0.0, 1.0)).face >= 0) break;
+          const Eigen::Vector2d dir =
+              internal::edge_point(corners_, edge, 1.0) - internal::edge_point(corners_, edge, 0.0);
+          const double ht = dir.dot(H * dir);
+          step = ht > 0 ? Eigen::Vector2d(-(g.dot(dir) / ht) * dir) : Eigen::Vector2d::Zero();
+          along_boundary = true;
+          if (along_boundary && step.norm() < 1e-14) break;  // a fixed point on the boundary
+          const int along = edge;
+          frac = internal::exit_fraction(corners_, r.point.u, r.point.v, step.x(), step.y(), edge);
+          if (edge == along) break;  // out through its own edge's end: trial() stops it there
         }
+        if (step.norm() < 1e-14) break;
       }
       LimitPoint y;
       LimitSample sy;
@@ -146,6 +153,25 @@ class Projector {
       const double dn = d.norm(), na = along.norm();
       // d = S - p: moving inward changes |d|^2 at the rate 2 d . inward.
       if (na > 0 && std::abs(along.dot(d)) <= cosine * na * dn && inward.dot(d) >= 0.0) return true;
+    }
+    // At a corner of the open boundary (both of the domain's edges there open, so no other face
+    // has the vertex): the closest point if moving along either boundary edge, away from the
+    // corner, does not bring S closer; the domain's directions there lie between those two. A
+    // point beyond the corner of a scan's open sheet projected there and was counted a fallback.
+    for (int k = 0; k < corners_; ++k) {
+      const int prev = (k + corners_ - 1) % corners_;
+      if (!internal::on_edge(corners_, k, x.u, x.v) || !internal::on_edge(corners_, prev, x.u, x.v)) continue;
+      if (surface_.across_edge(x.face, k, 0.0).face >= 0 || surface_.across_edge(x.face, prev, 1.0).face >= 0)
+        continue;
+      const Eigen::Vector2d a =
+          internal::edge_point(corners_, k, 1.0) - internal::edge_point(corners_, k, 0.0);
+      const Eigen::Vector2d b =
+          internal::edge_point(corners_, prev, 0.0) - internal::edge_point(corners_, prev, 1.0);
+      const Vec3 ta = a.x() * s.du + a.y() * s.dv, tb = b.x() * s.du + b.y() * s.dv;
+      const double dn = d.norm();
+      if (ta.norm() > 0 && tb.norm() > 0 && ta.dot(d) >= -cosine * ta.norm() * dn &&
+          tb.dot(d) >= -cosine * tb.norm() * dn)
+        return true;
     }
     return false;
   }
