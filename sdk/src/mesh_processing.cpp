@@ -9,6 +9,7 @@
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "internal/topology.h"
 #include "strata/exceptions.h"
@@ -50,13 +51,15 @@ double unit_scale(const std::vector<Vec3>& x) {
   return std::ldexp(1.0, -std::clamp(exponent, -1000, 1000));
 }
 
-// The checks of the mesh OpenMesh is given (the adapter): its add_face refuses a face whose
-// directed edge another face holds already (an edge of three faces, or two faces that disagree in
-// orientation), and a vertex whose faces form more than one fan (two surfaces touching at a point),
-// with only a line on stderr; the face is then missing from the result. validate_mesh() rejects
-// the first but accepts the second (the flat-array core has no use for it), so the adapter
-// refuses both, naming the edge or vertex. Faces' indices are in range and distinct.
-void check_openmesh_can_hold(const TriMesh& mesh, const char* what) {
+// The mesh OpenMesh is given (the adapter): its add_face refuses a face whose directed edge
+// another face holds already (an edge of three faces, or two faces that disagree in orientation),
+// and a vertex whose faces form more than one fan (two sheets touching at a point, common in
+// scans), with only a line on stderr; the face is then missing from the result. validate_mesh()
+// rejects the first (refused here too, naming the edge) but accepts the second (the flat-array
+// core has no use for it): such a vertex is split, one copy per fan, as the fans are separate
+// sheets of surface. Returns the split mesh, or nothing if no vertex needed it. Faces' indices
+// are in range and distinct.
+std::optional<TriMesh> split_for_openmesh(const TriMesh& mesh, const char* what) {
   const int nv = mesh.num_vertices();
   const internal::Adjacency adj = internal::build_adjacency(nv, mesh.faces);
   // Per vertex v, each of its faces' corners after and before v: two faces joined at an edge
@@ -66,11 +69,16 @@ void check_openmesh_can_hold(const TriMesh& mesh, const char* what) {
     int next, prev;
   };
   std::vector<Corner> corners;
-  std::vector<int> parent, by_next, by_prev;
+  std::vector<int> parent, by_next, by_prev, copy_of_root;
   auto find = [&](int i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
+  struct Split {
+    int face, corner, vertex;
+  };
+  std::vector<Split> splits;
+  std::vector<int> copied;  // per new vertex: the vertex it copies
   for (int v = 0; v < nv; ++v) {
     const int first = adj.face_offsets[v], n = adj.face_offsets[v + 1] - first;
     if (n == 0) continue;
@@ -113,11 +121,24 @@ void check_openmesh_can_hold(const TriMesh& mesh, const char* what) {
       const int a = find(by_next[i]), b = find(by_prev[j]);
       if (a != b) parent[a] = b, --fans;
     }
-    if (fans > 1)
-      throw InvalidInput(std::string(what) + ": vertex " + std::to_string(v) +
-                         " is non-manifold: its faces form " + std::to_string(fans) +
-                         " separate fans (OpenMesh cannot hold it)");
+    if (fans == 1) continue;
+    // The fan of v's first face keeps v; each other fan gets a copy.
+    copy_of_root.assign(n, -1);
+    copy_of_root[find(0)] = v;
+    for (int i = 0; i < n; ++i) {
+      int& target = copy_of_root[find(i)];
+      if (target < 0) {
+        target = nv + static_cast<int>(copied.size());
+        copied.push_back(v);
+      }
+      if (target != v) splits.push_back({adj.faces[first + i], adj.corners[first + i], target});
+    }
   }
+  if (splits.empty()) return std::nullopt;
+  TriMesh out = mesh;
+  for (int v : copied) out.vertices.push_back(mesh.vertices[v]);
+  for (const Split& x : splits) out.faces[x.face][x.corner] = x.vertex;
+  return out;
 }
 
 }  // namespace
@@ -202,18 +223,10 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   return x;
 }
 
-TriMesh decimate_mesh(const TriMesh& mesh, int target) {
-  if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
-  check_face_indices(mesh.vertices.size(), mesh.faces, "decimate_mesh");
-  for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
-    const Face& f = mesh.faces[j];
-    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])  // OpenMesh's add_face asserts on it
-      throw InvalidInput("decimate_mesh: face " + std::to_string(j) + " repeats a vertex (" +
-                         std::to_string(f[0]) + "," + std::to_string(f[1]) + "," + std::to_string(f[2]) +
-                         ")");
-  }
-  check_finite(mesh.vertices, "decimate_mesh");
-  check_openmesh_can_hold(mesh, "decimate_mesh");
+namespace {
+
+// decimate_mesh() of a mesh OpenMesh can hold whole (split_for_openmesh()).
+TriMesh decimate_manifold(const TriMesh& mesh, int target) {
   // Relative to the centre of the bounding box: the quadrics' error terms are squares of plane
   // offsets, which cancel catastrophically far from the origin (a scan 1e6 away, as a
   // georeferenced one, was decimated in a near random order: the camel's fitted cage then missed
@@ -235,8 +248,8 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
     vh[i] = om.add_vertex(OMesh::Point(std::ldexp(p.x(), -exponent), std::ldexp(p.y(), -exponent),
                                        std::ldexp(p.z(), -exponent)));
   }
-  // check_openmesh_can_hold() leaves add_face nothing to refuse; were it to refuse a face still,
-  // the decimation would run on a mesh with a hole.
+  // split_for_openmesh() leaves add_face nothing to refuse; were it to refuse a face still, the
+  // decimation would run on a mesh with a hole.
   for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
     const Face& f = mesh.faces[j];
     if (!om.add_face(vh[f[0]], vh[f[1]], vh[f[2]]).is_valid())
@@ -292,6 +305,23 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   }
   if (out.num_faces() < 4) throw SolverError("decimate_mesh: the decimation left fewer than 4 faces");
   return out;
+}
+
+}  // namespace
+
+TriMesh decimate_mesh(const TriMesh& mesh, int target) {
+  if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
+  check_face_indices(mesh.vertices.size(), mesh.faces, "decimate_mesh");
+  for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
+    const Face& f = mesh.faces[j];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])  // OpenMesh's add_face asserts on it
+      throw InvalidInput("decimate_mesh: face " + std::to_string(j) + " repeats a vertex (" +
+                         std::to_string(f[0]) + "," + std::to_string(f[1]) + "," + std::to_string(f[2]) +
+                         ")");
+  }
+  check_finite(mesh.vertices, "decimate_mesh");
+  const std::optional<TriMesh> split = split_for_openmesh(mesh, "decimate_mesh");
+  return decimate_manifold(split ? *split : mesh, target);
 }
 
 int orient_faces(TriMesh& mesh) {

@@ -54,8 +54,9 @@ int default_cage_faces(const CageFitOptions& options, int scan_faces);
 //! The fitted cage and its measured fitting error.
 struct CageFit {
   PolyMesh cage;  //!< triangles, counter-clockwise like the scan
-  //! Distances from the smoothed scan (the fitting target) to the cage's limit surface, along
-  //! the projections of the last round, relative to the scan's bounding-box diagonal.
+  //! Distances from the smoothed scan (the fitting target) to the final cage's limit surface
+  //! (projected onto it once more after the last round), relative to the scan's bounding-box
+  //! diagonal.
   double rms_error = 0.0, max_error = 0.0;
   //! The same for the scan's own vertices: the magnitude of the detail the cage leaves out.
   double scan_rms_distance = 0.0, scan_max_distance = 0.0;

@@ -47,7 +47,10 @@ namespace strata {
 //! 100,000 candidate pairs, as for spokes that all span one point), and so is a trapped one of
 //! over 256 corners. A polygon with a part of zero width gets zero-area triangles, and a polygon of corners
 //! all on one line is fanned: the validation reports their zero area.
-//! OFF is read one vertex or face per line, as all common writers produce it. Extra per-vertex and per-face
+//! OFF is free-form: a record's required values (3 coordinates; a corner count and its corners)
+//! may run over lines, and the numbers after them on the line where they end are its optional
+//! fields; records share a line only where the lines left are too few for one each (a whole body
+//! on one line). OBJ statements continue over a line ending in '\'. Extra per-vertex and per-face
 //! data (normals, colors, texture coordinates, materials) is ignored here; read_mesh_file() also
 //! reads the vertices' colours and texture coordinates. The result has passed
 //! validate_mesh(mesh, path). \pre nothing; any file content is handled (garbage gives an error, never a
@@ -140,7 +143,8 @@ void write_mesh(const TriMesh& mesh, const std::string& path, MeshEncoding encod
 //!   face list texcoord (as double), its texnumber and "comment TextureFile" lines;
 //! - what a format cannot store is not written (attributes_not_stored()).
 //! \throw as write_mesh(mesh, path, encoding), and InvalidInput if \p attributes fail
-//!        check_mesh_attributes() for \p mesh.
+//!        check_mesh_attributes() for \p mesh, or an OBJ's material name or library ends in '\\'
+//!        (read back, it would continue onto the next line).
 void write_mesh(const TriMesh& mesh, const MeshAttributes& attributes, const std::string& path,
                 MeshEncoding encoding = MeshEncoding::Default);
 
@@ -236,8 +240,8 @@ void write_polygon_mesh(const std::vector<Vec3>& vertices, const std::vector<std
 //! 2e-14 * bbox_diagonal(vertices)^2); no non-manifold edge (an undirected edge used by more than
 //! two faces); no edge used twice in the same direction (inconsistently oriented neighbours).
 //! Unreferenced vertices are allowed, and so are vertices where separate fans of faces meet (scans
-//! hold them; the engine takes them, and the cage fit's decimation leaves such a vertex's faces
-//! out of its input). The first problem found is reported.
+//! hold them; the engine takes them, and decimate_mesh(), for the cage fit and a layered model's
+//! bands, splits such a vertex into one per fan). The first problem found is reported.
 //! \param name names the mesh in messages (usually its file path).
 //! \throw InvalidInput "<name>: <problem>", e.g. "bunny.obj: face 12 has vertex index 99 out of
 //!        range (mesh has 40 vertices)" or "z.ply: edge (4,7) is non-manifold: shared by 3 faces".

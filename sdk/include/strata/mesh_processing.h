@@ -27,12 +27,14 @@ std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 //! Quadric-error decimation (Garland and Heckbert, OpenMesh's decimater) of \p mesh to about
 //! \p target_faces faces, refusing collapses that flip a face normal by more than 45 degrees or
 //! create slivers (aspect ratio above 8). Unreferenced vertices are dropped and the rest renumbered.
-//! A face whose corners make a non-manifold vertex is left out
-//! of the input. The result keeps the mesh's orientation.
+//! A vertex where separate fans of faces meet (a non-manifold vertex) is split into one vertex per
+//! fan first, so that no face is lost (OpenMesh holds only manifold vertices). The result keeps the
+//! mesh's orientation.
 //! \pre mesh is a valid triangle mesh (validate_mesh()); what would crash OpenMesh or give NaN
 //!      vertices is checked.
 //! \throw InvalidInput if target_faces < 4, a face index is out of range, a face repeats a
-//!        vertex or a coordinate is not finite.
+//!        vertex, a coordinate is not finite, or two faces run along an edge the same way (an
+//!        edge of three faces or inconsistent orientation, which validate_mesh() refuses too).
 //! \throw SolverError if the decimater cannot be initialized or leaves fewer than 4 faces.
 TriMesh decimate_mesh(const TriMesh& mesh, int target_faces);
 
