@@ -1,13 +1,17 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 
+#include "internal/closest_point.h"
 #include "paper_cases.h"
 #include "strata/encoding.h"
 #include "strata/exceptions.h"
 #include "strata/metrics.h"
+#include "test_files.h"
 
 using namespace strata;
 
@@ -217,6 +221,44 @@ TEST(Encoding, RejectsBadInput) {
   std::vector<Vec3> far_base = c.base.vertices;
   far_base[1] *= 1e25;
   EXPECT_THROW(evaluate_base_frames(e, far_base), InvalidInput);
+  // A base face with two equal corners, in either corner order: named, not a crash (its closest
+  // point was 0/0, and the encoding indexed face -1 when the corners came first).
+  for (const Face f : {Face{0, 1, 2}, Face{2, 0, 1}}) {
+    const TriMesh degenerate{{Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0)}, {f}};
+    TriMesh detail{{Vec3(0.2, 0.3, 0.5), Vec3(0.3, 0.3, 0.5), Vec3(0.2, 0.4, 0.5)}, {{0, 1, 2}}};
+    EXPECT_TRUE(
+        test::throws_with<InvalidInput>([&] { encode_detail(detail, degenerate); }, {"has no normal"}))
+        << f[0] << f[1] << f[2];
+  }
+}
+
+// The closest point on a triangle against the closest of its sides, on triangles degenerate and
+// thin to rounding: two equal corners gave a NaN point, and slivers (relative height 1e-14) a
+// point farther than a side's (found by a review, 2026-11-30).
+TEST(ClosestPoint, DegenerateAndSliverTrianglesGiveTheClosestSidePoint) {
+  auto on_segment = [](const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 d = b - a;
+    const double len = d.squaredNorm();
+    return len == 0 ? a : Vec3(a + std::clamp((p - a).dot(d) / len, 0.0, 1.0) * d);
+  };
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto random = [&] { return Vec3(u(rng), u(rng), u(rng)); };
+  int worse = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3 a = random(), b = random(), p = 2.0 * random();
+    const double height = std::pow(10.0, -(it % 17));
+    const Vec3 c = it % 5 == 0 ? a : Vec3(a + (b - a) * 1.5 * u(rng) + height * random());
+    Vec3 bary;
+    const Vec3 x = internal::closest_point_on_triangle(p, a, b, c, bary);
+    ASSERT_TRUE(x.allFinite() && bary.allFinite()) << it;
+    EXPECT_NEAR(bary.sum(), 1.0, 1e-12);
+    EXPECT_LT((bary[0] * a + bary[1] * b + bary[2] * c - x).norm(), 1e-12);
+    const double sides = std::min({(on_segment(p, a, b) - p).norm(), (on_segment(p, b, c) - p).norm(),
+                                   (on_segment(p, c, a) - p).norm()});
+    worse += (x - p).norm() > sides * (1 + 1e-9) + 1e-12;
+  }
+  EXPECT_EQ(worse, 0);
 }
 
 // Every function that takes an encoding checks that its arrays fit before indexing with them (an

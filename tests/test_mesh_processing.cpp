@@ -328,4 +328,8 @@ TEST(DecimateMesh, AnEdgeTwoFacesRunAlongAlikeIsRefused) {
     return t;
   }();
   EXPECT_EQ(decimate_mesh(tetra, 4).num_faces(), 4);
+  // Fewer than 4 faces: the input's fault (a SolverError said the decimation left too few).
+  TriMesh three = tetra;
+  three.faces.resize(3);
+  EXPECT_TRUE(test::throws_with<InvalidInput>([&] { decimate_mesh(three, 4); }, {"the mesh has 3 faces"}));
 }

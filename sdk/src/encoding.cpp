@@ -56,6 +56,7 @@ class Encoder {
     std::vector<int>& ring = sc.ring;
     std::vector<int>& mark = sc.mark;
     const auto hit = tree_.closest(p);
+    if (hit.face < 0) throw SolverError("no closest base face for detail vertex " + std::to_string(i));
     const double dc = std::sqrt(hit.distance_sq);
     const double T = opt_.max_distance_ratio * dc + 1e-12 * unit_;
     // Search outwards ring by ring and stop after the first ring (past the closest face's

@@ -32,7 +32,8 @@ std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 //! mesh's orientation.
 //! \pre mesh is a valid triangle mesh (validate_mesh()); what would crash OpenMesh or give NaN
 //!      vertices is checked.
-//! \throw InvalidInput if target_faces < 4, a face index is out of range, a face repeats a
+//! \throw InvalidInput if target_faces < 4 or the mesh has fewer than 4 faces, a face index is
+//!        out of range, a face repeats a
 //!        vertex, a coordinate is not finite, or two faces run along an edge the same way (an
 //!        edge of three faces or inconsistent orientation, which validate_mesh() refuses too).
 //! \throw SolverError if the decimater cannot be initialized or leaves fewer than 4 faces.

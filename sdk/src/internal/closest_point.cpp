@@ -5,9 +5,32 @@
 
 namespace strata::internal {
 
+namespace {
+
+// The closest point to p on segment [a, b] (a point if a == b), as the parameter t along it.
+double segment_param(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double len_sq = ab.squaredNorm();
+  return len_sq > 0.0 ? std::clamp((p - a).dot(ab) / len_sq, 0.0, 1.0) : 0.0;
+}
+
+}  // namespace
+
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3& bary) {
-  // Ericson, Real-Time Collision Detection, 5.1.5: Voronoi regions of the triangle's features.
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  // A degenerate or sliver triangle (sin of its angle at a below 1e-6): the closest of its three
+  // sides. The regions' tests below divide by differences that vanish there: two equal corners
+  // gave 0/0 (a NaN point, and the tree returned a farther face or none), and a sliver's last
+  // division by rounding noise a point off the triangle.
+  if (ab.cross(ac).squaredNorm() <= 1e-12 * ab.squaredNorm() * ac.squaredNorm()) {
+    const double tab = segment_param(p, a, b), tbc = segment_param(p, b, c), tca = segment_param(p, c, a);
+    const Vec3 xab = a + tab * ab, xbc = b + tbc * (c - b), xca = c + tca * (a - c);
+    const double dab = (xab - p).squaredNorm(), dbc = (xbc - p).squaredNorm(), dca = (xca - p).squaredNorm();
+    if (dab <= dbc && dab <= dca) return bary = Vec3(1 - tab, tab, 0), xab;
+    if (dbc <= dca) return bary = Vec3(0, 1 - tbc, tbc), xbc;
+    return bary = Vec3(tca, 0, 1 - tca), xca;
+  }
+  // Ericson, Real-Time Collision Detection, 5.1.5: Voronoi regions of the triangle's features.
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return bary = Vec3(1, 0, 0), a;
   const Vec3 bp = p - b;
