@@ -88,12 +88,12 @@ class Projector {
           const double ht = dir.dot(H * dir);
           step = ht > 0 ? Eigen::Vector2d(-(g.dot(dir) / ht) * dir) : Eigen::Vector2d::Zero();
           along_boundary = true;
-          if (along_boundary && step.norm() < 1e-14) break;  // a fixed point on the boundary
+          if (step.norm() < 1e-14) break;
           const int along = edge;
           frac = internal::exit_fraction(corners_, r.point.u, r.point.v, step.x(), step.y(), edge);
           if (edge == along) break;  // out through its own edge's end: trial() stops it there
         }
-        if (step.norm() < 1e-14) break;
+        if (along_boundary && step.norm() < 1e-14) break;  // a fixed point on the boundary
       }
       LimitPoint y;
       LimitSample sy;
