@@ -275,6 +275,22 @@ TEST(IntersectPair, HugeCoordinatesStayExact) {
   EXPECT_EQ(count(two_triangles(a, b)), 0u);
 }
 
+// Tiny coordinates, where the pre-filter's projections underflow: a touching pair at 2^-270
+// (integer coordinates scaled, so the scaled pair touches exactly) was "proved" apart, while
+// triangles_intersect() found it (found by a review, 2026-11-30).
+TEST(IntersectPair, TinyCoordinatesStayExact) {
+  const Tri a0 = {Vec3(-36, -54, 58), Vec3(25, -30, 1), Vec3(-9, -6, -54)};
+  const Tri b0 = {Vec3(-5.5, -42, 29.5), Vec3(41, -50, -18), Vec3(39, -59, 17)};
+  ASSERT_TRUE(triangles_intersect(a0, b0));
+  for (int e : {-270, -275, -360, -400}) {
+    Tri a = a0, b = b0;
+    for (Vec3& p : a) p *= std::ldexp(1.0, e);
+    for (Vec3& p : b) p *= std::ldexp(1.0, e);
+    EXPECT_TRUE(triangles_intersect(a, b)) << e;
+    EXPECT_EQ(count(two_triangles(a, b)), 1u) << e;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Closed meshes and reference tests
 

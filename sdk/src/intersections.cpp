@@ -120,9 +120,19 @@ inline bool share_vertex(const Prim& p, const Prim& q) {
 // Overflow gives an infinite or NaN bound, which never proves a gap.
 bool separated(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                const Vec3& b2) {
-  const Vec3 p[6] = {Vec3::Zero(), a1 - a0, a2 - a0, b0 - a0, b1 - a0, b2 - a0};
+  Vec3 p[6] = {Vec3::Zero(), a1 - a0, a2 - a0, b0 - a0, b1 - a0, b2 - a0};
   double m = 0.0;
   for (const Vec3& x : p) m = std::max(m, x.cwiseAbs().maxCoeff());
+  // The bound is relative: where the projections (on the in-plane axes, fourth powers of the
+  // coordinates) underflow, their rounding is absolute and it fails (touching triangles at 2^-270
+  // were "proved" apart). Tiny pairs are scaled by a power of 2 first, which is exact (differences
+  // that small are exact too).
+  if (m > 0.0 && m < 0x1p-200) {
+    int e = 0;
+    std::frexp(m, &e);
+    for (Vec3& x : p) x = Vec3(std::ldexp(x.x(), -e), std::ldexp(x.y(), -e), std::ldexp(x.z(), -e));
+    m = std::ldexp(m, -e);
+  }
   constexpr double kRel = 16.0 * std::numeric_limits<double>::epsilon() / 2.0;
   auto apart = [&](const Vec3& axis) {
     const double bound = kRel * axis.cwiseAbs().sum() * m;

@@ -311,10 +311,6 @@ TriMesh decimate_manifold(const TriMesh& mesh, int target) {
 
 TriMesh decimate_mesh(const TriMesh& mesh, int target) {
   if (target < 4) throw InvalidInput("decimate_mesh: the target face count must be >= 4");
-  // The result has at least 4 faces: a smaller input is the caller's, not the decimation's.
-  if (mesh.faces.size() < 4)
-    throw InvalidInput("decimate_mesh: the mesh has " + std::to_string(mesh.faces.size()) +
-                       " faces; at least 4 are needed");
   check_face_indices(mesh.vertices.size(), mesh.faces, "decimate_mesh");
   for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
     const Face& f = mesh.faces[j];
@@ -324,6 +320,10 @@ TriMesh decimate_mesh(const TriMesh& mesh, int target) {
                          ")");
   }
   check_finite(mesh.vertices, "decimate_mesh");
+  // The result has at least 4 faces: a smaller input is the caller's, not the decimation's.
+  if (mesh.faces.size() < 4)
+    throw InvalidInput("decimate_mesh: the mesh has " + std::to_string(mesh.faces.size()) +
+                       " faces; at least 4 are needed");
   const std::optional<TriMesh> split = split_for_openmesh(mesh, "decimate_mesh");
   return decimate_manifold(split ? *split : mesh, target);
 }
