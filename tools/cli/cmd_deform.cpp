@@ -352,7 +352,7 @@ Subcommand register_deform(CLI::App& parent) {
   app->add_flag(
       "--exact-region", o->exact_region,
       "With --base faired: edit exactly the selected region (by default a region vertex that is the "
-      "only selected vertex of three or more faces gets those faces' other vertices added, so that "
+      "only selected vertex of two or more faces gets those faces' other vertices added, so that "
       "their prisms can keep their volumes)");
   add_solver_option(app, o->solver);
   app->add_option("--cage-faces", o->cage_faces, "With --base subdiv and no --cage: faces of the fitted cage")

@@ -135,8 +135,9 @@ struct CascadeReport {
 //! Not thread-safe: one thread at a time per object.
 class LayeredModel {
  public:
-  //! Builds a model from a scan: a cage fitted to it (band 0), intermediate bands, and the scan as
-  //! the finest band, each encoded over the next coarser one.
+  //! Builds a model from a scan: the scan as the finest band, intermediate bands (each smoothed and
+  //! decimated from the next finer one), and band 0, a cage fitted to band 1; each band encoded
+  //! over the next coarser one.
   //! \pre nothing: the scan is validated.
   //! \throw InvalidInput if the scan is not a valid triangle mesh (validate_mesh) or an option is
   //!        out of range; SolverError if fitting or decimation fails.
