@@ -218,6 +218,15 @@ TEST(CageEditor, RigidHandleDetailMovesExactlyWithTheHandle) {
   }
   // Without the rigid pinning only vertices whose frames cannot change are pinned.
   EXPECT_GT(pinned_with_rings, pinned_without);
+  // A scaled handle: not rigid, so the handle is solved too (with it pinned the solve stopped at
+  // a max error of 1.48, unconverged).
+  EditTransform scaled = t;
+  scaled.linear *= 1.5;
+  CageEditor ed(s.c.detail, SubdivSurface(s.cage), s.region, s.handle);
+  const EditResult r = ed.apply(scaled);
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(r.volume.max_relative_error, 1e-3);
+  EXPECT_LE(r.volume.rms_relative_error, 1e-4);
 }
 
 TEST(CageEditor, RejectsBadSelections) {

@@ -102,6 +102,35 @@ TEST(EditTransform, BlendScalesTheRotationAngleAndTheTranslation) {
   EXPECT_LT((half - (pivot + Vec3(std::sqrt(0.5), std::sqrt(0.5), 0))).norm(), 1e-12);
 }
 
+// A turn past 180 degrees is blended along its own way: the linear part alone gives only the
+// short way (270 degrees at weight 0.5 turned -45; a drag through 180 degrees flipped the bend;
+// found by a review, 2026-11-30). By rotation(), by a script, scaled, and as partial().
+TEST(EditTransform, BlendFollowsATurnPast180Degrees) {
+  const Vec3 pivot(1, 2, 3), x(2, 2, 3);
+  auto turned = [&](double degrees) {
+    const double a = degrees * M_PI / 180.0;
+    return Vec3(pivot + Vec3(std::cos(a), std::sin(a), 0));
+  };
+  for (double degrees : {190.0, 270.0, 359.0, -270.0}) {
+    const EditTransform T = EditTransform::rotation(Vec3(0, 0, 1), degrees, pivot);
+    EXPECT_LT((T.apply_blended(x, 0.5) - turned(degrees / 2)).norm(), 1e-12) << degrees;
+    EXPECT_LT((T.partial(0.5).apply(x) - turned(degrees / 2)).norm(), 1e-12) << degrees;
+    EXPECT_LT((T.partial(0.25).partial(2.0).apply(x) - turned(degrees / 2)).norm(), 1e-12) << degrees;
+    EXPECT_LT((T.partial(1.0).apply(x) - T.apply(x)).norm(), 0.0 + 1e-15) << degrees;
+    const std::string script = R"({"region": {"vertices": [0]}, "handle": {"vertices": [0]},
+        "transform": {"rotate": {"axis": [0, 0, 3], "degrees": )" +
+                               std::to_string(degrees) + R"(, "pivot": [1, 2, 3]}, "scale": 2}})";
+    const EditTransform parsed = parse_edit_script(script, "s.json").edits.at(0).transform;
+    const Vec3 half = parsed.apply_blended(x, 0.5);  // scaled by 1.5 from the pivot
+    EXPECT_LT((half - (pivot + 1.5 * (turned(degrees / 2) - pivot))).norm(), 1e-12) << degrees;
+  }
+  // A linear part that is not the recorded rotation (changed after): the short way, as before.
+  EditTransform T = EditTransform::rotation(Vec3(0, 0, 1), 270.0, pivot);
+  T.linear = EditTransform::rotation(Vec3(1, 0, 0), 30.0, pivot).linear;
+  const Eigen::AngleAxisd half(M_PI / 12, Vec3(1, 0, 0));
+  EXPECT_LT((T.apply_blended(x, 0.5) - (pivot + half * (x - pivot))).norm(), 1e-12);
+}
+
 TEST(EditTransform, BlendInterpolatesAStretchFromTheIdentity) {
   EditTransform T;
   T.linear = Eigen::Vector3d(2.0, 1.0, 1.0).asDiagonal();
@@ -199,6 +228,17 @@ TEST(RegionEditor, OptionsOutOfRangeAreRejected) {
   o = {};
   o.smoothing_wavelength = 1e-300;
   bad.emplace_back(o, "too small");
+  // The solver's and the drag's options, at construction (they failed at the first apply() or
+  // update_drag()); an infinite length floor made the solve diverge, blaming the edit.
+  o = {};
+  o.reconstruct.threads = -1;
+  bad.emplace_back(o, "reconstruction option threads = -1");
+  o = {};
+  o.reconstruct.min_length_fraction = INFINITY;
+  bad.emplace_back(o, "reconstruction option min_length_fraction = inf");
+  o = {};
+  o.drag.tolerance = -1;
+  bad.emplace_back(o, "warm-start option tolerance = -1");
   for (const auto& [options, name] : bad) {
     try {
       RegionEditor(m, region, handle, options);
@@ -551,6 +591,34 @@ TEST(RegionEditor, VolumesKeepTheRegionsPrisms) {
   EditOptions vo;
   vo.method = EditOptions::Method::Vectors;
   EXPECT_GT(RegionEditor(m, b.region, b.handle, vo).apply(b.transform).volume.max_relative_error, 1.0);
+}
+
+// A map that is not rigid (a scale, allowed by edit scripts): the handle's inner vertices are not
+// placed by the vector rule, which keeps volumes only under a rigid map (a scale of 1.5 left the
+// solve at a max error of 3.27, unconverged; found by a review, 2026-11-30). Exact and drag ends.
+TEST(RegionEditor, AScaledHandleIsSolvedToo) {
+  const TriMesh m = bumpy_cylinder(8000);
+  const Bend b = elbow(m);
+  EditTransform t = b.transform;
+  t.linear *= 1.5;
+  ASSERT_FALSE(t.is_rigid());
+  RegionEditor ed(m, b.region, b.handle);
+  const EditResult r = ed.apply(t);
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(r.volume.max_relative_error, 1e-3);
+  EXPECT_LE(r.volume.rms_relative_error, 1e-4);
+  ed.begin_drag();
+  for (double f : {0.5, 1.0}) {
+    EditTransform step = b.transform;
+    step.linear *= 1.0 + 0.5 * f;
+    ed.update_drag(step);
+  }
+  const EditResult d = ed.end_drag();
+  EXPECT_TRUE(d.stats.converged);
+  EXPECT_LE(d.volume.max_relative_error, 1e-3);
+  // A rigid map keeps pinning the handle: its result is unchanged by the second solver.
+  const RegionEditor fresh(m, b.region, b.handle);
+  EXPECT_EQ(ed.apply(b.transform).positions, fresh.apply(b.transform).positions);
 }
 
 // The interactive mode: steps from 0 to 90 degrees warm-started from each other, then the exact

@@ -144,8 +144,9 @@ class CageEditor::Impl {
   }
 
   EditResult apply(const EditTransform& t) const {
-    return finish(t,
-                  [&](const std::vector<Vec3>& cage, EditResult& res) { return detail_.solve(cage, res); });
+    return finish(t, [&](const std::vector<Vec3>& cage, EditResult& res) {
+      return detail_.solve(cage, res, t.is_rigid());
+    });
   }
 
   // An exact edit by transform t whose detail \p solve rebuilds over the edited cage.
@@ -182,7 +183,7 @@ class CageEditor::Impl {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
     // The drag stays on until the solve returns: a cancelled or failed end leaves it to be
     // ended (or dragged on) again.
-    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart
+    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart || !drag_transform_.is_rigid()
                        ? apply(drag_transform_)
                        : finish(drag_transform_, [&](const std::vector<Vec3>& cage, EditResult& res) {
                            return detail_.end_drag(cage, res);
@@ -248,10 +249,13 @@ class CageEditor::Impl {
     detail_.set_intersection_context(context_around(mesh_.faces, moves, sub_vertices_, mesh_.vertices));
     moves_.swap(moves);
     enc.pinned.resize(sub_vertices_.size());
+    std::vector<char> outside(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
       enc.pinned[k] = !moves_[v] || (rings >= 0 && near_nonrigid[v] > rings);
+      outside[k] = !moves_[v];
     }
+    detail_.set_nonrigid_pins(std::move(outside));
   }
 
   // Vertices that depend on the region take the solution; all others keep theirs exactly.

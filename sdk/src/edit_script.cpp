@@ -109,6 +109,8 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
       t.pivot = vec3(c, w + ".pivot", r["pivot"]);
     }
     R = Eigen::AngleAxisd(deg * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
+    t.rotation_axis = (axis / largest).normalized();
+    t.rotation_degrees = deg;
   }
   if (j.contains("scale")) {
     const json& s = j["scale"];

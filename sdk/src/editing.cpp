@@ -115,6 +115,8 @@ EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Ve
   t.linear = Eigen::AngleAxisd(degrees * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
   t.pivot = pivot;
   t.translation = translation;
+  t.rotation_axis = (axis / largest).normalized();
+  t.rotation_degrees = degrees;
   return t;
 }
 
@@ -131,6 +133,11 @@ bool EditTransform::is_rigid(double tolerance) const {
 Vec3 EditTransform::apply_blended(const Vec3& x, double s) const {
   if (!std::isfinite(s)) throw InvalidInput("blend weight is not finite");
   return BlendedMap(*this).apply(x, s);
+}
+
+EditTransform EditTransform::partial(double s) const {
+  if (!std::isfinite(s)) throw InvalidInput("blend weight is not finite");
+  return BlendedMap(*this).partial(s);
 }
 
 std::vector<Vec3> blend_transform(const std::vector<Vec3>& points, const std::vector<double>& s,
@@ -226,8 +233,9 @@ class RegionEditor::Impl {
   std::vector<Vec3> edited_base(const EditTransform& t) const { return blend_transform(base_, s_, t); }
 
   EditResult apply(const EditTransform& t) const {
-    return finish(
-        t, [&](const std::vector<Vec3>& sub_base, EditResult& res) { return detail_.solve(sub_base, res); });
+    return finish(t, [&](const std::vector<Vec3>& sub_base, EditResult& res) {
+      return detail_.solve(sub_base, res, t.is_rigid());
+    });
   }
 
   // An exact edit by transform t whose region detail \p solve rebuilds over the region's base.
@@ -268,7 +276,9 @@ class RegionEditor::Impl {
     if (!dragging_) throw InvalidInput("end_drag() without begin_drag()");
     // The drag stays on until the solve returns: a cancelled or failed end leaves it to be
     // ended (or dragged on) again.
-    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart
+    // A map that is not rigid is solved with the handle free (apply()), not from the drag's
+    // state, whose handle was pinned.
+    EditResult r = opt_.drag_end == EditOptions::DragEnd::CleanStart || !drag_transform_.is_rigid()
                        ? apply(drag_transform_)
                        : finish(drag_transform_, [&](const std::vector<Vec3>& sub_base, EditResult& res) {
                            return detail_.end_drag(sub_base, res);
@@ -550,10 +560,13 @@ class RegionEditor::Impl {
     }
     const std::vector<int> near_nonrigid = internal::ring_distance(adj, nonrigid, rings + 1);
     enc.pinned.resize(sub_vertices_.size());
+    std::vector<char> outside(sub_vertices_.size());
     for (std::size_t k = 0; k < sub_vertices_.size(); ++k) {
       const int v = sub_vertices_[k];
       enc.pinned[k] = !in_region_[v] || (depth[v] > rings && near_nonrigid[v] > rings);
+      outside[k] = !in_region_[v];
     }
+    detail_.set_nonrigid_pins(std::move(outside));
   }
 
   std::vector<Vec3> gather(const std::vector<Vec3>& whole) const {

@@ -246,7 +246,7 @@ bool DragState::started() const {
 }
 
 // A NaN tolerance made a warm start end unconverged at once; negative counts passed unnoticed.
-static void check_warm_start(const WarmStartOptions& w) {
+void check_warm_start_options(const WarmStartOptions& w) {
   auto fail = [](const char* name, double value, const char* range) {
     internal::option_out_of_range("warm-start", name, value, range);
   };
@@ -345,7 +345,7 @@ class VolumeReconstructor::Impl {
 
   ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start, const WarmStartOptions* warm,
                         const ReconstructRequest& request = {}) const {
-    if (warm) check_warm_start(*warm);
+    if (warm) check_warm_start_options(*warm);
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
@@ -445,7 +445,7 @@ class VolumeReconstructor::Impl {
                          const ReconstructRequest& request) const {
     const int n = enc_.num_detail_vertices();
     if (!ds.started) throw InvalidInput("drag_step() before DragState::reset()");
-    check_warm_start(warm);
+    check_warm_start_options(warm);
     if (static_cast<int>(ds.frames.points.size()) != n)
       throw InvalidInput("drag state has " + std::to_string(ds.frames.points.size()) +
                          " vertices, the detail has " + std::to_string(n));
@@ -2616,11 +2616,16 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   count(o.max_factorized_steps, "max_factorized_steps", 0, 100000);
   check(o.max_constraint_motion >= 0 && o.max_constraint_motion <= 1e12, "max_constraint_motion",
         o.max_constraint_motion, "0 to 1e12; 0 keeps every constraint");
-  check(o.min_length_fraction >= 0, "min_length_fraction", o.min_length_fraction, "at least 0");
-  check(o.fixed_point_tolerance >= 0, "fixed_point_tolerance", o.fixed_point_tolerance, "at least 0");
+  // Finite: an infinite length floor made every ratio 0 and the solve diverged (named as the
+  // edit's fault).
+  check(o.min_length_fraction >= 0 && o.min_length_fraction <= 1000, "min_length_fraction",
+        o.min_length_fraction, "0-1000");
+  check(o.fixed_point_tolerance >= 0 && std::isfinite(o.fixed_point_tolerance), "fixed_point_tolerance",
+        o.fixed_point_tolerance, "at least 0, finite");
   check(o.regularization_decay >= 0 && o.regularization_decay <= 1000, "regularization_decay",
         o.regularization_decay, "0-1000");
-  check(o.cg_tolerance >= 0, "cg_tolerance", o.cg_tolerance, "at least 0");
+  check(o.cg_tolerance >= 0 && std::isfinite(o.cg_tolerance), "cg_tolerance", o.cg_tolerance,
+        "at least 0, finite");
   count(o.cg_max_iterations, "cg_max_iterations", 1, 1000000);
   // TBB's arenas crashed from 65,537 threads; far more than any machine's cores anyway.
   check(o.threads >= 0 && o.threads <= 1024, "threads", o.threads, "0-1024; 0 is all cores");

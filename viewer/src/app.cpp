@@ -53,21 +53,6 @@ void drop_callback(GLFWwindow* w, int count, const char** paths) {
   if (count > 0) guarded(w, [&] { app_of(w)->on_drop(paths[0]); });
 }
 
-//! The transform \p t applied to the fraction \p f: rotation angle, stretch and translation
-//! scaled (polar decomposition of the linear part), pivot kept.
-EditTransform partial_transform(const EditTransform& t, double f) {
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(t.linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
-  const Eigen::Matrix3d s = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
-  const Eigen::AngleAxisd aa(r);
-  EditTransform p;
-  p.linear = Eigen::AngleAxisd(f * aa.angle(), aa.axis()).toRotationMatrix() *
-             (Eigen::Matrix3d::Identity() + f * (s - Eigen::Matrix3d::Identity()));
-  p.translation = f * t.translation;
-  p.pivot = t.pivot;
-  return p;
-}
-
 void copy_to(std::array<char, 512>& buffer, const std::string& text) {
   std::snprintf(buffer.data(), buffer.size(), "%s", text.c_str());
 }
@@ -1008,8 +993,7 @@ void App::run_script_step() {
     dragging_ = true;
   }
   ++script_frame_;
-  worker_->update_drag(
-      partial_transform(step.transform, static_cast<double>(script_frame_) / options_.frames));
+  worker_->update_drag(step.transform.partial(static_cast<double>(script_frame_) / options_.frames));
   // Orbit a little so every frame draws a new view, as a user's camera would.
   camera_.orbit(2.0f, 0.0f);
   if (script_frame_ >= options_.frames) {

@@ -65,6 +65,13 @@ struct EditTransform {
   Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
   Vec3 translation = Vec3::Zero();
   Vec3 pivot = Vec3::Zero();
+  //! The rotation as it was given (rotation(), a script's "rotate"), for blending: the linear part
+  //! alone tells a turn of 270 degrees from one of -90 only the short way, so a blend weight of
+  //! 0.5 turned -45 degrees, and a drag through 180 degrees flipped the bend. Used when the
+  //! rotation of linear's polar decomposition is this one (to 1e-9); otherwise, and with a zero
+  //! axis, the short way.
+  Vec3 rotation_axis = Vec3::Zero();
+  double rotation_degrees = 0.0;
 
   //! A rotation by \p degrees about \p axis through \p pivot, then a translation.
   //! \throw InvalidInput if the axis is zero or a value is not finite.
@@ -80,6 +87,9 @@ struct EditTransform {
   //! on every call (an SVD); RegionEditor decomposes once per transform for all vertices.
   //! \throw InvalidInput if the map is not finite or its linear part is singular or reflecting.
   Vec3 apply_blended(const Vec3& x, double s) const;
+  //! The map blended with weight \p s as a transform of its own: apply_blended(x, s) for every x
+  //! (a drag's partial edit). \throw as apply_blended().
+  EditTransform partial(double s) const;
 };
 
 //! \p points with \p transform blended by the field \p s (one value per point): point i gets

@@ -561,6 +561,10 @@ struct WarmStartOptions {
   int max_cycles = 0;
 };
 
+//! Checks that every field of \p options is in range, as VolumeReconstructor::drag_step() does.
+//! \throw InvalidInput "warm-start option NAME = VALUE is out of range (RANGE)".
+void check_warm_start_options(const WarmStartOptions& options);
+
 //! Per-call inputs of a clean-start reconstruction beyond the edited base (layered models).
 struct ReconstructRequest {
   //! Scales every target volume and rest offset (a band's amplitude, issue 5): 1 keeps the

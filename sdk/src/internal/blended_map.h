@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -37,12 +38,31 @@ class BlendedMap {
     const Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
     stretch_ = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
     rotation_ = Eigen::AngleAxisd(R);
+    // The rotation as given, if it is this one: its own angle (past 180 degrees too).
+    const double largest = t.rotation_axis.cwiseAbs().maxCoeff();
+    if (largest > 0 && std::isfinite(t.rotation_degrees)) {
+      const Eigen::AngleAxisd given(t.rotation_degrees * M_PI / 180.0,
+                                    (t.rotation_axis / largest).normalized());
+      if ((given.toRotationMatrix() - R).cwiseAbs().maxCoeff() <= 1e-9) rotation_ = given;
+    }
   }
   Vec3 apply(const Vec3& x, double s) const {
     if (s == 1.0) return t_.apply(x);
+    const EditTransform p = partial(s);
+    return p.pivot + p.linear * (x - p.pivot) + p.translation;
+  }
+  // The blend with weight s as a transform (EditTransform::partial()).
+  EditTransform partial(double s) const {
+    if (s == 1.0) return t_;
+    EditTransform p;
     const Eigen::Matrix3d S = Eigen::Matrix3d::Identity() + s * (stretch_ - Eigen::Matrix3d::Identity());
     const Eigen::AngleAxisd r(s * rotation_.angle(), rotation_.axis());
-    return t_.pivot + r * (S * (x - t_.pivot)) + s * t_.translation;
+    p.linear = r.toRotationMatrix() * S;
+    p.translation = s * t_.translation;
+    p.pivot = t_.pivot;
+    p.rotation_axis = rotation_.axis();
+    p.rotation_degrees = s * rotation_.angle() * 180.0 / M_PI;
+    return p;
   }
 
  private:

@@ -36,7 +36,16 @@ double DetailSolve::ensure_reconstructor() const {
   return seconds_since(t0);
 }
 
-std::vector<Vec3> DetailSolve::solve(const std::vector<Vec3>& base, EditResult& res) const {
+std::vector<Vec3> DetailSolve::solve(const std::vector<Vec3>& base, EditResult& res, bool rigid) const {
+  if (!rigid && !nonrigid_pins_.empty() && nonrigid_pins_ != enc_.pinned) {
+    if (!nonrigid_) {
+      nonrigid_ = std::make_unique<DetailSolve>(method_, reconstruct_, drag_, drag_end_, drag_end_cycles_);
+      nonrigid_->enc_ = enc_;
+      nonrigid_->enc_.pinned = nonrigid_pins_;
+      nonrigid_->context_ = context_;
+    }
+    return nonrigid_->solve(base, res);
+  }
   const BaseFrames frames = evaluate_base_frames(enc_, base);
   if (base_at_rest(enc_, frames)) {
     res.volume = volume_metrics(enc_, frames, enc_.detail_rest);

@@ -27,6 +27,12 @@ class DetailSolve {
     if (drag_end != EditOptions::DragEnd::FromDragState && drag_end != EditOptions::DragEnd::CleanStart)
       throw InvalidInput("edit option drag_end = " + std::to_string(static_cast<int>(drag_end)) +
                          " is not from_drag_state or clean_start");
+    // At the editor's construction, not at its first solve or drag step (threads = -1 passed the
+    // constructor and failed apply(); a negative drag tolerance the first update_drag()).
+    if (method == EditOptions::Method::Volumes) {
+      check_reconstruct_options(reconstruct_);
+      check_warm_start_options(drag_);
+    }
   }
 
   //! Set once by the editor before the first solve (the reconstructor is built from it lazily).
@@ -36,10 +42,18 @@ class DetailSolve {
   void set_intersection_context(IntersectionContext context) { context_ = std::move(context); }
   const DetailEncoding& encoding() const { return enc_; }
 
+  //! The pinned flags for an edit whose map is not rigid (a scale, a shear): the encoding's pin
+  //! the handle's inner vertices, placed by the vector rule, which keeps their volumes only under
+  //! a rigid map (a scale of 1.5 left them at 3.4 times theirs, and the solve around them could
+  //! not converge). Set by the editor with the encoding; empty: the encoding's flags always.
+  void set_nonrigid_pins(std::vector<char> pinned) { nonrigid_pins_ = std::move(pinned); }
+
   //! The exact solve over \p base (the encoding's base vertices, or a cage's control points):
   //! from the clean start for volumes. A base back at rest to within rounding gives the encoded
   //! detail at rest exactly (no solve). Fills res.stats, res.times.setup/solve and res.volume.
-  std::vector<Vec3> solve(const std::vector<Vec3>& base, EditResult& res) const;
+  //! \p rigid false: with the pins of set_nonrigid_pins() (a second reconstructor, built on first
+  //! use).
+  std::vector<Vec3> solve(const std::vector<Vec3>& base, EditResult& res, bool rigid = true) const;
 
   //! Starts a drag from the encoded detail at rest, over \p rest_base (the encoding's base vertices
   //! or the cage's control points at rest).
@@ -62,6 +76,8 @@ class DetailSolve {
   DetailEncoding enc_;
   IntersectionContext context_;
   mutable std::unique_ptr<VolumeReconstructor> rec_;
+  std::vector<char> nonrigid_pins_;
+  mutable std::unique_ptr<DetailSolve> nonrigid_;  // the solve with nonrigid_pins_, on first use
   std::vector<Vec3> drag_sub_;
   DragState drag_state_;  // every multigrid level's last drag solution (volumes)
 };
