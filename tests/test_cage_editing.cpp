@@ -118,6 +118,12 @@ TEST(CageEditor, IdentityAndTinyEditsGiveBackTheMesh) {
     const EditResult id = ed.apply(EditTransform{});
     EXPECT_EQ(id.positions, s.c.detail.vertices);
     EXPECT_EQ(id.stats.volume_sweeps, 0);
+    // A drag back to the start too (its at-rest test read the reconstructor's single-precision
+    // frames, 4e-8 off: it solved, and ended 3.8e-8 off the mesh).
+    ed.begin_drag();
+    ed.update_drag(EditTransform::rotation(Vec3(0, 1, 0), 20.0, Vec3::Zero()));
+    ed.update_drag(EditTransform{});
+    EXPECT_EQ(ed.end_drag().positions, s.c.detail.vertices);
     EditTransform tiny;
     tiny.translation = Vec3(0.0, 0.0, 1e-9 * diag);
     const EditResult r = ed.apply(tiny);

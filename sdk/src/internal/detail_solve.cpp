@@ -88,7 +88,10 @@ std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResul
   const auto t0 = Clock::now();
   // One evaluation of the frames serves the check, the solve and the metrics.
   const BaseFrames frames = rec_->base_frames(base);
-  if (base_at_rest(enc_, frames)) return solve(base, res);
+  // At rest by the double-precision frames, as solve() tests it: the reconstructor's come from a
+  // cage's single-precision stencil weights (LimitPointSet), 4e-8 off the rest points, so a
+  // CageEditor drag back to the start never counted as at rest and ended 4e-8 off the mesh.
+  if (base_at_rest(enc_, evaluate_base_frames(enc_, base))) return solve(base, res);
   // The finest level from the drag's state to the exact tolerance, with the reconstructor's own
   // check for new intersecting pairs (and fold repair).
   WarmStartOptions exact;
