@@ -117,8 +117,9 @@ struct PartSolve {
   DragState drag;             // every multigrid level's last drag solution
   // Vertices to solve that lie in no face (a scan's unreferenced points): no prism holds them, so
   // they follow their base point by displacement vectors, over the band's whole encoding (held
-  // only if there are any). The part above has only vertices of faces: they stayed where they
-  // were while their base moved away.
+  // only if there are any), in the exact solve only: a drag's previews leave them where they are
+  // (a pass over the whole band per step), and its end is the exact edit. The part above has only
+  // vertices of faces: they stayed where they were while their base moved away.
   std::vector<int> loose;
   std::vector<Vec3> loose_positions;
   std::optional<DetailEncoding> whole;
@@ -195,7 +196,6 @@ struct PartSolve {
   // carried along with the base frames (DragState), volumes on the coarse levels only, with the
   // editors' step budget (EditOptions::drag).
   void solve_drag(const std::vector<Vec3>& base, double amplitude) {
-    place_loose(base, amplitude);
     if (vertices.empty()) return;
     const BaseFrames frames = evaluate_base_frames(part, base);
     if (reconstructor) {

@@ -239,6 +239,16 @@ for m in sheared combs; do
     echo "FAIL [quadratic $m]: no lower bound or no warning" >&2; cat stdout.txt stderr.txt >&2; failures=$((failures + 1))
   fi
 done
+# An output name of 240 bytes (legal) is written: its staging name went past NAME_MAX, and the
+# command failed after the whole solve.
+long=$(printf 'a%.0s' $(seq 240)).obj
+rc=0
+"$STRATA" reconstruct --detail $G/detail.obj --base $G/base.obj --edited-base $G/edited_base.obj -q \
+  -o "$long" >stdout.txt 2>stderr.txt || rc=$?
+if [ "$rc" -ne 0 ] || [ ! -s "$long" ]; then
+  echo "FAIL [long output name]: exit $rc" >&2; cat stderr.txt >&2; failures=$((failures + 1))
+fi
+rm -f "$long"
 # Standard output that cannot be written (a full disk) is a failure: stats --json exited 0.
 if [ -w /dev/full ]; then
   rc=0

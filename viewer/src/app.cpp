@@ -304,27 +304,25 @@ void App::take_snapshot() {
     }
   }
   if (message_only) return;  // the worker could not make the scenes: the panels stay
-  // Same panels and connectivity: move the vertices only; else upload anew.
-  const bool same =
-      s->panels.size() == panels_.size() &&
-      std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
-                 [](const SceneData& a, const std::unique_ptr<Panel>& b) {
-                   return a.shown_band == b->band && a.mesh.faces.size() == b->scene.mesh.faces.size() &&
-                          a.mesh.vertices.size() == b->scene.mesh.vertices.size() &&
-                          (a.colors.empty() && !a.texture) == (b->mesh.color_mode() == 0) &&
-                          a.vertex_colors == b->scene.vertex_colors && a.texture == b->scene.texture &&
-                          (!a.vertex_colors || a.colors == b->scene.colors) &&
-                          (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0]);
-                 });
-  // The same bands at the same sizes (a colour map changed): uploaded anew, but the camera stays
-  // where the user put it (it refitted on every colour change).
-  const bool same_layout = s->panels.size() == panels_.size() &&
-                           std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
-                                      [](const SceneData& a, const std::unique_ptr<Panel>& b) {
-                                        return a.shown_band == b->band &&
-                                               a.mesh.faces.size() == b->scene.mesh.faces.size() &&
-                                               a.mesh.vertices.size() == b->scene.mesh.vertices.size();
-                                      });
+  // Same panels and connectivity: move the vertices only; else upload anew. The same bands at the
+  // same sizes (a colour map changed) are uploaded anew, but the camera stays where the user put
+  // it (it refitted on every colour change).
+  auto panels_match = [&](bool colours) {
+    return s->panels.size() == panels_.size() &&
+           std::equal(s->panels.begin(), s->panels.end(), panels_.begin(),
+                      [&](const SceneData& a, const std::unique_ptr<Panel>& b) {
+                        const bool layout = a.shown_band == b->band &&
+                                            a.mesh.faces.size() == b->scene.mesh.faces.size() &&
+                                            a.mesh.vertices.size() == b->scene.mesh.vertices.size();
+                        return layout &&
+                               (!colours ||
+                                ((a.colors.empty() && !a.texture) == (b->mesh.color_mode() == 0) &&
+                                 a.vertex_colors == b->scene.vertex_colors && a.texture == b->scene.texture &&
+                                 (!a.vertex_colors || a.colors == b->scene.colors) &&
+                                 (a.mesh.faces.empty() || a.mesh.faces[0] == b->scene.mesh.faces[0])));
+                      });
+  };
+  const bool same_layout = panels_match(false), same = same_layout && panels_match(true);
   if (!same) panels_.clear();
   for (std::size_t i = 0; i < s->panels.size(); ++i) {
     if (!same) panels_.push_back(std::make_unique<Panel>());

@@ -86,7 +86,7 @@ std::vector<Vec3> DetailSolve::end_drag(const std::vector<Vec3>& base, EditResul
       !drag_state_.started())
     return solve(base, res);
   const auto t0 = Clock::now();
-  // One evaluation of the frames serves the check, the solve and the metrics.
+  // One evaluation of the reconstructor's frames serves the solve and the metrics.
   const BaseFrames frames = rec_->base_frames(base);
   // At rest by the double-precision frames, as solve() tests it: the reconstructor's come from a
   // cage's single-precision stencil weights (LimitPointSet), 4e-8 off the rest points, so a
