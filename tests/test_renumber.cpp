@@ -222,6 +222,18 @@ TEST(Renumber, EveryCallAnswersInTheCallersNumbering) {
             back(b.drag_step(internal::to_new(r, fr), db, warm, req_new)));
   // The state belongs to the reconstructor that took its first step.
   EXPECT_THROW(b.drag_step(half, da, warm, req_new), InvalidInput);
+  // A first step refused (an amplitude out of range) leaves the state in the caller's numbering:
+  // another reconstructor's first step then renumbers it as a fresh state's. The refused step used
+  // to mark it as in the solver's order, owned by nobody, and the renumbering one took it as is.
+  {
+    ReconstructRequest huge = req_new;
+    huge.amplitude = 1e301;
+    DragState refused, fresh;
+    refused.reset(evaluate_base_frames(e, rest), s.vertices);
+    fresh.reset(evaluate_base_frames(e, rest), s.vertices);
+    EXPECT_THROW(b.drag_step(half, refused, warm, huge), InvalidInput);
+    EXPECT_EQ(a.drag_step(half, refused, warm, req).positions, a.drag_step(half, fresh, warm, req).positions);
+  }
 
   // Errors name vertices by the caller's numbers.
   int k = 0;  // a pinned vertex the renumbering moved

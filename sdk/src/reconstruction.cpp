@@ -452,19 +452,21 @@ class VolumeReconstructor::Impl {
     if (ds.owner != 0 && ds.owner != serial_)
       throw InvalidInput(
           "drag state belongs to another VolumeReconstructor (reset() it to start a drag here)");
-    if (!ds.in_solver_order) {  // reset()'s frames and positions, in the caller's numbering
-      if (!renum_.empty()) {
-        ds.frames = internal::to_new(renum_, ds.frames);
-        ds.start = internal::to_new(renum_, ds.start);
-        ds.owner = serial_;  // in this solver's numbering from now on
-      }
-      ds.in_solver_order = true;
-    }
     ReconstructResult res;
     ReconstructStats& st = res.stats;
     auto t0 = Clock::now();
     State s;
-    init_state(fr, request, s);
+    init_state(fr, request, s);  // its checks first: a refused step leaves the state as it was
+    if (!ds.in_solver_order) {   // reset()'s frames and positions, in the caller's numbering
+      if (!renum_.empty()) {
+        ds.frames = internal::to_new(renum_, ds.frames);
+        ds.start = internal::to_new(renum_, ds.start);
+      }
+      ds.in_solver_order = true;
+      // In this solver's numbering from now on, renumbered or not: a state converted here and
+      // then stepped by a renumbering reconstructor was read in the wrong numbering.
+      ds.owner = serial_;
+    }
     const int nl = static_cast<int>(levels_.size());
     level_stats(st);
     // Level l's state ids -> original ids (the coarse levels' are compact: gather_coarse()).
