@@ -262,6 +262,41 @@ TEST(ApiInput, ADegenerateLimitSurfaceHasNoNormalsAndSaysSo) {
   EXPECT_TRUE(throws_with<InvalidInput>([&] { r.reconstruct(collapsed); }, {"has no normal"}));
 }
 
+// Frames passed in by the caller keep BaseFrames' contract (unit normal and tangent, orthogonal):
+// a normal of length 2 doubled the displacement along it without a word.
+TEST(ApiInput, CallerFramesMustBeOrthonormal) {
+  const cases::CylinderCase& c = small_case();
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const VolumeReconstructor r(e);
+  const BaseFrames fr = evaluate_base_frames(e, c.base.vertices);
+  EXPECT_EQ(r.reconstruct(fr).positions, r.reconstruct(c.base.vertices).positions);
+  const std::size_t k = 5;
+  std::vector<std::pair<BaseFrames, std::string>> bad(4, {fr, ""});
+  bad[0].first.normals[k] *= 2.0, bad[0].second = "base frame 5: the normal is not of unit length";
+  bad[1].first.tangents[k] *= 1.0 + 1e-5, bad[1].second = "base frame 5: the tangent is not of unit length";
+  bad[2].first.tangents[k] = fr.normals[k],
+  bad[2].second = "base frame 5: the normal and the tangent are not";
+  bad[3].first.normals[k] = Vec3::Zero(), bad[3].second = "base frame 5: the normal is not of unit length";
+  for (const auto& [frames, message] : bad) {
+    SCOPED_TRACE(message);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { r.reconstruct(frames); }, {message}));
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { reconstruct_vectors(e, frames); },
+                                          {"reconstruct_vectors: " + message}));
+    DragState s;
+    EXPECT_TRUE(
+        throws_with<InvalidInput>([&] { s.reset(frames, c.detail.vertices); }, {"drag start's " + message}));
+    s.reset(fr, c.detail.vertices);
+    EXPECT_TRUE(throws_with<InvalidInput>([&] { r.drag_step(frames, s); }, {message}));
+  }
+  // Float frames' rounding (a few 1e-8) passes.
+  BaseFrames rounded = fr;
+  for (std::size_t i = 0; i < rounded.normals.size(); ++i) {
+    rounded.normals[i] = rounded.normals[i].cast<float>().cast<double>();
+    rounded.tangents[i] = rounded.tangents[i].cast<float>().cast<double>();
+  }
+  EXPECT_NO_THROW(r.reconstruct(rounded));
+}
+
 TEST(ApiInput, AMovedFromDragStateIsNotStartedAndCanStartAgain) {
   const cases::CylinderCase& c = small_case();
   const DetailEncoding e = encode_detail(c.detail, c.base);

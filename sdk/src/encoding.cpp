@@ -655,6 +655,18 @@ std::vector<Vec3> internal::vectors_unchecked(const DetailEncoding& e, const Bas
   return p;
 }
 
+void internal::check_frame_axes(const BaseFrames& fr, const std::string& what) {
+  constexpr double kTol = 1e-6;  // above float frames' rounding (6e-8), far below a wrong frame
+  for (std::size_t i = 0; i < fr.normals.size() && i < fr.tangents.size(); ++i) {
+    const Vec3 &n = fr.normals[i], &t = fr.tangents[i];
+    const char* problem = !(std::abs(n.norm() - 1.0) <= kTol)   ? "the normal is not of unit length"
+                          : !(std::abs(t.norm() - 1.0) <= kTol) ? "the tangent is not of unit length"
+                          : !(std::abs(n.dot(t)) <= kTol) ? "the normal and the tangent are not orthogonal"
+                                                          : nullptr;
+    if (problem) throw InvalidInput(what + "base frame " + std::to_string(i) + ": " + problem);
+  }
+}
+
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames& fr, double amplitude) {
   check_encoding(e);
   const auto nv = static_cast<std::size_t>(e.num_detail_vertices());
@@ -673,6 +685,7 @@ std::vector<Vec3> reconstruct_vectors(const DetailEncoding& e, const BaseFrames&
     if (!p[i].allFinite())
       throw InvalidInput("reconstruct_vectors: detail vertex " + std::to_string(i) +
                          ": its base frame or its offsets are not finite");
+  internal::check_frame_axes(fr, "reconstruct_vectors: ");
   return p;
 }
 

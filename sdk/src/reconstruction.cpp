@@ -232,6 +232,7 @@ void DragState::reset(const BaseFrames& frames, std::vector<Vec3> start) {
       throw InvalidInput("drag start: vertex " + std::to_string(i) + " or its base frame is not finite");
   check_coordinates(start, "drag start:");
   check_coordinates(frames.points, "drag start's base frames:");
+  internal::check_frame_axes(frames, "drag start's ");
   if (!impl_) impl_ = std::make_unique<Impl>();  // a moved-from state starts anew
   impl_->frames = frames;
   impl_->start = std::move(start);
@@ -977,6 +978,7 @@ class VolumeReconstructor::Impl {
       if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
         throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
     check_coordinates(fr.points, "base frames:");
+    internal::check_frame_axes(fr, "");
   }
   template <class Pinned>
   void check_pinned_positions(const std::vector<Vec3>& pp, Pinned&& is_pinned) const {

@@ -214,7 +214,8 @@ constexpr double kMaxAmplitude = 1000.0;
 //! Same, from already evaluated base frames, with the displacements scaled by \p amplitude (a
 //! band's amplitude in a layered model: 0 puts every vertex on its base point).
 //! \throw InvalidInput if \p frames does not hold one frame per detail vertex, if |amplitude|
-//!        is not within kMaxAmplitude, if a frame or an offset is not finite, or as check_encoding().
+//!        is not within kMaxAmplitude, if a frame or an offset is not finite, if a frame's normal
+//!        and tangent are not orthonormal (within 1e-6), or as check_encoding().
 std::vector<Vec3> reconstruct_vectors(const DetailEncoding& encoding, const BaseFrames& frames,
                                       double amplitude = 1.0);
 

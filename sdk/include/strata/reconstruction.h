@@ -621,7 +621,8 @@ class DragState {
 
   //! Starts a drag from \p start, the detail positions (one per detail vertex) over \p frames
   //! (e.g. the encoded detail over the base at rest). Every level starts from these positions.
-  //! \throw InvalidInput if the sizes differ or a value is not finite.
+  //! \throw InvalidInput if the sizes differ, a value is not finite, or a frame's normal and
+  //!        tangent are not orthonormal (within 1e-6).
   void reset(const BaseFrames& frames, std::vector<Vec3> start);
   //! Whether reset() was called (false for a moved-from state, which reset() starts anew).
   bool started() const;
@@ -658,7 +659,8 @@ class VolumeReconstructor {
 
   //! The same over base frames evaluated by the caller (e.g. evaluate_base_frames() on a
   //! SubdivSurface the application keeps and edits).
-  //! \throw InvalidInput if the frames do not have one finite entry per detail vertex.
+  //! \throw InvalidInput if the frames do not have one finite entry per detail vertex, or a frame's
+  //!        normal and tangent are not orthonormal (within 1e-6).
   ReconstructResult reconstruct(const BaseFrames& edited_frames) const;
 
   //! The clean-start reconstruction with a request's amplitude and pinned positions. The hierarchy

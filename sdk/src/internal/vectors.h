@@ -3,6 +3,7 @@
 // step). Not part of the public API.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "strata/encoding.h"
@@ -13,5 +14,11 @@ namespace strata::internal {
 //! check. \pre check_encoding(encoding) passed; frames has one entry per detail vertex.
 std::vector<Vec3> vectors_unchecked(const DetailEncoding& encoding, const BaseFrames& frames,
                                     double amplitude);
+
+//! Throws InvalidInput("<what> base frame i: ...") at the first frame whose normal or tangent is
+//! not of unit length, or whose two are not orthogonal, each within 1e-6 (BaseFrames' contract:
+//! the displacements are laid out in that frame, and a normal of length 2 doubled them unseen).
+//! \pre every entry is finite.
+void check_frame_axes(const BaseFrames& frames, const std::string& what);
 
 }  // namespace strata::internal
