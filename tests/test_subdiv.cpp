@@ -565,6 +565,31 @@ TEST(Subdiv, RejectsBadCages) {
   PolyMesh m = cube_cage();
   m.vertices[3].x() = std::nan("");
   EXPECT_NE(msg(m).find("vertex 3 has a non-finite"), std::string::npos);
+  // A cage below the engine's extent (1e-20) is refused by the projection: scaled by 1e-160,
+  // every point fell back to its closest point without a word. At 1e-19 the points converge as
+  // at scale 1. (The surface itself is built: its stencils are its topology's.)
+  for (double scale : {1e-160, 1e-21, 1e-19}) {
+    m = cube_cage();
+    for (Vec3& p : m.vertices) p *= scale;
+    const SubdivSurface tiny(m);
+    std::vector<Vec3> points;
+    for (int f = 0; f < 6; ++f) {
+      const LimitSample e = tiny.evaluate({f, 0.4, 0.6});
+      points.push_back(e.position + 0.1 * scale * e.normal());
+    }
+    if (scale < 1e-20) {
+      try {
+        project_to_limit(tiny, points);
+        ADD_FAILURE() << "a cage scaled by " << scale << " was projected onto";
+      } catch (const InvalidInput& x) {
+        EXPECT_NE(std::string(x.what()).find("the cage has an extent (bounding box diagonal) of"),
+                  std::string::npos)
+            << x.what();
+      }
+    } else {
+      EXPECT_EQ(project_to_limit(tiny, points).num_converged, 6);
+    }
+  }
   m = cube_cage();
   m.faces[2][1] = 42;
   EXPECT_NE(msg(m).find("index 42 out of range"), std::string::npos);

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 #include "internal/closest_point.h"
 #include "internal/ptex_domain.h"
@@ -242,6 +243,15 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
       !(options.seam_tolerance >= options.orthogonality_tolerance))
     throw InvalidInput("projection options out of range");
   check_coordinates(points, "projected");
+  // A cage below the engine's extent: its limit normals (du x dv, of the extent squared) underflow,
+  // and a unit cube's cage scaled by 1e-160 had every point fall back to its closest point without
+  // a word. (The cage itself may be anything: its stencils are its topology's.)
+  if (const double extent = bbox_diagonal(surface.control_points()); !(extent >= kMinExtent)) {
+    std::ostringstream s;
+    s << "project_to_limit: the cage has an extent (bounding box diagonal) of " << extent
+      << ", below the engine's range (" << kMinExtent << "): its limit normals would underflow";
+    throw InvalidInput(s.str());
+  }
   Projection out;
   const std::size_t n = points.size();
   out.points.resize(n);

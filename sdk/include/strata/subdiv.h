@@ -255,7 +255,8 @@ struct Projection {
 //! orthogonal foot point, converges to the closest point of the boundary curve (counted in
 //! num_on_boundary). A point whose iteration does not converge keeps the closest point found and
 //! is counted as a fallback.
-//! \throw InvalidInput if a point is not finite or the options are out of range.
+//! \throw InvalidInput if a point is not finite, the options are out of range, or the cage spans
+//!        less than kMinExtent.
 Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3>& points,
                             const ProjectOptions& options = {});
 
