@@ -25,6 +25,16 @@ assert len(r["cpu_seconds"]["reconstruct_runs"]) == 3
 first = r["seconds"]["first_reconstruction"]
 assert abs(first - (r["seconds"]["setup"] + runs[0])) <= 1e-9 * first, (first, r["seconds"])
 assert r["targets"]["all"], r["targets"]
+# Memory per prism: the peak's growth over the floor run's (a smaller pipeline in its own child),
+# per prism added; and the whole process's peak per prism.
+m, f = r["memory"], d["memory_floor"]
+assert 0 < f["prisms"] < r["prisms"] and 0 < f["peak_rss_bytes"] <= m["peak_rss_bytes"], (f, m)
+slope = (m["peak_rss_bytes"] - f["peak_rss_bytes"]) / (r["prisms"] - f["prisms"])
+assert abs(m["bytes_per_prism"] - slope) <= 1e-9 * slope, (m, f)
+assert abs(m["whole_process_bytes_per_prism"] - m["peak_rss_bytes"] / r["prisms"]) <= 1e-6, m
+assert d["targets"]["memory_le_1kb_per_prism"]["values"]["3000"] == m["bytes_per_prism"]
+for k in ("max_error_relative_to_own_target", "rms_error_relative_to_own_target"):
+    assert r["accuracy"]["volumes"][k] > 0, r["accuracy"]
 PY
 grep -q "reconstruct run 3 in" "$TMP/err" || fail "no progress line for the third run"
 
