@@ -1605,8 +1605,30 @@ TEST(MeshIoValidate, ExactMessages) {
   // A face of area 0.5 is zero area next to a vertex at 1e300; the message says why.
   t.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1e300, 0, 0}};
   t.faces = {{0, 1, 2}, {1, 3, 2}};
-  EXPECT_EQ(message(t, "far"),
-            "far: face 0 has zero area for the mesh's size (area 0.5, bounding-box diagonal 1e+300)");
+  EXPECT_EQ(
+      message(t, "far"),
+      "far: face 0 has zero area for the mesh's size (area 0.5, bounding-box diagonal 1e+300; vertex 3 at "
+      "(1e+300, 0, 0) is the farthest from the others' median: an outlier?)");
+  // So does one stray face far from a scan-sized mesh (its faces of ordinary edges become zero area).
+  {
+    TriMesh grid = t;
+    grid.vertices.clear();
+    grid.faces.clear();
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) grid.vertices.push_back(Vec3(i, j, 0.1 * ((i * j) % 3)));
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const int v = 5 * i + j;
+        grid.faces.push_back({v, v + 5, v + 1});
+        grid.faces.push_back({v + 1, v + 5, v + 6});
+      }
+    EXPECT_EQ(message(grid, "g"), "(no error)");
+    for (const Vec3& p : {Vec3(2e15, 0, 0), Vec3(2e15, 1, 0), Vec3(2e15, 0, 1)}) grid.vertices.push_back(p);
+    grid.faces.push_back({25, 26, 27});
+    EXPECT_NE(message(grid, "g").find("; vertex 25 at (2e+15, 0, 0) is the farthest from the others' median"),
+              std::string::npos)
+        << message(grid, "g");
+  }
   // Where the unscaled area would overflow (inf, or NaN from inf - inf), only the reason is given.
   t.faces = {{0, 1, 2}};
   for (const std::vector<Vec3>& v : {std::vector<Vec3>{{0, 0, 0}, {1e300, 1e300, 0}, {2e300, 2e300, 0}},

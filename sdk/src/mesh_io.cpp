@@ -1687,6 +1687,36 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
 
 //! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid; in
 //! \p face (if given) the face it names first, or -1.
+// Where a face of ordinary edges is zero area only for the mesh's size (its longest edge \p edge
+// under 1e-4 of the diagonal \p diag, both scaled alike), the size likely comes from a stray
+// vertex: "; vertex V at (x, y, z) is the farthest from the others' median: an outlier?". Else "".
+std::string outlier_hint(const TriMesh& mesh, const std::vector<char>& used, double edge, double diag) {
+  if (!(edge < 1e-4 * diag)) return "";
+  std::vector<double> x[3];
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v])
+      for (int k = 0; k < 3; ++k) x[k].push_back(mesh.vertices[v][k]);
+  Vec3 median;
+  for (int k = 0; k < 3; ++k) {
+    auto mid = x[k].begin() + static_cast<std::ptrdiff_t>(x[k].size() / 2);
+    std::nth_element(x[k].begin(), mid, x[k].end());
+    median[k] = *mid;
+  }
+  size_t far = 0;
+  double far_d = -1.0;
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) {
+      const double d = (mesh.vertices[v] - median).cwiseAbs().maxCoeff();  // no overflow
+      if (d > far_d) far_d = d, far = v;
+    }
+  const Vec3& p = mesh.vertices[far];
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "; vertex %zu at (%.6g, %.6g, %.6g) is the farthest from the others' median: an outlier?",
+                far, p.x(), p.y(), p.z());
+  return text;
+}
+
 std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
   long long ignored = -1;
   long long& at = face ? *face : ignored;
@@ -1749,9 +1779,10 @@ std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
       // Near DBL_MAX the unscaled area or diagonal can overflow: then only the reason is given.
       if (!std::isfinite(area) || !std::isfinite(diagonal)) return what + " for the mesh's size";
       char sizes[96];
-      std::snprintf(sizes, sizeof sizes, " for the mesh's size (area %.3g, bounding-box diagonal %.3g)", area,
+      std::snprintf(sizes, sizeof sizes, " for the mesh's size (area %.3g, bounding-box diagonal %.3g", area,
                     diagonal);
-      return what + sizes;
+      return what + sizes +
+             outlier_hint(mesh, used, std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()}), diag) + ")";
     }
   }
 

@@ -116,7 +116,7 @@ expect_error zero_axis "must not be zero" "{$R, $H, \"transform\": {\"rotate\": 
 # A result the writer refuses is named as the edited mesh, not as the output file ("out.obj: face 0
 # has zero area"); a solver failure names the edit (a fairing system that could not be factorized
 # was reported without either).
-expect_error huge_scale "the mesh edited by .*huge_scale.json: face [0-9]* has zero area for the mesh's size (area [-+.e0-9]*, bounding-box diagonal [-+.e0-9]*) (not written to .*out.obj)" \
+expect_error huge_scale "the mesh edited by .*huge_scale.json: face [0-9]* has zero area for the mesh's size (area [-+.e0-9]*, bounding-box diagonal [-+.e0-9]*; vertex [0-9]* at (.*) is the farthest from the others' median: an outlier?) (not written to .*out.obj)" \
   "{$R, $H, \"transform\": {\"scale\": [1e6, 1e6, 1e6]}}"
 expect_error far_then_near "far_then_near.json: edit 2: the region's fairing system could not be factorized" \
   "{\"edits\": [{$R, $H, \"transform\": {\"translate\": [1e6, 0, 0]}}, {$R, $H, \"transform\": {\"translate\": [1, 0, 0]}}]}"
