@@ -85,6 +85,17 @@ TEST(ApiInput, MeshFunctionsCheckTheirFaceIndices) {
   EXPECT_EQ(signed_volume(ok), 0.0);
 }
 
+// coordinate_median(): per axis, the middle value (the upper one of an even count), whatever one
+// far point does; the box centre moves halfway to it.
+TEST(ApiInput, CoordinateMedianIgnoresAFarPoint) {
+  EXPECT_EQ(coordinate_median({}), Vec3::Zero());
+  std::vector<Vec3> p = {{3, -1, 5}, {1, -2, 4}, {2, -3, 6}};
+  EXPECT_EQ(coordinate_median(p), Vec3(2, -2, 5));
+  p.push_back({1e15, 1e15, -1e15});
+  EXPECT_EQ(coordinate_median(p), Vec3(3, -1, 5));
+  EXPECT_GT(bbox_diagonal(p), 1e15);
+}
+
 TEST(ApiInput, SmoothingAndDecimationRefuseWhatWouldSpreadNaNOrCrashOpenMesh) {
   TriMesh m = icosphere(2);
   m.vertices[5].x() = kNaN;

@@ -453,25 +453,16 @@ std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vecto
 }
 
 // The per-axis median of the faces' first corners, over both lists (at most 65,536 faces, evenly
-// spread, are read): most faces are near it, whatever a few far ones do. Zero without faces.
+// spread, are read): most faces are near it, whatever a few far ones do.
 Vec3 median_corner(const std::vector<Vec3>& vertices, const std::vector<Face>& faces_a,
                    const std::vector<Face>* faces_b) {
   const std::size_t na = faces_a.size(), n = na + (faces_b ? faces_b->size() : 0);
-  if (n == 0) return Vec3::Zero();
   constexpr std::size_t kSamples = 65536;
-  const std::size_t step = (n + kSamples - 1) / kSamples;
-  std::vector<double> x[3];
-  for (std::size_t f = 0; f < n; f += step) {
-    const Vec3& p = vertices[f < na ? faces_a[f][0] : (*faces_b)[f - na][0]];
-    for (int k = 0; k < 3; ++k) x[k].push_back(p[k]);
-  }
-  Vec3 m;
-  for (int k = 0; k < 3; ++k) {
-    auto mid = x[k].begin() + static_cast<std::ptrdiff_t>(x[k].size() / 2);
-    std::nth_element(x[k].begin(), mid, x[k].end());
-    m[k] = *mid;
-  }
-  return m;
+  const std::size_t step = std::max<std::size_t>(1, (n + kSamples - 1) / kSamples);
+  std::vector<Vec3> corners;
+  for (std::size_t f = 0; f < n; f += step)
+    corners.push_back(vertices[f < na ? faces_a[f][0] : (*faces_b)[f - na][0]]);
+  return coordinate_median(corners);
 }
 
 // The faces of `items` (in leaf order) with their outward-rounded boxes relative to \p origin.

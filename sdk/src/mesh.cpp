@@ -180,6 +180,19 @@ Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& fac
   return lo / 2.0 + hi / 2.0;  // halves first: no overflow
 }
 
+Vec3 coordinate_median(const std::vector<Vec3>& points) {
+  if (points.empty()) return Vec3::Zero();
+  std::vector<double> x(points.size());
+  Vec3 m;
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < points.size(); ++i) x[i] = points[i][k];
+    const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+    std::nth_element(x.begin(), mid, x.end());
+    m[k] = *mid;
+  }
+  return m;
+}
+
 bool back_at_rest(const Vec3& p, const Vec3& rest, double scale) {
   return (p - rest).norm() <= 1e-12 * scale + 1e-14 * rest.cwiseAbs().maxCoeff();
 }

@@ -1685,23 +1685,15 @@ TriMesh read_stl(const std::string& name, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
-//! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid; in
-//! \p face (if given) the face it names first, or -1.
 // Where a face of ordinary edges is zero area only for the mesh's size (its longest edge \p edge
 // under 1e-4 of the diagonal \p diag, both scaled alike), the size likely comes from a stray
 // vertex: "; vertex V at (x, y, z) is the farthest from the others' median: an outlier?". Else "".
 std::string outlier_hint(const TriMesh& mesh, const std::vector<char>& used, double edge, double diag) {
   if (!(edge < 1e-4 * diag)) return "";
-  std::vector<double> x[3];
+  std::vector<Vec3> points;
   for (size_t v = 0; v < used.size(); ++v)
-    if (used[v])
-      for (int k = 0; k < 3; ++k) x[k].push_back(mesh.vertices[v][k]);
-  Vec3 median;
-  for (int k = 0; k < 3; ++k) {
-    auto mid = x[k].begin() + static_cast<std::ptrdiff_t>(x[k].size() / 2);
-    std::nth_element(x[k].begin(), mid, x[k].end());
-    median[k] = *mid;
-  }
+    if (used[v]) points.push_back(mesh.vertices[v]);
+  const Vec3 median = coordinate_median(points);
   size_t far = 0;
   double far_d = -1.0;
   for (size_t v = 0; v < used.size(); ++v)
@@ -1717,6 +1709,8 @@ std::string outlier_hint(const TriMesh& mesh, const std::vector<char>& used, dou
   return text;
 }
 
+//! Returns the first problem of \p mesh (without the name prefix), or "" if it is valid; in
+//! \p face (if given) the face it names first, or -1.
 std::string find_mesh_problem(const TriMesh& mesh, long long* face = nullptr) {
   long long ignored = -1;
   long long& at = face ? *face : ignored;

@@ -651,9 +651,12 @@ class VolumeReconstructor::Impl {
     return r;
   }
   // The caller's frames in the solver's numbering (held by \p copy if renumbered).
+  // The caller's frames in the solver's numbering, checked (their axes here only: the frames the
+  // reconstructor evaluates itself are orthonormal, and a drag step need not check them again).
   const BaseFrames& solver_frames(const BaseFrames& f, BaseFrames& copy) const {
-    if (renum_.empty()) return f;
     check_frames(f);
+    internal::check_frame_axes(f, "");
+    if (renum_.empty()) return f;
     copy = internal::to_new(renum_, f);
     return copy;
   }
@@ -978,7 +981,6 @@ class VolumeReconstructor::Impl {
       if (!fr.points[i].allFinite() || !fr.normals[i].allFinite() || !fr.tangents[i].allFinite())
         throw InvalidInput("base frame " + std::to_string(i) + " is not finite");
     check_coordinates(fr.points, "base frames:");
-    internal::check_frame_axes(fr, "");
   }
   template <class Pinned>
   void check_pinned_positions(const std::vector<Vec3>& pp, Pinned&& is_pinned) const {

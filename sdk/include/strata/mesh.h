@@ -119,6 +119,10 @@ double bbox_diagonal(const std::vector<Vec3>& points);
 //! so that a scan far from the origin (a georeferenced one) is treated as at it.
 //! \throw InvalidInput if a face index is out of range (check_face_indices()).
 Vec3 bbox_centre(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+//! The per-axis median of \p points (the upper middle value for an even count; the origin for no
+//! points): unlike the box centre, near most points whatever a few far ones do (a scan's stray
+//! vertex).
+Vec3 coordinate_median(const std::vector<Vec3>& points);
 
 //! Whether \p p is \p rest up to rounding: within 1e-12 of \p scale (a diagonal of the points
 //! it is one of) plus 1e-14 (about 45 units in the last place) of rest's largest coordinate. An

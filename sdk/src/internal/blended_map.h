@@ -46,18 +46,16 @@ class BlendedMap {
       if ((given.toRotationMatrix() - R).cwiseAbs().maxCoeff() <= 1e-9) rotation_ = given;
     }
   }
+  // Per point of a blend field: no EditTransform a point (the arithmetic before partial() came).
   Vec3 apply(const Vec3& x, double s) const {
     if (s == 1.0) return t_.apply(x);
-    const EditTransform p = partial(s);
-    return p.pivot + p.linear * (x - p.pivot) + p.translation;
+    return t_.pivot + rotation_at(s) * (stretch_at(s) * (x - t_.pivot)) + s * t_.translation;
   }
   // The blend with weight s as a transform (EditTransform::partial()).
   EditTransform partial(double s) const {
     if (s == 1.0) return t_;
     EditTransform p;
-    const Eigen::Matrix3d S = Eigen::Matrix3d::Identity() + s * (stretch_ - Eigen::Matrix3d::Identity());
-    const Eigen::AngleAxisd r(s * rotation_.angle(), rotation_.axis());
-    p.linear = r.toRotationMatrix() * S;
+    p.linear = rotation_at(s).toRotationMatrix() * stretch_at(s);
     p.translation = s * t_.translation;
     p.pivot = t_.pivot;
     p.rotation_axis = rotation_.axis();
@@ -66,6 +64,13 @@ class BlendedMap {
   }
 
  private:
+  Eigen::Matrix3d stretch_at(double s) const {
+    return Eigen::Matrix3d::Identity() + s * (stretch_ - Eigen::Matrix3d::Identity());
+  }
+  Eigen::AngleAxisd rotation_at(double s) const {
+    return Eigen::AngleAxisd(s * rotation_.angle(), rotation_.axis());
+  }
+
   EditTransform t_;
   Eigen::Matrix3d stretch_;
   Eigen::AngleAxisd rotation_;
