@@ -1362,6 +1362,13 @@ TEST(LayersFile, TheCagesRefinementBudgetRoundTrips) {
   layers::write_strata_container(old, tmp.file("negative.strata"));
   expect_rejected(tmp.file("negative.strata"), "max_refined_faces",
                   "'max_refined_faces' in band 0 is -1, outside");
+  // A budget over the cage's ceiling (4 times its default) is refused before any refinement: a
+  // crafted file's 2^30 let a 190 KB file take 4.5 GB.
+  j["bands"][0]["max_refined_faces"] = 1LL << 30;
+  old.model_json = j.dump();
+  layers::write_strata_container(old, tmp.file("huge.strata"));
+  expect_rejected(tmp.file("huge.strata"), "max_refined_faces 2^30",
+                  "max_refined_faces 1073741824 is above this cage's ceiling");
   bands[0].subdiv.max_refined_faces = bands[1].encoding.cage_options.max_refined_faces = 1LL << 40;
   try {
     LayeredModel::assemble(bands, camel.options(), camel.history());

@@ -650,6 +650,18 @@ TEST(Subdiv, RejectsBadCages) {
     EXPECT_NO_THROW(SubdivSurface(octa, sharp, deep));
     deep.max_refined_faces = -1;
     EXPECT_NE(msg(octa, sharp, deep).find("max_refined_faces"), std::string::npos);
+    // The budget is a bound on memory that a file may set, so it has a ceiling: 4 times the
+    // default (max(2^20, 512 x 24 corners) for the octahedron). At it, the level-4 cage builds.
+    deep.max_refined_faces = 4LL << 20;
+    EXPECT_NO_THROW(SubdivSurface(octa, sharp, deep));
+    deep.max_refined_faces = (4LL << 20) + 1;
+    EXPECT_NE(msg(octa, sharp, deep)
+                  .find("max_refined_faces 4194305 is above this cage's ceiling of 4194304 (4 times the "
+                        "default budget, max(2^20, 512 x its 24 face corners))"),
+              std::string::npos)
+        << msg(octa, sharp, deep);
+    deep.max_refined_faces = 1LL << 30;
+    EXPECT_NE(msg(octa, sharp, deep).find("above this cage's ceiling"), std::string::npos);
   }
   // Faces of over 64 corners and vertices in over 64 faces (a 300-corner face took 30 s): a prism
   // whose caps have k corners, and a bipyramid whose apexes are in k faces; 64 is accepted.

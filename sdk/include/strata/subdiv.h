@@ -67,7 +67,11 @@ struct SubdivOptions {
   //! creases on every edge refine nearly everywhere, 3 to 4 times the faces a level: a 400-face
   //! Loop cage so creased, isolated to level 10, took 4.5 GB. Levels up to 4 are not checked (they
   //! refine at once, as they always did); deeper ones are refined one at a time and refused once
-  //! past the budget, having taken at most about 4 times it.
+  //! past the budget, having taken at most about 4 times it. At most
+  //! SubdivSurface::kMaxRefinedFacesFactor times the default: a budget read from a file bounds
+  //! what reading it may take (4 times the default took 8.4 s and 962 MB on a 512-face Loop cage
+  //! creased everywhere, isolated to level 10; 2^30, allowed before, 27.5 s and 4.5 GB on a
+  //! 400-face one).
   long long max_refined_faces = 0;
 };
 
@@ -116,7 +120,8 @@ class SubdivSurface {
   //!        inconsistently oriented edge, a crease on a pair of vertices that is not a cage edge, a
   //!        corner on a missing vertex, a negative sharpness, an isolation level outside 1..10,
   //!        coordinates beyond kMaxCoordinate, a face of over kMaxCageValence corners or a
-  //!        vertex in over kMaxCageValence faces, or an isolation whose refinement exceeds
+  //!        vertex in over kMaxCageValence faces, a max_refined_faces below 0 or above
+  //!        kMaxRefinedFacesFactor times its default, or an isolation whose refinement exceeds
   //!        SubdivOptions::max_refined_faces.
   //! \throw SolverError if OpenSubdiv fails to build the topology or the patch table.
   explicit SubdivSurface(const PolyMesh& cage, const SubdivTags& tags = {},
@@ -128,6 +133,8 @@ class SubdivSurface {
   //! about the cube of either (measured: 64 took 0.07-0.33 s, 128 1-3.4 s, 200 5-16 s); a cage
   //! of a 300-corner face made a deform run 34 s. Modelling cages stay far below.
   static constexpr int kMaxCageValence = 64;
+  //! SubdivOptions::max_refined_faces is at most this many times its default for the cage.
+  static constexpr long long kMaxRefinedFacesFactor = 4;
   SubdivSurface& operator=(SubdivSurface&&) noexcept;
 
   //! Loop or CatmullClark (never Auto).
