@@ -435,6 +435,58 @@ class SubdivSurface::Impl {
     if (!std::isfinite(p.u) || !std::isfinite(p.v)) throw InvalidInput("limit point with non-finite (u, v)");
   }
 
+  // A Gregory end cap's interior points f+ and f- at each corner are blended by rational weights
+  // G(s, t) = N / D (N and D linear, the pair's G summing to 1). Debian's OpenSubdiv 3.5 is built
+  // without OPENSUBDIV_GREGORY_EVAL_TRUE_DERIVATIVES, so its derivative weights take G as
+  // constant; this adds the terms of G's own derivatives, making them the patch's true
+  // derivatives (they were up to 13% off on a cube cage with pentagons). The layout of the 20
+  // points and the G are those of Far's EvalBasisGregory; (u, v) is the ptex point, normalized
+  // here to the patch as EvaluateBasis does.
+  static void add_gregory_blend_derivatives(const Far::PatchParam& param, double s, double t, double* wDs,
+                                            double* wDt, double* wDss, double* wDst, double* wDtt) {
+    static constexpr int kPoint[8] = {3, 4, 8, 9, 13, 14, 18, 19};  // interior points
+    static constexpr int kCol[8] = {1, 1, 2, 2, 2, 2, 1, 1};        // their Bezier columns (s)
+    static constexpr int kRow[8] = {1, 1, 1, 1, 2, 2, 2, 2};        // and rows (t)
+    // N and D of each G, as value = c + cs s + ct t (sC = 1 - s, tC = 1 - t):
+    // G = s / (s + t), t / (s + t), t / (sC + t), sC / (sC + t), sC / (sC + tC), tC / (sC + tC),
+    //     tC / (s + tC), s / (s + tC).
+    static constexpr double kN[8][3] = {{0, 1, 0},  {0, 0, 1},  {0, 0, 1},  {1, -1, 0},
+                                        {1, -1, 0}, {1, 0, -1}, {1, 0, -1}, {0, 1, 0}};
+    static constexpr double kD[8][3] = {{0, 1, 1},   {0, 1, 1},   {1, -1, 1}, {1, -1, 1},
+                                        {2, -1, -1}, {2, -1, -1}, {1, 1, -1}, {1, 1, -1}};
+    param.Normalize(s, t);
+    const double scale = static_cast<double>(1 << param.GetDepth());
+    auto bezier = [](double x, double* b, double* db, double* ddb) {
+      const double xc = 1.0 - x;
+      b[0] = xc * xc * xc, b[1] = 3 * x * xc * xc, b[2] = 3 * x * x * xc, b[3] = x * x * x;
+      db[0] = -3 * xc * xc, db[1] = 3 * xc * (1 - 3 * x), db[2] = 3 * x * (2 - 3 * x), db[3] = 3 * x * x;
+      ddb[0] = 6 * xc, ddb[1] = 18 * x - 12, ddb[2] = 6 - 18 * x, ddb[3] = 6 * x;
+    };
+    double Bs[4], Bds[4], Bdss[4], Bt[4], Bdt[4], Bdtt[4];
+    bezier(s, Bs, Bds, Bdss);
+    bezier(t, Bt, Bdt, Bdtt);
+    for (int i = 0; i < 8; ++i) {
+      const double n = kN[i][0] + kN[i][1] * s + kN[i][2] * t;
+      const double d = kD[i][0] + kD[i][1] * s + kD[i][2] * t;
+      // At the patch corner where D = 0, OpenSubdiv takes G = N (= 0); the terms below vanish
+      // there with the Bezier weights, so they are left out.
+      if (!(d > 0)) continue;
+      // G = N / D with N, D linear: G_x = (N_x - D_x G) / D, G_xy = -(D_x G_y + D_y G_x) / D.
+      const double g = n / d;
+      const double gs = (kN[i][1] - kD[i][1] * g) / d, gt = (kN[i][2] - kD[i][2] * g) / d;
+      const double gss = -2 * kD[i][1] * gs / d, gtt = -2 * kD[i][2] * gt / d;
+      const double gst = -(kD[i][1] * gt + kD[i][2] * gs) / d;
+      const int k = kPoint[i], c = kCol[i], r = kRow[i];
+      wDs[k] += Bs[c] * Bt[r] * gs * scale;
+      wDt[k] += Bs[c] * Bt[r] * gt * scale;
+      if (wDss) {
+        wDss[k] += (2 * Bds[c] * gs + Bs[c] * gss) * Bt[r] * scale * scale;
+        wDst[k] += (Bds[c] * Bt[r] * gt + Bs[c] * Bdt[r] * gs + Bs[c] * Bt[r] * gst) * scale * scale;
+        wDtt[k] += (2 * Bdt[r] * gt + Bt[r] * gtt) * Bs[c] * scale * scale;
+      }
+    }
+  }
+
   // Basis weights at p (clamped into the domain) and the patch's point indices.
   Far::ConstIndexArray basis(const LimitPoint& p, double* wP, double* wDu, double* wDv, double* wDuu,
                              double* wDuv, double* wDvv) const {
@@ -444,6 +496,8 @@ class SubdivSurface::Impl {
     if (!h) throw SolverError("no limit patch at ptex face " + vtx(p.face));
     table_->EvaluateBasis(*h, u, v, wP, wDu, wDv, wDuu, wDuv, wDvv);
     const Far::ConstIndexArray cv = table_->GetPatchVertices(*h);
+    if (wDu && table_->GetPatchDescriptor(*h).GetType() == Far::PatchDescriptor::GREGORY_BASIS)
+      add_gregory_blend_derivatives(table_->GetPatchParam(*h), u, v, wDu, wDv, wDuu, wDuv, wDvv);
     // OpenSubdiv 3.5 negates the second derivatives of rotated triangle patches (the middle
     // triangle of a Loop split, parameterized backwards) along with the first ones; the chain rule
     // gives them a factor (-1)^2 = 1. Checked against finite differences in the tests.

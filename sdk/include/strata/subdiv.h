@@ -155,7 +155,8 @@ class SubdivSurface {
   const std::vector<Vec3>& control_points() const;
 
   //! The limit surface at \p p; (u, v) outside the domain are clamped into it. With
-  //! \p second_derivatives the sample also holds duu, duv, dvv.
+  //! \p second_derivatives the sample also holds duu, duv, dvv. The derivatives are the patches'
+  //! own, on Gregory end caps too (OpenSubdiv 3.5's leave out their blend weights' derivatives).
   //! \throw InvalidInput if p.face is out of range or u, v are not finite.
   LimitSample evaluate(const LimitPoint& p, bool second_derivatives = false) const;
 
