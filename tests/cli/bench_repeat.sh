@@ -2,6 +2,7 @@
 # strata_bench --repeat N: N reconstructions with one solver object, each run's time listed, the
 # reported times their median, the runs identical (else an error); a bad count is a usage error.
 # --min-run-seconds S: more runs past --repeat until their wall times add up to S (100 at most).
+# --rounds R: the sizes R times over, interleaved, each size's runs of all rounds taken together.
 # Usage: bash bench_repeat.sh <path-to-strata> <tests/data dir>
 set -euo pipefail
 STRATA=${1:?usage: bench_repeat.sh <path-to-strata> <tests/data dir>}
@@ -55,7 +56,37 @@ assert r["seconds"]["reconstruct"] == statistics.median(runs), (runs, r["seconds
 assert len(r["cpu_seconds"]["reconstruct_runs"]) == len(runs)
 PY
 
+# Two rounds of two sizes: the children run 2000, 3000, 2000, 3000; each size's runs are both
+# children's, its times their medians, and each child's own medians are listed.
+"$BENCH" --sizes 2000,3000 --jitter 0.4 --solver multigrid --repeat 2 --min-run-seconds 0 --rounds 2 \
+  --out "$TMP/rounds.json" >/dev/null 2>"$TMP/err" || fail "strata_bench --rounds 2 exited non-zero: $(cat "$TMP/err")"
+[ "$(grep -o 'size [0-9]* (bumps), round [12] of 2' "$TMP/err" | tr '\n' ' ')" = \
+  "size 2000 (bumps), round 1 of 2 size 3000 (bumps), round 1 of 2 size 2000 (bumps), round 2 of 2 size 3000 (bumps), round 2 of 2 " ] ||
+  fail "--rounds 2: the children did not run interleaved: $(grep 'round' "$TMP/err")"
+python3 - "$TMP/rounds.json" <<'PY' || fail "--rounds report check"
+import json, statistics, sys
+d = json.load(open(sys.argv[1]))
+assert d["rounds"] == 2, d["rounds"]
+for r in d["results"]:
+    runs = r["seconds"]["reconstruct_runs"]
+    assert r["runs"] == len(runs) == 4 and len(r["rounds"]) == 2, (r["runs"], runs, r["rounds"])
+    assert r["seconds"]["reconstruct"] == statistics.median(runs), (runs, r["seconds"]["reconstruct"])
+    assert len(r["seconds"]["solve_runs"]) == 4 and r["seconds"]["solve"] == statistics.median(r["seconds"]["solve_runs"])
+    assert r["cpu_seconds"]["reconstruct"] == statistics.median(r["cpu_seconds"]["reconstruct_runs"])
+    firsts = [c["first_reconstruction"] for c in r["rounds"]]
+    assert r["seconds"]["first_reconstruction"] == statistics.median(firsts), (firsts, r["seconds"])
+    assert r["memory"]["peak_rss_bytes"] == max(c["peak_rss_bytes"] for c in r["rounds"])
+    thr = r["throughput"]["prisms_per_second_per_multigrid_pass"]
+    assert abs(thr - r["prisms"] / r["seconds"]["solve"]) <= 1e-9 * thr, (thr, r["seconds"]["solve"])
+    assert r["targets"]["all"], r["targets"]
+PY
+
 set +e
+for bad in 0 -1 x 21 2x; do
+  err=$("$BENCH" --sizes 3000 --rounds "$bad" 2>&1 >/dev/null); rc=$?
+  [ "$rc" -eq 2 ] || fail "--rounds $bad exited $rc, expected 2"
+  grep -qF -- "--rounds is a whole number from 1 to 20, got '$bad'" <<<"$err" || fail "--rounds $bad: $err"
+done
 for bad in 0 -1 x 101 99999999999 2x; do
   err=$("$BENCH" --sizes 3000 --repeat "$bad" 2>&1 >/dev/null); rc=$?
   [ "$rc" -eq 2 ] || fail "--repeat $bad exited $rc, expected 2"

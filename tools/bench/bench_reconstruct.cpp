@@ -23,6 +23,11 @@
 // of three moved between 0.59 and 1.10 s from one benchmark run to the next), get a median of
 // more runs (on this project's 2-core VM, --repeat 3 at 1M already takes longer than 5 s). Keep S
 // well under --max-seconds, which kills a size's child with all its runs.
+// --rounds R (default 1): the whole sequence of sizes R times over, each size's child in turn
+// (10k, 100k, 1M, 10k, 100k, 1M, ...), and each size's runs of all rounds taken together: the
+// machine's speed drifts over minutes (the 100k median moved 0.62-0.85 s between runs of the
+// command), and a 1M child that runs long after its 100k one skews their ratio; interleaved, both
+// sizes sample the same stretch of time.
 
 #include <poll.h>
 #include <signal.h>
@@ -124,6 +129,7 @@ struct Args {
   int finest_volume_iterations = 0;  // 0: the options' own
   int repeat = 1;                    // reconstructions per size (--repeat)
   double min_run_seconds = 5.0;      // more runs until their wall times add up to this
+  int rounds = 1;                    // the size sequence this many times, interleaved (--rounds)
   bool help = false;
   ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
 };
@@ -203,6 +209,12 @@ Args parse_args(int argc, char** argv) {
       if (!read_whole(v, n) || n < 1 || n > 100)
         throw std::runtime_error("--repeat is a whole number from 1 to 100, got '" + v + "'");
       a.repeat = static_cast<int>(n);
+    } else if (opt == "--rounds") {
+      const std::string v = value(i);
+      long long n = 0;
+      if (!read_whole(v, n) || n < 1 || n > 20)
+        throw std::runtime_error("--rounds is a whole number from 1 to 20, got '" + v + "'");
+      a.rounds = static_cast<int>(n);
     } else if (opt == "--min-run-seconds") {
       const std::string v = value(i);
       if (!read_whole(v, a.min_run_seconds) || !(a.min_run_seconds >= 0 && a.min_run_seconds <= 3600))
@@ -297,6 +309,7 @@ json run_size(const Args& args, int size) {
   cpu["reconstruct"] = median(cpus);
   sec["frames"] = median(frame_secs);
   sec["solve"] = median(solves);
+  sec["solve_runs"] = solves;
   // The phases of the run whose solve took the median time (of an even count, the lower middle one).
   std::vector<std::size_t> order(solves.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -461,6 +474,57 @@ bool completed(const json* r) {
   return r && r->contains("prisms");
 }
 
+// One size's result from its children of every round (--rounds): the first child's, with the
+// runs of all of them together and the medians taken over those (the first reconstruction's over
+// the rounds), the largest peak memory, and `rounds` listing each child's own medians. A child
+// that failed, or whose results differ from the first's (the same solve in another process must
+// give the same errors, pairs and iteration counts), makes the size an error.
+json merge_rounds(std::vector<json>& rounds) {
+  json r = std::move(rounds.front());
+  if (rounds.size() == 1 || !completed(&r)) return r;
+  std::vector<double> wall, cpus, solves, firsts;
+  json per_round = json::array();
+  long long peak = 0;
+  for (std::size_t k = 0; k < rounds.size(); ++k) {
+    const json& c = k == 0 ? r : rounds[k];
+    if (!completed(&c)) return c;
+    if (c["accuracy"] != r["accuracy"] || c["intersections"] != r["intersections"] ||
+        c["stats"]["cg_iterations"] != r["stats"]["cg_iterations"])
+      return json{{"size", r["size"]},
+                  {"error", "round " + std::to_string(k + 1) + " gave other results than the first"}};
+    for (const json& x : c["seconds"]["reconstruct_runs"]) wall.push_back(x.get<double>());
+    for (const json& x : c["cpu_seconds"]["reconstruct_runs"]) cpus.push_back(x.get<double>());
+    for (const json& x : c["seconds"]["solve_runs"]) solves.push_back(x.get<double>());
+    firsts.push_back(c["seconds"]["first_reconstruction"].get<double>());
+    peak = std::max(peak, c["memory"]["peak_rss_bytes"].get<long long>());
+    per_round.push_back({{"reconstruct", c["seconds"]["reconstruct"]},
+                         {"first_reconstruction", c["seconds"]["first_reconstruction"]},
+                         {"setup", c["seconds"]["setup"]},
+                         {"runs", c["runs"]},
+                         {"peak_rss_bytes", c["memory"]["peak_rss_bytes"]}});
+  }
+  json& sec = r["seconds"];
+  sec["reconstruct_runs"] = wall;
+  sec["reconstruct"] = median(wall);
+  sec["solve_runs"] = solves;
+  const double old_solve = sec["solve"].get<double>();
+  sec["solve"] = median(solves);
+  sec["first_reconstruction"] = median(firsts);
+  r["cpu_seconds"]["reconstruct_runs"] = cpus;
+  r["cpu_seconds"]["reconstruct"] = median(cpus);
+  r["runs"] = wall.size();
+  r["rounds"] = per_round;
+  const double prisms = r["prisms"].get<double>();
+  r["memory"]["peak_rss_bytes"] = peak;
+  r["memory"]["whole_process_bytes_per_prism"] = static_cast<double>(peak) / prisms;
+  // The throughputs are per solve second: rescaled to the median over all rounds.
+  const double solve = sec["solve"].get<double>();
+  if (solve > 0 && old_solve > 0)
+    for (const char* key : {"constraint_updates_per_second", "prisms_per_second_per_multigrid_pass"})
+      r["throughput"][key] = r["throughput"][key].get<double>() * old_solve / solve;
+  return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -480,7 +544,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
       "[--shuffle SEED] [--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
-      "[--repeat N] [--min-run-seconds S] [--out FILE.json] [--max-seconds S]\n"
+      "[--repeat N] [--min-run-seconds S] [--rounds R] [--out FILE.json] [--max-seconds S]\n"
       "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
       "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
       "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
@@ -490,7 +554,9 @@ int main(int argc, char** argv) {
       "  --repeat N: N reconstructions per size with one solver object; times are their median, and\n"
       "    the runs must agree bit for bit\n"
       "  --min-run-seconds S: more runs past --repeat until their wall times add up to S seconds\n"
-      "    (default 5; at most 100 runs): a steadier median for the small sizes\n";
+      "    (default 5; at most 100 runs): a steadier median for the small sizes\n"
+      "  --rounds R: the sizes R times over, interleaved (a child per size and round); each size's\n"
+      "    times are the medians over the runs of all its rounds (default 1)\n";
   Args args;
   try {
     args = parse_args(argc, argv);
@@ -515,9 +581,19 @@ int main(int argc, char** argv) {
     const long long floor_prisms = floor["prisms"].get<long long>();
     json results = json::array();
     bool errors = false;
-    for (int size : args.sizes) {
-      std::cerr << "strata_bench: size " << size << " (" << cases::to_string(args.detail) << ")" << std::endl;
-      json r = run_forked(args, size);
+    // Each size's children, round by round (--rounds): the sizes interleaved, so that all of them
+    // sample the same stretch of the machine's drifting speed.
+    std::vector<std::vector<json>> children(args.sizes.size());
+    for (int round = 0; round < args.rounds; ++round)
+      for (std::size_t k = 0; k < args.sizes.size(); ++k) {
+        const int size = args.sizes[k];
+        std::cerr << "strata_bench: size " << size << " (" << cases::to_string(args.detail) << ")";
+        if (args.rounds > 1) std::cerr << ", round " << round + 1 << " of " << args.rounds;
+        std::cerr << std::endl;
+        children[k].push_back(run_forked(args, size));
+      }
+    for (std::vector<json>& rounds : children) {
+      json r = merge_rounds(rounds);
       if (completed(&r)) {
         json& m = r["memory"];
         const long long prisms = r["prisms"].get<long long>();
@@ -589,6 +665,7 @@ int main(int argc, char** argv) {
       {"benchmark", "strata_bench: volumetric reconstruction over the bent cylinder (paper, section 6)"},
           {"case", cases::to_string(args.detail)}, {"jitter", args.jitter}, {"shuffle", args.shuffle},
           {"sizes", args.sizes}, {"max_seconds", args.max_seconds}, {"min_run_seconds", args.min_run_seconds},
+          {"rounds", args.rounds},
           {"machine",
            {{"nproc", sysconf(_SC_NPROCESSORS_ONLN)},
             {"cpu_model", cpu_model()},
