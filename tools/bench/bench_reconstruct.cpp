@@ -203,18 +203,14 @@ Args parse_args(int argc, char** argv) {
       multigrid = v == "multigrid";
     } else if (opt == "--set") {
       sets.push_back(value(i));
-    } else if (opt == "--repeat") {
+    } else if (opt == "--repeat" || opt == "--rounds") {
       const std::string v = value(i);
+      const long long most = opt == "--repeat" ? 100 : 20;
       long long n = 0;
-      if (!read_whole(v, n) || n < 1 || n > 100)
-        throw std::runtime_error("--repeat is a whole number from 1 to 100, got '" + v + "'");
-      a.repeat = static_cast<int>(n);
-    } else if (opt == "--rounds") {
-      const std::string v = value(i);
-      long long n = 0;
-      if (!read_whole(v, n) || n < 1 || n > 20)
-        throw std::runtime_error("--rounds is a whole number from 1 to 20, got '" + v + "'");
-      a.rounds = static_cast<int>(n);
+      if (!read_whole(v, n) || n < 1 || n > most)
+        throw std::runtime_error(opt + " is a whole number from 1 to " + std::to_string(most) + ", got '" +
+                                 v + "'");
+      (opt == "--repeat" ? a.repeat : a.rounds) = static_cast<int>(n);
     } else if (opt == "--min-run-seconds") {
       const std::string v = value(i);
       if (!read_whole(v, a.min_run_seconds) || !(a.min_run_seconds >= 0 && a.min_run_seconds <= 3600))
