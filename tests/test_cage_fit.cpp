@@ -165,6 +165,25 @@ TEST(CageFit, RejectsBadInput) {
   // fit's SolverError, after the decimation had run).
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.subdiv.isolation_level = 0; })), InvalidInput);
   EXPECT_THROW(fit_cage(scan, with([](CageFitOptions& o) { o.subdiv.isolation_level = 11; })), InvalidInput);
+  // So is a refinement budget over the cage's ceiling (4 times its default), named up front; at
+  // the ceiling of a cage of 2 triangles fewer than the target, the fit runs.
+  try {
+    (void)fit_cage(scan, with([](CageFitOptions& o) {
+                     o.faces = 40;
+                     o.subdiv.max_refined_faces = SubdivSurface::max_refined_faces_ceiling(3 * 38) + 1;
+                   }));
+    ADD_FAILURE() << "a budget over the ceiling was taken";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("cage fit: subdiv.max_refined_faces 4194305 is above the ceiling of a "
+                                   "cage of 40 triangles, 4194304"),
+        std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(fit_cage(scan, with([](CageFitOptions& o) {
+                             o.faces = 40;
+                             o.subdiv.max_refined_faces = SubdivSurface::max_refined_faces_ceiling(3 * 38);
+                           })));
 }
 
 // The decimation, the cage fit and the builder do not depend on the scan's size: OpenMesh keeps

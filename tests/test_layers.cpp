@@ -1194,6 +1194,17 @@ TEST(LayersFile, OptionsAFileCannotHoldAreRefused) {
     EXPECT_NE(std::string(e.what()).find("max_refined_faces must be at most 2^30"), std::string::npos)
         << e.what();
   }
+  // Below that, over the cage's own ceiling: refused before the bands are built, as the caller's.
+  b.cage.subdiv.max_refined_faces = 1LL << 30;
+  try {
+    (void)LayeredModel::build(model.band(2).mesh, b);
+    ADD_FAILURE() << "built with a refinement budget over the cage's ceiling";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("build: the cage's max_refined_faces 1073741824 is above the ceiling"),
+        std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(LayersFile, SolverOptionsRoundTrip) {

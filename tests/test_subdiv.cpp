@@ -304,6 +304,16 @@ TEST(Subdiv, DerivativesNearExtraordinaryVerticesMatchFiniteDifferences) {
           }
       EXPECT_LE(worst1, 1e-7);
       EXPECT_LE(worst2, 1e-5);
+      // Next to a corner the blend's own derivatives grow like 1 / D^2: taken apart from the
+      // Bezier weights that vanish there, they overflowed into NaN second derivatives below
+      // u ~ 1e-154 (a review's finding).
+      for (int f = 0; f < s.num_ptex_faces(); ++f)
+        for (const auto& [u, v] :
+             {std::pair{1e-160, 1e-160}, {1e-200, 0.0}, {0.0, 1e-300}, {1e-300, 1e-300}}) {
+          const LimitSample x = s.evaluate({f, u, v}, true);
+          for (const Vec3& w : {x.position, x.du, x.dv, x.duu, x.duv, x.dvv})
+            ASSERT_TRUE(w.allFinite()) << "ptex " << f << " at (" << u << ", " << v << ")";
+        }
     }
   }
 }

@@ -509,7 +509,9 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
     throw InvalidInput("build: band_smoothing_steps must be 0 to 1000, not " +
                        std::to_string(o.band_smoothing_steps));
   check_model_options(o.model);
-  // The bound of assemble() and the reader: a larger budget built a model that did not read back.
+  // The file format's bound on counts: a larger budget built a model that did not read back. (The
+  // cage's own ceiling, SubdivSurface::max_refined_faces_ceiling(), is lower: below, once the
+  // cage's size is known.)
   if (o.cage.subdiv.max_refined_faces > (1LL << 30))
     throw InvalidInput("build: the cage's max_refined_faces must be at most 2^30, got " +
                        std::to_string(o.cage.subdiv.max_refined_faces));
@@ -522,6 +524,14 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   if (cage_faces >= scan_faces)
     throw InvalidInput("build: the scan has " + std::to_string(scan_faces) +
                        " faces, not more than the cage's " + std::to_string(cage_faces));
+  // Checked before the bands are built (fit_cage() checks it too, after them); the decimation
+  // ends within a collapse of the cage's target.
+  const long long ceiling = SubdivSurface::max_refined_faces_ceiling(3LL * std::max(cage_faces - 2, 1));
+  if (o.cage.subdiv.max_refined_faces > ceiling)
+    throw InvalidInput("build: the cage's max_refined_faces " +
+                       std::to_string(o.cage.subdiv.max_refined_faces) +
+                       " is above the ceiling of a cage of " + std::to_string(cage_faces) + " triangles, " +
+                       std::to_string(ceiling) + " (SubdivSurface::max_refined_faces_ceiling())");
   LayeredModel model;
   Impl& m = *model.impl_;
   m.options = o.model;
@@ -686,7 +696,7 @@ LayeredModel LayeredModel::assemble_parts(std::vector<Band> bands, ModelOptions 
   // The scheme is stored by name: Auto (or a cast integer) wrote a file the reader refused.
   if (bands[0].subdiv.scheme != SubdivScheme::Loop && bands[0].subdiv.scheme != SubdivScheme::CatmullClark)
     throw InvalidInput("band 0: the cage's scheme must be loop or catmull-clark (not auto)");
-  // The reader's bound (a budget past it cannot be met in memory anyway).
+  // The reader's bound on counts (the cage's own ceiling is checked as its surface is built below).
   if (bands[0].subdiv.max_refined_faces > (1LL << 30))
     throw InvalidInput("band 0: the cage's max_refined_faces must be at most 2^30, got " +
                        std::to_string(bands[0].subdiv.max_refined_faces));

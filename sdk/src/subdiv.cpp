@@ -212,7 +212,7 @@ class SubdivSurface::Impl {
                          std::to_string(opt_.max_refined_faces));
     // A budget is a memory bound a file can set: 2^30 let a 190 KB cage file take 4.5 GB and
     // 27.5 s. Four times the default covers isolation level 6 on a cage creased everywhere.
-    const long long ceiling = kMaxRefinedFacesFactor * default_budget();
+    const long long ceiling = max_refined_faces_ceiling(face_corners());
     if (opt_.max_refined_faces > ceiling)
       throw InvalidInput("max_refined_faces " + std::to_string(opt_.max_refined_faces) +
                          " is above this cage's ceiling of " + std::to_string(ceiling) + " (" +
@@ -227,7 +227,9 @@ class SubdivSurface::Impl {
     return corners;
   }
   // SubdivOptions::max_refined_faces' default (0) for this cage.
-  long long default_budget() const { return std::max<long long>(1 << 20, 512 * face_corners()); }
+  long long default_budget() const {
+    return max_refined_faces_ceiling(face_corners()) / kMaxRefinedFacesFactor;
+  }
 
   // The adaptive refinement. Up to level 4 as before, at once and unchecked. Deeper, one level at
   // a time, refused once the faces pass SubdivOptions::max_refined_faces: each level has at most
@@ -468,21 +470,25 @@ class SubdivSurface::Impl {
     for (int i = 0; i < 8; ++i) {
       const double n = kN[i][0] + kN[i][1] * s + kN[i][2] * t;
       const double d = kD[i][0] + kD[i][1] * s + kD[i][2] * t;
-      // At the patch corner where D = 0, OpenSubdiv takes G = N (= 0); the terms below vanish
-      // there with the Bezier weights, so they are left out.
+      // At the patch corner where D = 0, OpenSubdiv takes G = N (= 0) and these terms are left
+      // out: the first derivatives' vanish there; the second derivatives' limit depends on the
+      // direction of approach (a Gregory patch's), so OpenSubdiv's value stands.
       if (!(d > 0)) continue;
-      // G = N / D with N, D linear: G_x = (N_x - D_x G) / D, G_xy = -(D_x G_y + D_y G_x) / D.
+      // G = N / D with N, D linear: G_x = a_x / D with a_x = N_x - D_x G, and
+      // G_xy = -(D_x a_y + D_y a_x) / D^2. The point's Bezier weights vanish linearly where D does
+      // (its corner), so Bs / D and Bt / D stay below 3: taken as such, no term overflows however
+      // close to the corner (G_ss alone overflowed below u ~ 1e-154).
       const double g = n / d;
-      const double gs = (kN[i][1] - kD[i][1] * g) / d, gt = (kN[i][2] - kD[i][2] * g) / d;
-      const double gss = -2 * kD[i][1] * gs / d, gtt = -2 * kD[i][2] * gt / d;
-      const double gst = -(kD[i][1] * gt + kD[i][2] * gs) / d;
+      const double as = kN[i][1] - kD[i][1] * g, at = kN[i][2] - kD[i][2] * g;
       const int k = kPoint[i], c = kCol[i], r = kRow[i];
-      wDs[k] += Bs[c] * Bt[r] * gs * scale;
-      wDt[k] += Bs[c] * Bt[r] * gt * scale;
+      const double bs = Bs[c] / d, bt = Bt[r] / d;  // at most 3
+      wDs[k] += bs * Bt[r] * as * scale;
+      wDt[k] += bs * Bt[r] * at * scale;
       if (wDss) {
-        wDss[k] += (2 * Bds[c] * gs + Bs[c] * gss) * Bt[r] * scale * scale;
-        wDst[k] += (Bds[c] * Bt[r] * gt + Bs[c] * Bdt[r] * gs + Bs[c] * Bt[r] * gst) * scale * scale;
-        wDtt[k] += (2 * Bdt[r] * gt + Bt[r] * gtt) * Bs[c] * scale * scale;
+        const double s2 = scale * scale;
+        wDss[k] += 2 * (Bds[c] * bt - kD[i][1] * bs * bt) * as * s2;
+        wDst[k] += (Bds[c] * bt * at + bs * Bdt[r] * as - bs * bt * (kD[i][1] * at + kD[i][2] * as)) * s2;
+        wDtt[k] += 2 * (Bdt[r] * bs - kD[i][2] * bs * bt) * at * s2;
       }
     }
   }
@@ -718,6 +724,10 @@ class SubdivSurface::Impl {
 SubdivSurface::SubdivSurface(const PolyMesh& cage, const SubdivTags& tags, const SubdivOptions& options)
     : impl_(std::make_unique<Impl>(cage, tags, options)) {}
 SubdivSurface::~SubdivSurface() = default;
+
+long long SubdivSurface::max_refined_faces_ceiling(long long face_corners) {
+  return kMaxRefinedFacesFactor * std::max<long long>(1 << 20, 512 * face_corners);
+}
 SubdivSurface::SubdivSurface(SubdivSurface&&) noexcept = default;
 SubdivSurface& SubdivSurface::operator=(SubdivSurface&&) noexcept = default;
 

@@ -135,6 +135,9 @@ class SubdivSurface {
   static constexpr int kMaxCageValence = 64;
   //! SubdivOptions::max_refined_faces is at most this many times its default for the cage.
   static constexpr long long kMaxRefinedFacesFactor = 4;
+  //! The largest SubdivOptions::max_refined_faces a cage of \p face_corners face corners takes:
+  //! kMaxRefinedFacesFactor times the default, max(2^20, 512 x face_corners).
+  static long long max_refined_faces_ceiling(long long face_corners);
   SubdivSurface& operator=(SubdivSurface&&) noexcept;
 
   //! Loop or CatmullClark (never Auto).
