@@ -1200,9 +1200,9 @@ TEST(LayersFile, OptionsAFileCannotHoldAreRefused) {
     (void)LayeredModel::build(model.band(2).mesh, b);
     ADD_FAILURE() << "built with a refinement budget over the cage's ceiling";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("build: the cage's max_refined_faces 1073741824 is above the ceiling"),
-        std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(
+                  "build: cage fit: subdiv.max_refined_faces 1073741824 is above the ceiling"),
+              std::string::npos)
         << e.what();
   }
 }

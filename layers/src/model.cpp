@@ -510,8 +510,8 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
                        std::to_string(o.band_smoothing_steps));
   check_model_options(o.model);
   // The file format's bound on counts: a larger budget built a model that did not read back. (The
-  // cage's own ceiling, SubdivSurface::max_refined_faces_ceiling(), is lower: below, once the
-  // cage's size is known.)
+  // cage's own ceiling, SubdivSurface::max_refined_faces_ceiling(), is lower: below, with the
+  // cage's other fit options.)
   if (o.cage.subdiv.max_refined_faces > (1LL << 30))
     throw InvalidInput("build: the cage's max_refined_faces must be at most 2^30, got " +
                        std::to_string(o.cage.subdiv.max_refined_faces));
@@ -524,14 +524,14 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   if (cage_faces >= scan_faces)
     throw InvalidInput("build: the scan has " + std::to_string(scan_faces) +
                        " faces, not more than the cage's " + std::to_string(cage_faces));
-  // Checked before the bands are built (fit_cage() checks it too, after them); the decimation
-  // ends within a collapse of the cage's target.
-  const long long ceiling = SubdivSurface::max_refined_faces_ceiling(3LL * std::max(cage_faces - 2, 1));
-  if (o.cage.subdiv.max_refined_faces > ceiling)
-    throw InvalidInput("build: the cage's max_refined_faces " +
-                       std::to_string(o.cage.subdiv.max_refined_faces) +
-                       " is above the ceiling of a cage of " + std::to_string(cage_faces) + " triangles, " +
-                       std::to_string(ceiling) + " (SubdivSurface::max_refined_faces_ceiling())");
+  // The cage's fit options, checked before the bands are built (fit_cage() checks them after).
+  CageFitOptions co = o.cage;
+  co.faces = cage_faces;
+  try {
+    check_cage_fit_options(co, scan_faces);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string("build: ") + e.what());
+  }
   LayeredModel model;
   Impl& m = *model.impl_;
   m.options = o.model;
@@ -560,8 +560,6 @@ LayeredModel LayeredModel::build(const TriMesh& scan, const BuildOptions& o) {
   }
   // Band 0: a cage fitted to band 1 (the smoothest triangle band).
   progress("cage", 0.5);
-  CageFitOptions co = o.cage;
-  co.faces = cage_faces;
   const CageFit fit = fit_cage(m.bands[1].mesh, co);
   m.bands[0].cage = fit.cage;
   m.bands[0].subdiv = co.subdiv;

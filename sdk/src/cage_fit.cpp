@@ -139,7 +139,7 @@ CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options);
 }  // namespace
 
 CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
-  check_options(options);
+  check_cage_fit_options(options, scan.num_faces());
   validate_mesh(scan, "scan");
   check_coordinates(scan.vertices, "scan");
   check_extent(scan.vertices, scan.faces, "scan");
@@ -152,6 +152,20 @@ CageFit fit_cage(const TriMesh& scan, const CageFitOptions& options) {
   CageFit fit = fit_centred(centred, options);
   for (Vec3& p : fit.cage.vertices) p += centre;
   return fit;
+}
+
+void check_cage_fit_options(const CageFitOptions& options, int scan_faces) {
+  check_options(options);
+  // The caller's refinement budget against the cage's ceiling, before the work (the cage's
+  // SubdivSurface would refuse it after the decimation, as the fit's failure). The decimation
+  // ends within a collapse of the target, so the ceiling of 2 triangles fewer is the cage's or less.
+  const int target = default_cage_faces(options, scan_faces);
+  const long long ceiling = SubdivSurface::max_refined_faces_ceiling(3LL * std::max(target - 2, 1));
+  if (options.subdiv.max_refined_faces > ceiling)
+    throw InvalidInput("cage fit: subdiv.max_refined_faces " +
+                       std::to_string(options.subdiv.max_refined_faces) +
+                       " is above the ceiling of a cage of " + std::to_string(target) + " triangles, " +
+                       std::to_string(ceiling) + " (SubdivSurface::max_refined_faces_ceiling())");
 }
 
 int default_cage_faces(const CageFitOptions& options, int scan_faces) {
@@ -167,15 +181,6 @@ CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
   if (target > scan.num_faces())
     throw InvalidInput("cage fit: the scan has " + std::to_string(scan.num_faces()) +
                        " faces, fewer than the cage's " + std::to_string(target));
-  // The caller's refinement budget against the cage's ceiling, before the work (the cage's
-  // SubdivSurface would refuse it after the decimation, as the fit's failure). The decimation
-  // ends within a collapse of the target, so the ceiling of 2 triangles fewer is the cage's or less.
-  const long long ceiling = SubdivSurface::max_refined_faces_ceiling(3LL * std::max(target - 2, 1));
-  if (options.subdiv.max_refined_faces > ceiling)
-    throw InvalidInput("cage fit: subdiv.max_refined_faces " +
-                       std::to_string(options.subdiv.max_refined_faces) +
-                       " is above the ceiling of a cage of " + std::to_string(target) + " triangles, " +
-                       std::to_string(ceiling) + " (SubdivSurface::max_refined_faces_ceiling())");
   CageFit fit;
   auto t0 = Clock::now();
   const std::vector<Vec3> smooth = taubin_smooth(scan, options.smoothing_steps);

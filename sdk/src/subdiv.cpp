@@ -31,6 +31,11 @@ namespace Sdc = OpenSubdiv::Sdc;
 
 namespace {
 
+// SubdivOptions::max_refined_faces' default (0) for a cage of \p face_corners corners.
+long long default_refined_faces(long long face_corners) {
+  return std::max<long long>(1 << 20, 512 * face_corners);
+}
+
 // A point type for OpenSubdiv's stencil updates (Clear / AddWithWeight).
 struct P3 {
   double x[3];
@@ -227,9 +232,7 @@ class SubdivSurface::Impl {
     return corners;
   }
   // SubdivOptions::max_refined_faces' default (0) for this cage.
-  long long default_budget() const {
-    return max_refined_faces_ceiling(face_corners()) / kMaxRefinedFacesFactor;
-  }
+  long long default_budget() const { return default_refined_faces(face_corners()); }
 
   // The adaptive refinement. Up to level 4 as before, at once and unchecked. Deeper, one level at
   // a time, refused once the faces pass SubdivOptions::max_refined_faces: each level has at most
@@ -726,7 +729,7 @@ SubdivSurface::SubdivSurface(const PolyMesh& cage, const SubdivTags& tags, const
 SubdivSurface::~SubdivSurface() = default;
 
 long long SubdivSurface::max_refined_faces_ceiling(long long face_corners) {
-  return kMaxRefinedFacesFactor * std::max<long long>(1 << 20, 512 * face_corners);
+  return kMaxRefinedFacesFactor * default_refined_faces(face_corners);
 }
 SubdivSurface::SubdivSurface(SubdivSurface&&) noexcept = default;
 SubdivSurface& SubdivSurface::operator=(SubdivSurface&&) noexcept = default;

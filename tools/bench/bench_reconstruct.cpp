@@ -503,7 +503,6 @@ json merge_rounds(std::vector<json>& rounds) {
   sec["reconstruct_runs"] = wall;
   sec["reconstruct"] = median(wall);
   sec["solve_runs"] = solves;
-  const double old_solve = sec["solve"].get<double>();
   sec["solve"] = median(solves);
   sec["first_reconstruction"] = median(firsts);
   r["cpu_seconds"]["reconstruct_runs"] = cpus;
@@ -513,11 +512,12 @@ json merge_rounds(std::vector<json>& rounds) {
   const double prisms = r["prisms"].get<double>();
   r["memory"]["peak_rss_bytes"] = peak;
   r["memory"]["whole_process_bytes_per_prism"] = static_cast<double>(peak) / prisms;
-  // The throughputs are per solve second: rescaled to the median over all rounds.
-  const double solve = sec["solve"].get<double>();
-  if (solve > 0 && old_solve > 0)
-    for (const char* key : {"constraint_updates_per_second", "prisms_per_second_per_multigrid_pass"})
-      r["throughput"][key] = r["throughput"][key].get<double>() * old_solve / solve;
+  // The throughputs, as run_size() defines them, over the median solve of all rounds (the solve
+  // phases stay the first round's median run's).
+  const double solve = std::max(sec["solve"].get<double>(), 1e-300);
+  json& thr = r["throughput"];
+  thr["constraint_updates_per_second"] = r["stats"]["constraint_updates"].get<double>() / solve;
+  thr["prisms_per_second_per_multigrid_pass"] = prisms * thr["finest_passes"].get<double>() / solve;
   return r;
 }
 

@@ -51,6 +51,13 @@ struct CageFitOptions {
 //! gets a cage four times coarser than itself instead of one as fine as itself.
 int default_cage_faces(const CageFitOptions& options, int scan_faces);
 
+//! Checks \p options as fit_cage() does before any work, for a scan of \p scan_faces faces: the
+//! ranges of its fields, and a subdiv.max_refined_faces within the ceiling
+//! (SubdivSurface::max_refined_faces_ceiling()) of a cage of default_cage_faces() triangles. For
+//! callers that fit a cage after other work (LayeredModel::build()).
+//! \throw InvalidInput naming the first field out of range.
+void check_cage_fit_options(const CageFitOptions& options, int scan_faces);
+
 //! The fitted cage and its measured fitting error.
 struct CageFit {
   PolyMesh cage;  //!< triangles, counter-clockwise like the scan
