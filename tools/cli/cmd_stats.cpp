@@ -16,6 +16,9 @@ namespace {
 struct StatsCmdOptions {
   std::string mesh;
   bool json = false;
+  //! Exact triangle-pair tests of the self-intersection search at most; 0: the tools' bound,
+  //! bounded_intersection_options() (50 million + 200 per face).
+  long long max_tests = 0;
 };
 
 //! Undirected edges used by exactly one face.
@@ -39,8 +42,9 @@ int run_stats(const StatsCmdOptions& o) {
   const NamedMesh m = read_named_mesh(o.mesh);
   const std::size_t boundary = count_boundary_edges(m.mesh);
   Stopwatch sw;
-  const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces,
-                                                           bounded_intersection_options(m.mesh.faces.size()));
+  IntersectionOptions search = bounded_intersection_options(m.mesh.faces.size());
+  if (o.max_tests > 0) search.max_tests = static_cast<std::size_t>(o.max_tests);
+  const IntersectionResult isect = find_self_intersections(m.mesh.vertices, m.mesh.faces, search);
   const double isect_seconds = sw.seconds();
   if (isect.truncated) std::cerr << "strata: warning: " << cut_short_text(isect, m.name) << std::endl;
   json r{{"mesh", m.name},
@@ -91,6 +95,13 @@ Subcommand register_stats(CLI::App& parent) {
       "stats", "Print a mesh's size, boundary, extent, volume and self-intersecting triangle pairs");
   app->add_option("mesh", o->mesh, "Mesh file (.obj, .off, .ply, .stl)")->required();
   app->add_flag("--json", o->json, "Print the statistics as JSON");
+  // Why: a pipeline that checks many scans bounds each search's time (a search cut short gives a
+  // lower bound and a warning, as at the default bound).
+  app->add_option("--max-intersection-tests", o->max_tests,
+                  "Exact triangle-pair tests of the self-intersection search at most; past them the "
+                  "count is a lower bound, with a warning (0: 50 million + 200 per face)")
+      ->check(in_range(0, 1e15))
+      ->capture_default_str();
   return {app, [o] { return run_stats(*o); }};
 }
 
