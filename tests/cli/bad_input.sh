@@ -243,8 +243,8 @@ for m in sheared combs; do
     echo "FAIL [quadratic $m]: no lower bound or no warning" >&2; cat stdout.txt stderr.txt >&2; failures=$((failures + 1))
   fi
 done
-# --max-intersection-tests bounds the search: cut short within a batch of tests per thread past
-# the budget (4,096; the tools use two threads at most here), with the warning and a lower bound.
+# --max-intersection-tests bounds the search: cut short within a batch of 4,096 tests per thread
+# past the budget (the check allows 64 threads), with the warning and a lower bound.
 rc=0
 "$STRATA" stats --json --max-intersection-tests 100000 sheared.off >stdout.txt 2>stderr.txt || rc=$?
 if [ "$rc" -ne 0 ] || ! grep -q "sheared.off: the self-intersection search stopped after" stderr.txt ||
