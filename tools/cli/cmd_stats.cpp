@@ -100,7 +100,7 @@ Subcommand register_stats(CLI::App& parent) {
   app->add_option("--max-intersection-tests", o->max_tests,
                   "Exact triangle-pair tests of the self-intersection search at most; past them the "
                   "count is a lower bound, with a warning (0: 50 million + 200 per face)")
-      ->check(in_range(0, 1e15))
+      ->check(in_range(0, 1e12))
       ->capture_default_str();
   return {app, [o] { return run_stats(*o); }};
 }
