@@ -1,4 +1,7 @@
-import random, subprocess, sys, os, re, time
+import os, random, re, sys
+
+from common import Tally, remove
+
 # mesh_fuzz.py <strata> <cases> <seed>: mutated copies of mesh_seeds.py's files, `strata stats` on each.
 BIN=sys.argv[1]; N=int(sys.argv[2]); seed=int(sys.argv[3])
 rng=random.Random(seed)
@@ -32,22 +35,11 @@ def mutate(d):
   if k==5 and len(d)>2:
     i=rng.randrange(len(d)); j=rng.randrange(len(d)); return bytes(d[:i]+d[j:])
   return bytes(d)
-bad=0
+tally = Tally()
 for it in range(N):
   src=rng.choice(srcs); d=open(src,'rb').read()
   for _ in range(rng.randint(1,3)): d=mutate(d)
-  ext=os.path.splitext(src)[1]
-  fn='case_%d_%d%s'%(seed,it,ext)
+  fn='case_%d_%d%s'%(seed,it,os.path.splitext(src)[1])
   open(fn,'wb').write(d)
-  t=time.time()
-  try:
-    p=subprocess.run([BIN,'stats',fn],capture_output=True,timeout=60,env=dict(os.environ,ASAN_OPTIONS='detect_leaks=1:exitcode=86',UBSAN_OPTIONS='print_stacktrace=1:exitcode=87'))
-    rc=p.returncode; err=p.stderr
-  except subprocess.TimeoutExpired:
-    rc='timeout'; err=b''
-  dt=time.time()-t
-  if rc not in (0,1,2) or dt>20:
-    bad+=1; print('BAD',fn,rc,'%.1fs'%dt,err[-600:].decode(errors='replace').replace('\n',' | ')[:600]); sys.stdout.flush()
-  else:
-    os.remove(fn)
-print('done',N,'bad',bad)
+  if tally.run('stats', fn, [BIN,'stats',fn], slow=20): remove(fn)
+tally.summary(N)

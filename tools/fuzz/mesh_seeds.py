@@ -1,6 +1,6 @@
 # mesh_seeds.py: a level-1 icosphere as OBJ, OFF, ASCII and binary PLY, ASCII and binary STL.
-import struct, math, random
-# a small closed mesh: an icosphere level 1
+import math, struct
+
 t=(1+5**0.5)/2
 V=[(-1,t,0),(1,t,0),(-1,-t,0),(1,-t,0),(0,-1,t),(0,1,t),(0,-1,-t),(0,1,-t),(t,0,-1),(t,0,1),(-t,0,-1),(-t,0,1)]
 F=[(0,11,5),(0,5,1),(0,1,7),(0,7,10),(0,10,11),(1,5,9),(5,11,4),(11,10,2),(10,7,6),(7,1,8),(3,9,4),(3,4,2),(3,2,6),(3,6,8),(3,8,9),(4,9,5),(2,4,11),(6,2,10),(8,6,7),(9,8,1)]

@@ -1,6 +1,10 @@
-import random, subprocess, sys, os, re, time, json, struct, zlib
+import json, os, random, struct, sys, zlib
+
+from common import Tally, remove
+
 # strata_fuzz.py <strata> <cases> <seed> <model.strata> [opt]: mutated models, rewritten with valid
-# CRC-32s; `strata info` and `export` on each, or with opt the options only, `info` and `edit`.
+# CRC-32s; `strata info` and `export` on each, or with opt the options only, `info` and `edit`
+# (camel_edit.json, a band-0 move of the camel's cage).
 BIN=sys.argv[1]; N=int(sys.argv[2]); seed=int(sys.argv[3]); src=sys.argv[4]; OPT=len(sys.argv)>5
 rng=random.Random(seed)
 d=open(src,'rb').read()
@@ -37,7 +41,8 @@ def setp(x,p,v):
   if v is KeyError:
     del x[p[-1]]
   else: x[p[-1]]=v
-bad=0; hist={}
+tally = Tally()
+EDIT = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'camel_edit.json')
 for it in range(N):
   model=json.loads(json.dumps(hdr['model'])); s2=dict(secs); o2=list(order)
   for _ in range(rng.randint(1,3)):
@@ -72,18 +77,8 @@ for it in range(N):
       if rng.random()<0.5: o2.remove(n); del s2[n]
       else: o2.append(n+'x'); s2[n+'x']=s2[n]
   fn='s_%d_%d.strata'%(seed,it); open(fn,'wb').write(pack(model,s2,o2))
-  for cmd in ((['info',fn],['edit',fn,'--band','0','--edit','cedit.json','-o','x_%d.strata'%seed,'-q']) if OPT else (['info',fn],['export',fn,'-o','x_%d.obj'%seed])):
-    t=time.time()
-    try:
-      p=subprocess.run([BIN]+cmd,capture_output=True,timeout=300,env=dict(os.environ,ASAN_OPTIONS='detect_leaks=1:exitcode=86',UBSAN_OPTIONS='print_stacktrace=1:exitcode=87'))
-      rc=p.returncode; err=p.stderr
-    except subprocess.TimeoutExpired:
-      rc='timeout'; err=b''
-    dt=time.time()-t; hist[(cmd[0],rc)]=hist.get((cmd[0],rc),0)+1
-    if rc not in (0,1,2) or dt>120:
-      bad+=1; print('BAD',fn,cmd[0],rc,'%.1fs'%dt,err[-800:].decode(errors='replace').replace('\n',' | ')); sys.stdout.flush(); break
-  else:
-    os.remove(fn)
-  for xf in ('x_%d.obj'%seed,'x_%d.strata'%seed):
-    if os.path.exists(xf): os.remove(xf)
-print('done',N,'bad',bad,hist)
+  out = 'x_%d.strata' % seed if OPT else 'x_%d.obj' % seed
+  second = ['edit',fn,'--band','0','--edit',EDIT,'-o',out,'-q'] if OPT else ['export',fn,'-o',out]
+  if all(tally.run(c[0], fn, [BIN]+c, slow=120, output=out) for c in (['info',fn], second)): remove(fn)
+  remove(out)
+tally.summary(N)
