@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cfloat>
 #include <climits>
 #include <cmath>
 #include <limits>
@@ -56,19 +55,23 @@ float round_up(double x) {
   return f;
 }
 
+// S: float, or double where float boxes would be loose (search_pairs()).
+template <class S>
 struct Box {
-  float lo[3];
-  float hi[3];
+  S lo[3];
+  S hi[3];
 };
 
 // Closed intervals: boxes that merely touch overlap, so touching triangles are not pruned.
-inline bool overlap(const Box& a, const Box& b) {
+template <class S>
+inline bool overlap(const Box<S>& a, const Box<S>& b) {
   return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] &&
          a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
 }
 
-Box merge(const Box& a, const Box& b) {
-  Box m;
+template <class S>
+Box<S> merge(const Box<S>& a, const Box<S>& b) {
+  Box<S> m;
   for (int k = 0; k < 3; ++k) {
     m.lo[k] = std::min(a.lo[k], b.lo[k]);
     m.hi[k] = std::max(a.hi[k], b.hi[k]);
@@ -77,29 +80,33 @@ Box merge(const Box& a, const Box& b) {
 }
 
 // One non-degenerate face with its box, stored in leaf order so that a leaf's triangles are contiguous.
+template <class S>
 struct Prim {
-  Box box;
+  Box<S> box;
   std::array<int, 3> v;
   int face;  // index in the caller's face list
 };
 
 // A face as the build sees it: centroid and face index only (16 bytes), so that the median
 // selections move little memory. face == -1 marks a degenerate face before compaction.
+template <class S>
 struct Item {
-  float c[3];
+  S c[3];
   int face;
 };
 
 // Depth-first layout: an internal node (count == 0) has its left child right after it and its right
 // child at `index`; a leaf owns prims [index, index + count). A node over m triangles splits them
 // m/2 | m - m/2, so subtree sizes need not be stored.
+template <class S>
 struct Node {
-  Box box;
+  Box<S> box;
   int index;
   int count;
 };
 
-inline bool share_vertex(const Prim& p, const Prim& q) {
+template <class S>
+inline bool share_vertex(const Prim<S>& p, const Prim<S>& q) {
   for (int a : p.v)
     if (a == q.v[0] || a == q.v[1] || a == q.v[2]) return true;
   return false;
@@ -158,9 +165,10 @@ bool separated(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, c
 
 // Median-split BVH topology over the items, built top-down (in parallel for large subtrees). On
 // return the items are in leaf order; boxes are filled in afterwards by fit_boxes().
+template <class S>
 class BvhBuilder {
  public:
-  BvhBuilder(std::vector<Item>& items, std::vector<Node>& nodes) : items_(items), nodes_(nodes) {}
+  BvhBuilder(std::vector<Item<S>>& items, std::vector<Node<S>>& nodes) : items_(items), nodes_(nodes) {}
 
   void build() {
     if (items_.empty()) return;
@@ -182,14 +190,15 @@ class BvhBuilder {
   std::size_t nodes_of(std::size_t m) const { return m <= kLeafSize ? 1 : memo_.at(m); }
 
   void split(std::size_t node, std::size_t b, std::size_t e) {
-    Node& nd = nodes_[node];
+    Node<S>& nd = nodes_[node];
     if (e - b <= kLeafSize) {
       nd.index = static_cast<int>(b);
       nd.count = static_cast<int>(e - b);
       return;
     }
     // Split at the median centroid along the axis where the centroids spread most.
-    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    constexpr S kMax = std::numeric_limits<S>::max();
+    S lo[3] = {kMax, kMax, kMax}, hi[3] = {-kMax, -kMax, -kMax};
     for (std::size_t i = b; i < e; ++i)
       for (int k = 0; k < 3; ++k) {
         lo[k] = std::min(lo[k], items_[i].c[k]);
@@ -200,7 +209,7 @@ class BvhBuilder {
       if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
     const std::size_t mid = b + (e - b) / 2;
     std::nth_element(items_.begin() + b, items_.begin() + mid, items_.begin() + e,
-                     [axis](const Item& p, const Item& q) { return p.c[axis] < q.c[axis]; });
+                     [axis](const Item<S>& p, const Item<S>& q) { return p.c[axis] < q.c[axis]; });
 
     const std::size_t left = node + 1, right = node + 1 + nodes_of(mid - b);
     if (e - b > kParallelGrain)
@@ -213,16 +222,17 @@ class BvhBuilder {
     nd.count = 0;
   }
 
-  std::vector<Item>& items_;
-  std::vector<Node>& nodes_;
+  std::vector<Item<S>>& items_;
+  std::vector<Node<S>>& nodes_;
   std::map<std::size_t, std::size_t> memo_;
 };
 
 // Bottom-up boxes: children come after their parent in the depth-first layout, so one backward
 // sweep sees every child before its parent.
-void fit_boxes(std::vector<Node>& nodes, const std::vector<Prim>& prims) {
+template <class S>
+void fit_boxes(std::vector<Node<S>>& nodes, const std::vector<Prim<S>>& prims) {
   for (std::size_t n = nodes.size(); n-- > 0;) {
-    Node& nd = nodes[n];
+    Node<S>& nd = nodes[n];
     if (nd.count > 0) {
       nd.box = prims[nd.index].box;
       for (int i = nd.index + 1; i < nd.index + nd.count; ++i) nd.box = merge(nd.box, prims[i].box);
@@ -233,17 +243,19 @@ void fit_boxes(std::vector<Node>& nodes, const std::vector<Prim>& prims) {
 }
 
 // A bounding-volume hierarchy over one face list: nodes in depth-first layout, prims in leaf order.
+template <class S>
 struct Tree {
-  std::vector<Node> nodes;
-  std::vector<Prim> prims;
+  std::vector<Node<S>> nodes;
+  std::vector<Prim<S>> prims;
 };
 
 // Traverses one tree against itself (each unordered pair of leaves whose boxes overlap is visited
 // once, and each pair of triangles in them is tested once), or two trees against each other (each
 // pair of a triangle of the first and one of the second, reported in that order).
+template <class S>
 class IntersectionSearch {
  public:
-  IntersectionSearch(const std::vector<Vec3>& vertices, const Tree& a, const Tree& b,
+  IntersectionSearch(const std::vector<Vec3>& vertices, const Tree<S>& a, const Tree<S>& b,
                      const IntersectionOptions& options)
       : vertices_(vertices),
         a_(a),
@@ -296,7 +308,7 @@ class IntersectionSearch {
   // All pairs within subtree `n` (over m triangles) of the one tree (a_ == b_).
   void self(int n, std::size_t m) {
     if (stopped()) return;
-    const Node& nd = a_.nodes[n];
+    const Node<S>& nd = a_.nodes[n];
     if (nd.count > 0) {
       std::size_t tests = 0;
       for (int i = nd.index, end = nd.index + nd.count; i < end; ++i)
@@ -318,13 +330,13 @@ class IntersectionSearch {
   // All pairs with one triangle in subtree a of a_ (ma triangles) and the other in subtree b of b_ (mb).
   void cross(int a, std::size_t ma, int b, std::size_t mb) {
     if (stopped()) return;
-    const Node& na = a_.nodes[a];
-    const Node& nb = b_.nodes[b];
+    const Node<S>& na = a_.nodes[a];
+    const Node<S>& nb = b_.nodes[b];
     if (!overlap(na.box, nb.box)) return;
     if (na.count > 0 && nb.count > 0) {
       std::size_t tests = 0;
       for (int i = na.index, ie = na.index + na.count; i < ie; ++i) {
-        const Prim& p = a_.prims[i];
+        const Prim<S>& p = a_.prims[i];
         if (!overlap(p.box, nb.box)) continue;
         for (int j = nb.index, je = nb.index + nb.count; j < je; ++j) tests += test(p, b_.prims[j]);
       }
@@ -361,7 +373,7 @@ class IntersectionSearch {
   }
 
   // Whether the exact test ran (the boxes overlap and no vertex is shared); a hit is reported.
-  bool test(const Prim& p, const Prim& q) {
+  bool test(const Prim<S>& p, const Prim<S>& q) {
     if (!overlap(p.box, q.box) || share_vertex(p, q)) return false;
     const Vec3 &a0 = vertices_[p.v[0]], &a1 = vertices_[p.v[1]], &a2 = vertices_[p.v[2]];
     const Vec3 &b0 = vertices_[q.v[0]], &b1 = vertices_[q.v[1]], &b2 = vertices_[q.v[2]];
@@ -384,8 +396,8 @@ class IntersectionSearch {
   }
 
   const std::vector<Vec3>& vertices_;
-  const Tree& a_;
-  const Tree& b_;
+  const Tree<S>& a_;
+  const Tree<S>& b_;
   static constexpr std::size_t kTestBatch = 4096;
   const bool collect_;
   const std::size_t max_pairs_;
@@ -425,16 +437,37 @@ std::uint64_t fingerprint(const std::vector<Face>& faces) {
   return h;
 }
 
-// The non-degenerate faces, in face order; centroids relative to \p origin.
-std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                             const Vec3& origin) {
-  std::vector<Item> items(faces.size());
+// Faces with at least this many loose float boxes (loose_in_float()) make the search take double
+// boxes: a lone stray face is left to its loose box (the median keeps the others tight), a
+// cluster of them is not, since its faces would all overlap one another.
+constexpr std::size_t kLooseFacesForDouble = 16;
+
+// Whether triangle (a, b, c)'s float box relative to \p origin is loose: its sides, rounded
+// outward to floats at their distance from the origin (R), move by up to about 2 float steps,
+// R 2^-22; loose where that exceeds a sixteenth of the triangle's extent (on a scan at the
+// origin with a million faces it is about 1e-4 of it). Faces far from the median
+// in a mesh of two clusters far apart (two scans in one georeferenced frame) are; their float
+// boxes overlapped one another, up to every pair of the far cluster (two overlapping level-5
+// icospheres 2e7 from two others along each axis: 23.9M exact tests and 1.57 s, one thread,
+// against 13.5k and 0.07 s with double boxes).
+bool loose_in_float(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& origin) {
+  const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+  const double reach = (lo - origin).cwiseAbs().cwiseMax((hi - origin).cwiseAbs()).maxCoeff();
+  return std::ldexp(reach, -22) > 0.0625 * (hi - lo).maxCoeff();
+}
+
+// The non-degenerate faces, in face order; centroids relative to \p origin. \p loose, if given,
+// counts the faces whose float boxes would be loose.
+template <class S>
+std::vector<Item<S>> make_items(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                const Vec3& origin, std::atomic<std::size_t>* loose) {
+  std::vector<Item<S>> items(faces.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces.size(), 1024), [&](const auto& range) {
     for (std::size_t f = range.begin(); f < range.end(); ++f) {
       const Vec3& a = vertices[faces[f][0]];
       const Vec3& b = vertices[faces[f][1]];
       const Vec3& c = vertices[faces[f][2]];
-      Item& item = items[f];
+      Item<S>& item = items[f];
       // Exact: zero-area triangles have no plane, and CGAL's triangle test requires one.
       if (CGAL::collinear(to_point(a), to_point(b), to_point(c))) {
         item.face = -1;
@@ -444,10 +477,11 @@ std::vector<Item> make_items(const std::vector<Vec3>& vertices, const std::vecto
       // Divide first so that huge coordinates cannot overflow (the difference with the origin may
       // be infinite, never NaN); the centroid only guides the split.
       const Vec3 centroid = a / 3.0 + b / 3.0 + c / 3.0 - origin;
-      for (int k = 0; k < 3; ++k) item.c[k] = static_cast<float>(centroid[k]);
+      for (int k = 0; k < 3; ++k) item.c[k] = static_cast<S>(centroid[k]);
+      if (loose && loose_in_float(a, b, c, origin)) loose->fetch_add(1, std::memory_order_relaxed);
     }
   });
-  items.erase(std::remove_if(items.begin(), items.end(), [](const Item& i) { return i.face < 0; }),
+  items.erase(std::remove_if(items.begin(), items.end(), [](const Item<S>& i) { return i.face < 0; }),
               items.end());
   return items;
 }
@@ -465,25 +499,41 @@ Vec3 median_corner(const std::vector<Vec3>& vertices, const std::vector<Face>& f
   return coordinate_median(corners);
 }
 
+// x - origin (computed in double, so within half a unit in its last place) rounded outward to S,
+// and one step of S more, which covers that rounding: the boxes still hold the triangles.
+template <class S>
+S lower_side(double x) {
+  return std::nextafter(static_cast<S>(round_down(x)), -std::numeric_limits<S>::infinity());
+}
+template <>
+double lower_side<double>(double x) {
+  return std::nextafter(x, -std::numeric_limits<double>::infinity());
+}
+template <class S>
+S upper_side(double x) {
+  return std::nextafter(static_cast<S>(round_up(x)), std::numeric_limits<S>::infinity());
+}
+template <>
+double upper_side<double>(double x) {
+  return std::nextafter(x, std::numeric_limits<double>::infinity());
+}
+
 // The faces of `items` (in leaf order) with their outward-rounded boxes relative to \p origin.
-// The difference with the origin is rounded in double (by at most half a unit in its last
-// place), then to float outward, and one float step more, which covers that rounding: the boxes
-// still hold the triangles.
-std::vector<Prim> make_prims(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
-                             const std::vector<Item>& items, const Vec3& origin) {
-  std::vector<Prim> prims(items.size());
+template <class S>
+std::vector<Prim<S>> make_prims(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                                const std::vector<Item<S>>& items, const Vec3& origin) {
+  std::vector<Prim<S>> prims(items.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items.size(), 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      Prim& p = prims[i];
+      Prim<S>& p = prims[i];
       p.face = items[i].face;
       p.v = faces[p.face];
       const Vec3& a = vertices[p.v[0]];
       const Vec3& b = vertices[p.v[1]];
       const Vec3& c = vertices[p.v[2]];
-      constexpr float kInf = std::numeric_limits<float>::infinity();
       for (int k = 0; k < 3; ++k) {
-        p.box.lo[k] = std::nextafter(round_down(std::min({a[k], b[k], c[k]}) - origin[k]), -kInf);
-        p.box.hi[k] = std::nextafter(round_up(std::max({a[k], b[k], c[k]}) - origin[k]), kInf);
+        p.box.lo[k] = lower_side<S>(std::min({a[k], b[k], c[k]}) - origin[k]);
+        p.box.hi[k] = upper_side<S>(std::max({a[k], b[k], c[k]}) - origin[k]);
       }
     }
   });
@@ -494,19 +544,42 @@ bool lists_all_pairs(const IntersectionResult& r) {
   return r.pairs.size() == r.num_pairs;
 }
 
-// The tree of the non-degenerate faces of \p faces, its boxes relative to \p origin.
-template <class F>
-Tree build_tree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces, const Vec3& origin,
-                const F& check_cancel) {
-  Tree tree;
-  std::vector<Item> items = make_items(vertices, faces, origin);
-  check_cancel();
-  BvhBuilder(items, tree.nodes).build();
+// The tree of \p items (make_items() of \p faces), its boxes relative to \p origin.
+template <class S, class F>
+Tree<S> build_tree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                   std::vector<Item<S>> items, const Vec3& origin, const F& check_cancel) {
+  Tree<S> tree;
+  BvhBuilder<S>(items, tree.nodes).build();
   check_cancel();
   tree.prims = make_prims(vertices, faces, items, origin);
-  std::vector<Item>().swap(items);  // keep the peak memory down on big meshes
+  std::vector<Item<S>>().swap(items);  // keep the peak memory down on big meshes
   fit_boxes(tree.nodes, tree.prims);
   return tree;
+}
+
+// The search over the trees of \p items_a and, if \p faces_b, \p items_b, into \p result.
+template <class S, class F>
+void search_trees(const std::vector<Vec3>& vertices, const std::vector<Face>& faces_a,
+                  const std::vector<Face>* faces_b, std::vector<Item<S>> items_a,
+                  std::vector<Item<S>> items_b, const Vec3& origin, const IntersectionOptions& options,
+                  const F& check_cancel, IntersectionResult& result) {
+  const Tree<S> a = build_tree(vertices, faces_a, std::move(items_a), origin, check_cancel);
+  std::unique_ptr<Tree<S>> b;
+  if (faces_b)
+    b = std::make_unique<Tree<S>>(build_tree(vertices, *faces_b, std::move(items_b), origin, check_cancel));
+  IntersectionSearch<S> search(vertices, a, b ? *b : a, options);
+  search.run();
+  check_cancel();  // the search stopped at a node, and its count is short
+  const std::size_t found = search.found();
+  result.num_tests = search.tests();
+  // The batches let a search finish a little past max_tests: it counts as cut short all the
+  // same, so that whether it is does not depend on the threads (a whole search makes the same
+  // tests on any number of them).
+  result.out_of_tests =
+      search.out_of_tests() || (options.max_tests > 0 && result.num_tests > options.max_tests);
+  result.truncated = search.truncated() || result.out_of_tests;
+  result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;
+  if (options.collect_pairs) result.pairs = search.take_pairs();  // at most max_pairs: report()
 }
 
 // The search of find_self_intersections() (\p faces_b null) or find_intersections_between().
@@ -519,28 +592,30 @@ IntersectionResult search_pairs(const std::vector<Vec3>& vertices, const std::ve
   };
   auto work = [&] {
     check_cancel();
-    // Boxes and centroids are stored in float relative to the median of the faces: in absolute
+    // Boxes and centroids are stored relative to the median of the faces: in absolute
     // coordinates, a scan 1e6 from the origin (a georeferenced one) got float boxes a float step
     // (0.06) wide at least and split on centroids that coincide (the camel 1e6 away took 20.7M
     // exact tests and 0.73 s where it takes 11k and 0.02 s at the origin). Relative to the box
-    // centre, one stray face far from a scan did the same to all the others.
+    // centre, one stray face far from a scan did the same to all the others. In float (half the
+    // memory traffic of the traversal) unless that leaves faces far from the median loose.
     const Vec3 origin = median_corner(vertices, faces_a, faces_b);
-    const Tree a = build_tree(vertices, faces_a, origin, check_cancel);
-    std::unique_ptr<Tree> b;
-    if (faces_b) b = std::make_unique<Tree>(build_tree(vertices, *faces_b, origin, check_cancel));
-    IntersectionSearch search(vertices, a, b ? *b : a, options);
-    search.run();
-    check_cancel();  // the search stopped at a node, and its count is short
-    const std::size_t found = search.found();
-    result.num_tests = search.tests();
-    // The batches let a search finish a little past max_tests: it counts as cut short all the
-    // same, so that whether it is does not depend on the threads (a whole search makes the same
-    // tests on any number of them).
-    result.out_of_tests =
-        search.out_of_tests() || (options.max_tests > 0 && result.num_tests > options.max_tests);
-    result.truncated = search.truncated() || result.out_of_tests;
-    result.num_pairs = options.max_pairs > 0 ? std::min(found, options.max_pairs) : found;
-    if (options.collect_pairs) result.pairs = search.take_pairs();  // at most max_pairs: report()
+    std::atomic<std::size_t> loose{0};
+    std::vector<Item<float>> items_a = make_items<float>(vertices, faces_a, origin, &loose);
+    std::vector<Item<float>> items_b;
+    if (faces_b) items_b = make_items<float>(vertices, *faces_b, origin, &loose);
+    check_cancel();
+    if (loose.load() < kLooseFacesForDouble) {
+      search_trees(vertices, faces_a, faces_b, std::move(items_a), std::move(items_b), origin, options,
+                   check_cancel, result);
+      return;
+    }
+    std::vector<Item<float>>().swap(items_a);
+    std::vector<Item<float>>().swap(items_b);
+    std::vector<Item<double>> wide_a = make_items<double>(vertices, faces_a, origin, nullptr), wide_b;
+    if (faces_b) wide_b = make_items<double>(vertices, *faces_b, origin, nullptr);
+    check_cancel();
+    search_trees(vertices, faces_a, faces_b, std::move(wide_a), std::move(wide_b), origin, options,
+                 check_cancel, result);
   };
   if (options.parallel) {
     work();
@@ -550,7 +625,6 @@ IntersectionResult search_pairs(const std::vector<Vec3>& vertices, const std::ve
   }
   return result;
 }
-
 }  // namespace
 
 IntersectionResult find_self_intersections(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
