@@ -89,6 +89,33 @@ TEST(Selection, RejectsMalformedSelections) {
   EXPECT_THROW(select_vertices(x, Selection::vertices({-1})), InvalidInput);
 }
 
+// Radii and centres whose squares overflow (a review, thirty-eighth session: a sphere of radius
+// 1e200 about 1e300 selected every vertex near the origin, inf <= inf).
+TEST(Selection, HugeSpheresSelectByTheirDistance) {
+  const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1e300, 0, 0), Vec3(-1e300, 0, 0)};
+  EXPECT_EQ(select_vertices(x, Selection::sphere(Vec3(1e300, 0, 0), 1e200)), (std::vector<char>{0, 0, 1, 0}));
+  EXPECT_EQ(select_vertices(x, Selection::sphere(Vec3(1e160, 0, 0), 1e155)), (std::vector<char>{0, 0, 0, 0}));
+  EXPECT_EQ(select_vertices(x, Selection::sphere(Vec3::Zero(), 1e200)), (std::vector<char>{1, 1, 0, 0}));
+  EXPECT_EQ(select_vertices(x, Selection::sphere(Vec3::Zero(), 1.5e300)), (std::vector<char>{1, 1, 1, 1}));
+}
+
+// Whole turns are dropped before the angle is taken in radians: 1e308 degrees overflowed to a
+// NaN matrix, and a huge angle in radians lost its digits.
+TEST(EditTransform, HugeAnglesAreTakenModuloATurn) {
+  const Vec3 axis(0, 0, 1), pivot(1, 2, 3);
+  for (double degrees : {1e308, -1e308, 1e20}) {
+    const EditTransform t = EditTransform::rotation(axis, degrees, pivot);
+    ASSERT_TRUE(t.linear.allFinite()) << degrees;
+    EXPECT_LT((t.linear * t.linear.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_LT((t.linear - EditTransform::rotation(axis, std::fmod(degrees, 360.0), pivot).linear)
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-15);
+  }
+  EXPECT_EQ(EditTransform::rotation(axis, 360.0 * 1e10 + 90.0, pivot).linear,
+            EditTransform::rotation(axis, 90.0, pivot).linear);
+}
+
 TEST(EditTransform, BlendScalesTheRotationAngleAndTheTranslation) {
   const Vec3 pivot(1, 2, 3), t(0.5, -1, 2);
   const EditTransform T = EditTransform::rotation(Vec3(0, 0, 2), 90.0, pivot, t);
@@ -246,6 +273,38 @@ TEST(RegionEditor, OptionsOutOfRangeAreRejected) {
     } catch (const InvalidInput& e) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
+  }
+}
+
+// The open rim's fairing past the region's size: only the pull holds the rim's vertices (they
+// have no fairing rows), and as the wavelength grew it let the rim flare (a review, thirty-eighth
+// session: the tube's end region moved 0.52 / 4.94 / 632 from the input at smoothing 1 / 3 / 100,
+// a closed region 0.24 / 0.28 / 0.29). Now the base stays as near the input as at the region's
+// own size, and a wavelength whose weights overflow with the positions is refused as too small.
+TEST(RegionEditor, ARimInTheRegionStaysPutAtLongWavelengths) {
+  const TriMesh m = bumpy_cylinder(2000);
+  const std::vector<char> region = above(m, 3.0), handle = above(m, 5.0);
+  auto base_offset = [&](double fraction) {
+    EditOptions o;
+    o.smoothing_fraction = fraction;
+    const RegionEditor ed(m, region, handle, o);
+    return max_distance(ed.base(), m.vertices);
+  };
+  const double at_size = base_offset(1.0);
+  EXPECT_GT(at_size, 0.1);  // the bumps (height 0.35 about a radius of 1.35) go into the detail
+  for (double fraction : {3.0, 100.0, 1e6}) {
+    const double d = base_offset(fraction);
+    EXPECT_LT(d, 1.5 * at_size) << "smoothing_fraction " << fraction << " (at 1: " << at_size << ")";
+  }
+  TriMesh huge = m;
+  for (Vec3& p : huge.vertices) p *= 1e10;
+  EditOptions o;
+  o.smoothing_wavelength = 1e-70;
+  try {
+    RegionEditor(huge, region, handle, o);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("too small"), std::string::npos) << e.what();
   }
 }
 
@@ -789,6 +848,8 @@ TEST(EditScript, RejectsMalformedScriptsNamingTheFileAndThePlace) {
       {R"({"region": {"sphere": {"center": [0, 0], "radius": 2}}, "handle": {"vertices": [0]}, "transform": {}})",
        "edit.region.sphere.center"},
       {R"({"region": {"vertices": [0, -3]}, "handle": {"vertices": [0]}, "transform": {}})", "vertex index"},
+      {R"({"region": {"vertices": [0, 99999999999]}, "handle": {"vertices": [0]}, "transform": {}})",
+       "edit.region.vertices[1]: vertex index 99999999999 is out of range (at most 2147483647)"},
       {R"({"region": {"sphere": {}, "box": {}}, "handle": {"vertices": [0]}, "transform": {}})",
        "exactly one"},
       // Found by a fuzzing pass: a raw library message, and overflows blamed on other things.

@@ -83,9 +83,15 @@ Selection selection(const Ctx& c, const std::string& where, const json& j) {
   if (!v.is_array()) c.fail(w, "expected a list of vertex indices");
   std::vector<int> idx;
   for (std::size_t k = 0; k < v.size(); ++k) {
-    if (!v[k].is_number_integer() || v[k].get<long long>() < 0 || v[k].get<long long>() > 2147483647LL)
-      c.fail(w + "[" + std::to_string(k) + "]", "expected a non-negative vertex index");
-    idx.push_back(static_cast<int>(v[k].get<long long>()));
+    const std::string at = w + "[" + std::to_string(k) + "]";
+    // The parser keeps non-negative integers unsigned: those above INT_MAX are out of range, the
+    // signed ones are negative.
+    if (!v[k].is_number_integer() || !v[k].is_number_unsigned())
+      c.fail(at, "expected a non-negative vertex index");
+    const unsigned long long index = v[k].get<unsigned long long>();
+    if (index > 2147483647ULL)
+      c.fail(at, "vertex index " + std::to_string(index) + " is out of range (at most 2147483647)");
+    idx.push_back(static_cast<int>(index));
   }
   return Selection::vertices(std::move(idx));
 }
@@ -108,7 +114,9 @@ EditTransform transform(const Ctx& c, const std::string& where, const json& j) {
       if (j.contains("pivot")) c.fail(w + ".pivot", "give the pivot once (here or in the transform)");
       t.pivot = vec3(c, w + ".pivot", r["pivot"]);
     }
-    R = Eigen::AngleAxisd(deg * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
+    // Modulo a turn first, as EditTransform::rotation() (exact; 1e20 degrees in radians is not).
+    R = Eigen::AngleAxisd(std::fmod(deg, 360.0) * M_PI / 180.0, (axis / largest).normalized())
+            .toRotationMatrix();
     t.rotation_axis = (axis / largest).normalized();
     t.rotation_degrees = deg;
   }

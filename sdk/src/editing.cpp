@@ -68,7 +68,10 @@ std::vector<char> select_vertices(const std::vector<Vec3>& x, const Selection& s
       if (!finite(sel.center) || !std::isfinite(sel.radius) || sel.radius < 0)
         throw InvalidInput("sphere selection needs a finite center and a non-negative radius");
       const double r2 = sel.radius * sel.radius;
-      for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.center).squaredNorm() <= r2;
+      if (std::isfinite(r2))  // (a square that overflows is farther than the radius: not selected)
+        for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.center).squaredNorm() <= r2;
+      else  // a radius of 1e200 squared overflowed, and inf <= inf selected every vertex
+        for (std::size_t i = 0; i < x.size(); ++i) out[i] = (x[i] - sel.center).stableNorm() <= sel.radius;
       break;
     }
     case Selection::Kind::Halfspace: {
@@ -112,7 +115,9 @@ EditTransform EditTransform::rotation(const Vec3& axis, double degrees, const Ve
   const double largest = axis.cwiseAbs().maxCoeff();
   if (!(largest > 0)) throw InvalidInput("rotation axis is zero");
   EditTransform t;
-  t.linear = Eigen::AngleAxisd(degrees * M_PI / 180.0, (axis / largest).normalized()).toRotationMatrix();
+  // The angle modulo a turn first: 1e308 degrees overflowed to an infinite angle, a NaN matrix.
+  t.linear = Eigen::AngleAxisd(std::fmod(degrees, 360.0) * M_PI / 180.0, (axis / largest).normalized())
+                 .toRotationMatrix();
   t.pivot = pivot;
   t.translation = translation;
   t.rotation_axis = (axis / largest).normalized();
@@ -342,16 +347,30 @@ class RegionEditor::Impl {
     for (int v = 0; v < n; ++v)
       for (int t = adj.neighbor_offsets[v]; t < adj.neighbor_offsets[v + 1]; ++t) diag[v] += w[t];
     // Filter response w / (w + k^4) for a mode of wavenumber k (Q ~ M Laplacian^2).
+    std::vector<Vec3> region_points;
+    for (int i : region_) region_points.push_back(x[i]);
+    const double region_diagonal = bbox_diagonal(region_points);
     double wavelength = opt_.smoothing_wavelength;
-    if (!(wavelength > 0)) {
-      std::vector<Vec3> pts;
-      for (int i : region_) pts.push_back(x[i]);
-      wavelength = opt_.smoothing_fraction * bbox_diagonal(pts);
-    }
+    if (!(wavelength > 0)) wavelength = opt_.smoothing_fraction * region_diagonal;
     if (!(wavelength > 0) || !std::isfinite(wavelength))
       throw InvalidInput("the region has no extent to smooth over");
     const double pull = std::pow(2 * M_PI / wavelength, 4);
-    if (!std::isfinite(pull)) {  // a tiny wavelength: the fairing's weights overflow
+    // The open rim's vertices have no fairing rows of their own (assemble(): they would pull the
+    // rim in), so only the pull holds them, and as the wavelength grows past the region's size
+    // it lets the rim flare: a tube's end region moved 0.52 / 4.94 / 632 from the input at
+    // smoothing 1 / 3 / 100 (a closed region 0.24 / 0.28 / 0.29). There the rim keeps the pull
+    // of a wavelength of the region's diagonal.
+    const double rim_pull =
+        region_diagonal > 0 ? std::max(pull, std::pow(2 * M_PI / region_diagonal, 4)) : pull;
+    double largest_area = 0.0, largest_coordinate = 0.0;
+    for (int i : region_) {
+      largest_area = std::max(largest_area, area[i]);
+      largest_coordinate = std::max(largest_coordinate, x[i].cwiseAbs().maxCoeff());
+    }
+    // A tiny wavelength: the fairing's weights overflow (pull itself, or its products with the
+    // areas and positions, which the system holds).
+    if (!std::isfinite(rim_pull) ||
+        !std::isfinite(rim_pull * largest_area * std::max(1.0, largest_coordinate))) {
       std::ostringstream m;
       m << "the smoothing wavelength " << wavelength << " is too small (the fairing's weights overflow)";
       throw InvalidInput(m.str());
@@ -423,8 +442,9 @@ class RegionEditor::Impl {
         [&](int r, int j, double v, Eigen::MatrixXd& b) { b.row(r) -= v * x[j].transpose(); }, rhs, false);
     for (int i : region_) {
       const int r = region_id[i];
-      trip.emplace_back(r, r, pull * area[i]);
-      rhs.row(r) += pull * area[i] * x[i].transpose();
+      const double p = on_boundary[i] ? rim_pull : pull;
+      trip.emplace_back(r, r, p * area[i]);
+      rhs.row(r) += p * area[i] * x[i].transpose();
     }
     const Eigen::MatrixXd faired = solve(region_, trip, rhs, "fairing", false);
     base_ = x;
