@@ -1444,6 +1444,31 @@ TEST(LayersFile, AssembleChecksTheEncodingsValues) {
   EXPECT_TRUE(test::throws_with<InvalidInput>(
       [&] { assemble_with([](std::vector<layers::Band>& b) { b[1].base_rest[0].x() += 1e-3; }); },
       {"band 1: the encoding's", "is not the one"}));
+  // What the reader refuses, refused at assembly (a review, thirty-eighth session: an infinite
+  // sharpness, which the cage's surface takes as infinitely sharp, was written as null, and a
+  // report count of -5 as it was; the reader refused both files).
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with([](std::vector<layers::Band>& b) {
+          const std::vector<int>& f = b[0].cage.faces[0];
+          b[0].tags.creases.push_back({f[0], f[1], INFINITY});
+        });
+      },
+      {"band 0: a crease's sharpness is not finite (10 or more is infinitely sharp)"}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with([](std::vector<layers::Band>& b) { b[0].tags.corners.push_back({0, INFINITY}); });
+      },
+      {"band 0: a corner's sharpness is not finite"}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] { assemble_with([](std::vector<layers::Band>& b) { b[2].encoding.report.num_projected = -5; }); },
+      {"band 2: the encoding report's projected count -5 is outside 0.."}));
+  EXPECT_TRUE(test::throws_with<InvalidInput>(
+      [&] {
+        assemble_with(
+            [](std::vector<layers::Band>& b) { b[1].encoding.report.max_tangential_offset = INFINITY; });
+      },
+      {"band 1: the encoding report's max_tangential_offset is not finite"}));
   // The caller's progress callback and cancel flag stay with the caller (as in set_options()).
   layers::ModelOptions o = camel.options();
   std::atomic<bool> cancel{false};

@@ -698,6 +698,15 @@ LayeredModel LayeredModel::assemble_parts(std::vector<Band> bands, ModelOptions 
   if (bands[0].subdiv.max_refined_faces > (1LL << 30))
     throw InvalidInput("band 0: the cage's max_refined_faces must be at most 2^30, got " +
                        std::to_string(bands[0].subdiv.max_refined_faces));
+  // What the reader refuses is refused here too (a review, thirty-eighth session: an infinite
+  // sharpness, which the cage's surface takes as infinitely sharp, was written as null and the
+  // file refused).
+  for (const SubdivTags::Crease& c : bands[0].tags.creases)
+    if (!std::isfinite(c.sharpness))
+      throw InvalidInput("band 0: a crease's sharpness is not finite (10 or more is infinitely sharp)");
+  for (const SubdivTags::Corner& c : bands[0].tags.corners)
+    if (!std::isfinite(c.sharpness))
+      throw InvalidInput("band 0: a corner's sharpness is not finite (10 or more is infinitely sharp)");
   // The cage's current points make a limit surface (a NaN point passed `info` and `export`, and an
   // edit blamed its script).
   std::optional<SubdivSurface> surface;
@@ -787,6 +796,16 @@ LayeredModel LayeredModel::assemble_parts(std::vector<Band> bands, ModelOptions 
     finite(e.tangential_offsets, "tangential offset");
     finite(e.base_rest_points, "rest base point");
     finite(e.weights, "regularization weight");
+    // The encoding's report as the reader checks it (a count of -5 was written and refused).
+    const EncodeReport& rep = e.report;
+    for (const auto& [count, what] : {std::pair<int, const char*>{rep.num_projected, "projected"},
+                                      {rep.num_fallback, "fallback"},
+                                      {rep.num_ambiguous, "ambiguous"}})
+      if (count < 0 || count > nv)
+        throw InvalidInput(name + ": the encoding report's " + what + " count " + std::to_string(count) +
+                           " is outside 0.." + std::to_string(nv));
+    if (!std::isfinite(rep.max_tangential_offset))
+      throw InvalidInput(name + ": the encoding report's max_tangential_offset is not finite");
     if (k == 1) {
       try {
         check_limit_points(e.limit_points, *surface);

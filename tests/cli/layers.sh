@@ -112,13 +112,15 @@ PY
 "$STRATA" generate --case bumps --triangles 2000 --out-dir tube >/dev/null
 # A history entry is the file's text: `info` shows its control characters escaped, so that a
 # newline or a terminal escape in it cannot fake lines of the output (a fuzzing pass found both).
-python3 - camel.strata forged.strata <<'PY'
+cat >forge_history.py <<'PY'
+# forge_history.py IN OUT ENTRY: IN with the text ENTRY (@FILE: FILE's text) appended to its
+# history, CRCs valid.
 import json, struct, sys, zlib
 data = open(sys.argv[1], "rb").read()
 H = struct.unpack_from("<I", data, 12)[0]
 header = json.loads(data[20:20 + H])
 old = [(s, data[s["offset"]:s["offset"] + s["size"]]) for s in header["sections"]]
-header["model"]["history"].append("x\nstrata: error: forged\u001b[2J")
+header["model"]["history"].append(open(sys.argv[3][1:]).read() if sys.argv[3][:1] == "@" else sys.argv[3])
 align = lambda n: (n + 7) // 8 * 8
 length = 0
 while True:
@@ -135,9 +137,18 @@ for s, b in old:
     out += bytes(s["offset"] - len(out)) + b
 open(sys.argv[2], "wb").write(bytes(out))
 PY
+python3 forge_history.py camel.strata forged.strata $'x\nstrata: error: forged\e[2J' || fail "could not forge"
 "$STRATA" info forged.strata >forged.txt || fail "the forged history was not read"
 grep -q '^strata: error' forged.txt && fail "a history entry printed a fake error line"
 grep -qF 'x\x0astrata: error: forged\x1b[2J' forged.txt || fail "the history entry is not shown escaped: $(tail -2 forged.txt)"
+# An entry of 100k nested brackets, which a file may hold as text, is shown as its text: `info
+# --json` parsed it and dumped it recursively, and overflowed the stack (a review, thirty-eighth
+# session).
+python3 -c 'print("[" * 100000 + "]" * 100000, end="")' >deep_entry.txt
+python3 forge_history.py camel.strata deep.strata @deep_entry.txt || fail "could not forge"
+"$STRATA" info deep.strata --json >deep.json || fail "info --json failed on a deeply nested history entry"
+python3 -c "import json,sys; h=json.load(open('deep.json'))['history']; assert h[-1] == '[' * 100000 + ']' * 100000" ||
+  fail "the deep history entry is not shown as its text"
 
 "$STRATA" build tube/detail.obj -o tube.strata -q >/dev/null || fail "build of the tube failed"
 python3 - <<'PY' || fail "could not write the back-and-forth script"
@@ -176,6 +187,11 @@ PY
   "$STRATA" export restored.strata -o c.obj >/dev/null || fail "exports failed"
 cmp -s a.obj c.obj || fail "muting and restoring band 2 changed the finest band"
 cmp -s a.obj b.obj && fail "muting band 2 changed nothing"
+# A model that a command replaces keeps its permission bits, as `export`'s meshes do (a private
+# model became world-readable: a review, thirty-eighth session).
+cp muted.strata private.strata && chmod 600 private.strata
+"$STRATA" amplitude bent.strata --band 2 --scale 0.5 -o private.strata -q >/dev/null || fail "amplitude into a private file failed"
+[ "$(stat -c %a private.strata)" = 600 ] || fail "the replaced model's permissions became $(stat -c %a private.strata)"
 
 # Batch: a bad file is reported and skipped, the others are built, the exit code is 1.
 printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n' >broken.off

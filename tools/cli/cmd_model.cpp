@@ -12,6 +12,7 @@
 #include "strata/cage_io.h"
 #include "strata/edit_script.h"
 #include "strata/exceptions.h"
+#include "strata/json_check.h"
 #include "strata/layers/model.h"
 #include "strata/mesh_io.h"
 
@@ -220,8 +221,13 @@ int run_info(const InfoCmdOptions& o) {
     json h = json::array();
     // An entry that is not JSON (a file may keep text) is shown as a string: parse() without
     // exceptions gave a "discarded" value, printed as <discarded>, and the output was no JSON.
+    // So is one beyond the header's limits (as write_model() stores it): an entry of 100k nested
+    // brackets, which a file may hold as text, was parsed and dumped recursively and overflowed
+    // the stack (a review, thirty-eighth session).
+    JsonLimits entry_limits;
+    entry_limits.max_depth -= 2;  // an entry sits two levels below the printed object
     for (const std::string& e : model.history()) {
-      json v = json::parse(e, nullptr, false);
+      json v = json_structure_problem(e, entry_limits).empty() ? json::parse(e, nullptr, false) : json(e);
       h.push_back(v.is_discarded() ? json(e) : std::move(v));
     }
     // Paths and text that are not UTF-8 are printed with U+FFFD (the strict dump threw a JSON
