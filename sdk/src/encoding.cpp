@@ -496,6 +496,9 @@ BaseFrames evaluate_base_frames(const DetailEncoding& e, const std::vector<Vec3>
     throw InvalidInput("edited base has " + std::to_string(x.size()) + " vertices, the encoding's base has " +
                        std::to_string(e.base_num_vertices));
   check_coordinates(x, "edited base");
+  // Below the engine's range the normals underflow: a base scaled by 1e-150 was refused as "base
+  // face 95 has no normal", one by 1e-21 solved unconverged.
+  check_extent(x, e.base_faces, "edited base");
   const std::vector<Vec3> vn = vertex_normals(x, e.base_faces);
   const int n = e.num_detail_vertices();
   BaseFrames fr;
@@ -646,12 +649,7 @@ std::vector<Vec3> internal::vectors_unchecked(const DetailEncoding& e, const Bas
                                               double amplitude) {
   const int n = e.num_detail_vertices();
   std::vector<Vec3> p(n);
-  for (int i = 0; i < n; ++i) {
-    const Vec3& nrm = fr.normals[i];
-    const Vec3& t = fr.tangents[i];
-    const Eigen::Vector2d& o = e.tangential_offsets[i];
-    p[i] = fr.points[i] + amplitude * (e.normal_offsets[i] * nrm + o[0] * t + o[1] * nrm.cross(t));
-  }
+  for (int i = 0; i < n; ++i) p[i] = vector_position(e, fr, amplitude, i);
   return p;
 }
 

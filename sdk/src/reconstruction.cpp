@@ -270,11 +270,31 @@ class VolumeReconstructor::Impl {
       if (!renum_.empty()) enc_ = internal::renumber(enc_, renum_, &face_order_);
     }
     const int n = enc_.num_detail_vertices();
+    // The mean displacement length over the vertices of faces: one stray vertex far from a scan
+    // raised it (to 300 times the detail's height at 1e4 away), and with it the length filter's
+    // floor and the fixed-point test's scale, which moved the detail 0.15 in a round trip.
+    std::vector<char> in_face(n, 0);
+    for (const Face& f : enc_.detail_faces)
+      for (int v : f) in_face[v] = 1;
     double mean_f = 0.0;
-    for (double f : enc_.normal_offsets) mean_f += std::abs(f);
-    mean_f = n > 0 ? mean_f / n : 0.0;
+    int counted = 0;
+    for (int i = 0; i < n; ++i)
+      if (in_face[i]) {
+        mean_f += std::abs(enc_.normal_offsets[i]);
+        ++counted;
+      } else {
+        isolated_.push_back(i);
+      }
+    mean_f = counted > 0 ? mean_f / counted : 0.0;
     mean_abs_f_ = mean_f;
-    rest_diagonal_ = bbox_diagonal(enc_.detail_rest);
+    if (isolated_.empty()) {
+      rest_diagonal_ = bbox_diagonal(enc_.detail_rest);
+    } else {  // the faces' extent, as the mean above
+      std::vector<Vec3> used;
+      for (int i = 0; i < n; ++i)
+        if (in_face[i]) used.push_back(enc_.detail_rest[i]);
+      rest_diagonal_ = bbox_diagonal(used);
+    }
     guarded_f_.resize(n);
     const double fmin = std::max(opt_.min_length_fraction * mean_f, 1e-300);
     for (int i = 0; i < n; ++i) {
@@ -346,6 +366,20 @@ class VolumeReconstructor::Impl {
 
   ReconstructResult run(const BaseFrames& fr, const std::vector<Vec3>* start, const WarmStartOptions* warm,
                         const ReconstructRequest& request = {}) const {
+    ReconstructResult res = solve_frames(fr, start, warm, request);
+    place_isolated(fr, request.amplitude, res.positions);
+    return res;
+  }
+
+  // Vertices in no face have no prism to solve: they are placed by their displacement vectors
+  // (a review, thirty-eighth session: a scan's stray vertex stayed on its base point, its
+  // displacement lost).
+  void place_isolated(const BaseFrames& fr, double amplitude, std::vector<Vec3>& P) const {
+    for (int i : isolated_) P[i] = internal::vector_position(enc_, fr, amplitude, i);
+  }
+
+  ReconstructResult solve_frames(const BaseFrames& fr, const std::vector<Vec3>* start,
+                                 const WarmStartOptions* warm, const ReconstructRequest& request) const {
     if (warm) check_warm_start_options(*warm);
     ReconstructResult res;
     ReconstructStats& st = res.stats;
@@ -444,6 +478,12 @@ class VolumeReconstructor::Impl {
   // One drag step (section 5) with per-level warm starts; see VolumeReconstructor::drag_step().
   ReconstructResult drag(const BaseFrames& fr, DragState::Impl& ds, const WarmStartOptions& warm,
                          const ReconstructRequest& request) const {
+    ReconstructResult res = drag_frames(fr, ds, warm, request);
+    place_isolated(fr, request.amplitude, res.positions);
+    return res;
+  }
+  ReconstructResult drag_frames(const BaseFrames& fr, DragState::Impl& ds, const WarmStartOptions& warm,
+                                const ReconstructRequest& request) const {
     const int n = enc_.num_detail_vertices();
     if (!ds.started) throw InvalidInput("drag_step() before DragState::reset()");
     check_warm_start_options(warm);
@@ -1795,7 +1835,9 @@ class VolumeReconstructor::Impl {
       const bool coarse_only = !opt_.finest_intermediate_solves && sc + 1 < k;
       multigrid_pass(s, h, sc + 1 == k, sc + 1 == k ? opt_.tolerance : opt_.level_tolerance, coarse_only, st,
                      V);
-      if (coarse_only) st.finest_cycles_per_scale.push_back(0);
+      // (A one-level hierarchy solves its only level in a coarse-only pass: multigrid_pass() counts
+      // its cycles; a 0 as well made 5 entries for 3 scales.)
+      if (coarse_only && levels_.size() > 1) st.finest_cycles_per_scale.push_back(0);
     }
     s.clean_start = false;
     s.work_total = 0.0;
@@ -2503,6 +2545,7 @@ class VolumeReconstructor::Impl {
   // The coarse levels' compact ids: the second-finest level's vertices, compact id -> original
   // id (empty with one level), and guarded_f_ and the pinned flags by compact id.
   std::vector<int> compact_to_orig_;
+  std::vector<int> isolated_;  // vertices in no face (place_isolated())
   std::vector<double> compact_f_;
   std::vector<char> compact_pinned_;
   // Over a subdivision base: the cage's limit surface, kept so that a reconstruction from edited

@@ -121,6 +121,16 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
 
   const fs::path dir(o.out_dir);
   auto out_path = [&](const std::string& suffix) { return (dir / case_output(src.name, suffix)).string(); };
+  // Both methods first, then the files: a case whose solve failed left its input copies in the
+  // output directory (a review, thirty-eighth session).
+  std::vector<std::pair<Method, MethodOutcome>> outcomes;
+  for (const Method method : {Method::Volumes, Method::Vectors}) {
+    ReconstructOptions options;
+    options.progress = log.progress(to_string(method));
+    outcomes.emplace_back(
+        method,
+        run_method(method, {encoding, edited.mesh.vertices, edited.name, input.result}, options, log));
+  }
   json files = json::array();
   sw.restart();
   for (const auto& [mesh, suffix] : {std::pair<const TriMesh*, const char*>{&detail.mesh, "detail"},
@@ -132,10 +142,7 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
   shared.write = sw.seconds();
 
   json methods = json::object();
-  for (const Method method : {Method::Volumes, Method::Vectors}) {
-    ReconstructOptions options;
-    options.progress = log.progress(to_string(method));
-    MethodOutcome outcome = run_method(method, {encoding, edited.mesh.vertices, input.result}, options, log);
+  for (auto& [method, outcome] : outcomes) {
     const std::string path = out_path(to_string(method));
     sw.restart();
     TriMesh result;

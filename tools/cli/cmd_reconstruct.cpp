@@ -85,7 +85,8 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
   solver.solver = resolve_solver(o.solver, detail.mesh.faces.size());
   ReconstructOptions options = solver_options(solver);
   options.progress = log.progress(to_string(method));
-  MethodOutcome outcome = run_method(method, {encoding, edited.mesh.vertices, input.result}, options, log);
+  MethodOutcome outcome =
+      run_method(method, {encoding, edited.mesh.vertices, edited.name, input.result}, options, log);
   times.setup = outcome.times.setup;
   times.frames = outcome.times.frames;
   times.solve = outcome.times.solve;

@@ -240,6 +240,10 @@ std::pair<NamedMesh, NamedMesh> read_base_pair(const std::string& base, const st
                                     {read_mesh(edited, &edited_polygons), edited}};
   check_coordinates(r.first.mesh.vertices, base + ":");
   check_coordinates(r.second.mesh.vertices, edited + ":");
+  // The engine's range, named by file (an edited base scaled by 1e-150 was refused as "base face
+  // 95 has no normal", naming no file; one by 1e-21 was solved, unconverged).
+  check_extent(r.first.mesh.vertices, r.first.mesh.faces, base);
+  check_extent(r.second.mesh.vertices, r.second.mesh.faces, edited);
   if (r.second.mesh.faces != r.first.mesh.faces && edited_polygons == base_polygons &&
       r.second.mesh.num_vertices() == r.first.mesh.num_vertices()) {
     r.second.mesh.faces = r.first.mesh.faces;
@@ -516,7 +520,12 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
             " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
   EncodedInput e;
   Stopwatch sw;
-  e.encoding = encode_detail(detail.mesh, base.mesh);
+  check_extent(detail.mesh.vertices, detail.mesh.faces, detail.name);
+  try {  // the engine's errors name the meshes by role; the user named files
+    e.encoding = encode_detail(detail.mesh, base.mesh);
+  } catch (const InvalidInput& ex) {
+    throw InvalidInput("encoding " + detail.name + " over " + base.name + ": " + ex.what());
+  }
   e.encode_seconds = sw.seconds();
   // A detail that is not a displacement of this base (another object, units or placement) gives a
   // meaningless result; a warning says so up front. Its signs: many closest-point fallbacks, or
@@ -551,6 +560,14 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
   const std::vector<Vec3>& edited_base = in.edited_base;
   MethodOutcome out;
   out.method = method;
+  // The edited base's frames, once for the method and the metrics; their errors name its file.
+  auto edited_frames = [&] {
+    try {
+      return evaluate_base_frames(encoding, edited_base);
+    } catch (const InvalidInput& ex) {
+      throw InvalidInput(in.edited_name + ": " + ex.what());
+    }
+  };
   BaseFrames frames;
   if (method == Method::Volumes) {
     Stopwatch sw;
@@ -558,20 +575,19 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
               std::to_string(encoding.detail_faces.size()) + " prisms)");
     VolumeReconstructor reconstructor(encoding, options);
     out.times.setup = sw.seconds();
+    sw.restart();
+    frames = edited_frames();
+    const double frame_seconds = sw.seconds();
     log.phase(std::string(to_string(method)) + ": solving for the prism volumes");
-    ReconstructResult r = reconstructor.reconstruct(edited_base);
-    out.times.frames = r.stats.seconds_frames;
+    ReconstructResult r = reconstructor.reconstruct(frames);
+    out.times.frames = frame_seconds + r.stats.seconds_frames;
     out.times.solve = r.stats.seconds_solve;
     out.positions = std::move(r.positions);
     out.stats = std::move(r.stats);
-    // The metrics need the base frames; the reconstructor evaluates its own privately.
-    Stopwatch mw;
-    frames = evaluate_base_frames(encoding, edited_base);
-    out.times.metrics += mw.seconds();
   } else {
     log.phase(std::string(to_string(method)) + ": displacing along the edited base's normals");
     Stopwatch sw;
-    frames = evaluate_base_frames(encoding, edited_base);
+    frames = edited_frames();
     out.times.frames = sw.seconds();
     sw.restart();
     out.positions = reconstruct_vectors(encoding, frames);

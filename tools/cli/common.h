@@ -308,6 +308,7 @@ struct MethodOutcome {
 struct ReconstructionInputs {
   const DetailEncoding& encoding;
   const std::vector<Vec3>& edited_base;           //!< the edited base's vertices (the base's connectivity)
+  const std::string& edited_name;                 //!< its file, named in the errors it causes
   const IntersectionResult& input_intersections;  //!< the input detail's own, with pairs collected
 };
 

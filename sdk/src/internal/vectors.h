@@ -10,6 +10,15 @@
 
 namespace strata::internal {
 
+//! Detail vertex \p i placed by its displacement vector over \p frames.
+//! \pre check_encoding(encoding) passed; i is a detail vertex with a frame.
+inline Vec3 vector_position(const DetailEncoding& e, const BaseFrames& fr, double amplitude, int i) {
+  const Vec3& n = fr.normals[i];
+  const Vec3& t = fr.tangents[i];
+  const Eigen::Vector2d& o = e.tangential_offsets[i];
+  return fr.points[i] + amplitude * (e.normal_offsets[i] * n + o[0] * t + o[1] * n.cross(t));
+}
+
 //! reconstruct_vectors(encoding, frames, amplitude) without check_encoding() and the frames' size
 //! check. \pre check_encoding(encoding) passed; frames has one entry per detail vertex.
 std::vector<Vec3> vectors_unchecked(const DetailEncoding& encoding, const BaseFrames& frames,
