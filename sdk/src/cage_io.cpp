@@ -1,6 +1,8 @@
 #include "strata/cage_io.h"
 
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "internal/read_file.h"
@@ -91,7 +93,20 @@ SubdivTags read_subdiv_tags(const std::string& path) {
   return parse_subdiv_tags(internal::read_whole_file(path), path);
 }
 
+// STL keeps neither the vertex numbering that tags name (its vertices are merged in the order
+// of their first use) nor double coordinates: a tetrahedron's cage came back renumbered and
+// 0.1 as 0.10000000149011612 (a review, thirty-eighth session).
+void check_cage_format(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".stl")
+    throw IoError(path +
+                  ": a cage is not kept in STL (it loses the vertex numbering that tags name, "
+                  "and rounds the points to floats); use .obj, .off or .ply");
+}
+
 PolyMesh read_cage(const std::string& path) {
+  check_cage_format(path);
   PolyMesh cage;
   cage.vertices = read_mesh(path, &cage.faces).vertices;
   check_coordinates(cage.vertices, path + ":");  // named here, not by the edit that uses the cage
@@ -100,6 +115,7 @@ PolyMesh read_cage(const std::string& path) {
 
 void write_cage(const PolyMesh& cage, const std::string& path) {
   // What read_cage() refuses is not written (a cage of 1e300 was, and could not be read back).
+  check_cage_format(path);
   check_coordinates(cage.vertices, path + ":");
   write_polygon_mesh(cage.vertices, cage.faces, path);
 }

@@ -60,9 +60,10 @@ class Projector {
         return r;
       }
       const Eigen::Vector2d g(s.du.dot(d), s.dv.dot(d));
-      Eigen::Matrix2d H;
-      H << s.du.dot(s.du) + s.duu.dot(d), s.du.dot(s.dv) + s.duv.dot(d), s.du.dot(s.dv) + s.duv.dot(d),
+      Eigen::Matrix2d full;  // the distance's Hessian
+      full << s.du.dot(s.du) + s.duu.dot(d), s.du.dot(s.dv) + s.duv.dot(d), s.du.dot(s.dv) + s.duv.dot(d),
           s.dv.dot(s.dv) + s.dvv.dot(d);
+      Eigen::Matrix2d H = full;
       if (!(H(0, 0) > 0 && H.determinant() > 0)) {
         // Not a local minimum's basin (the distance's Hessian is indefinite): Gauss-Newton.
         H << s.du.dot(s.du), s.du.dot(s.dv), s.du.dot(s.dv), s.dv.dot(s.dv);
@@ -86,7 +87,12 @@ class Projector {
           if (surface_.across_edge(r.point.face, edge, std::clamp(t, 0.0, 1.0)).face >= 0) break;
           const Eigen::Vector2d dir =
               internal::edge_point(corners_, edge, 1.0) - internal::edge_point(corners_, edge, 0.0);
-          const double ht = dir.dot(H * dir);
+          // The distance's own second derivative along the edge where it is positive: beyond a
+          // boundary the full Hessian is mostly indefinite, and Gauss-Newton's |S_u|^2 there
+          // was half the curve's (a point beyond a quad's edge zig-zagged for 355 iterations
+          // where a few do; a review, thirty-eighth session).
+          const double along_full = dir.dot(full * dir) * (1.0 + mu);
+          const double ht = along_full > 0 ? along_full : dir.dot(H * dir);
           step = ht > 0 ? Eigen::Vector2d(-(g.dot(dir) / ht) * dir) : Eigen::Vector2d::Zero();
           along_boundary = true;
           if (step.norm() < 1e-14) break;

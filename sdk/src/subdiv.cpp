@@ -496,6 +496,50 @@ class SubdivSurface::Impl {
     }
   }
 
+  // The same for a Loop cage's end caps, quartic Gregory triangles (Far's EvalBasisGregoryTri, which
+  // takes its three pairs of blend weights G as constant in the derivatives too): the terms of
+  // G's derivatives on the 6 interior points (the derivatives were up to 1.7% off near an
+  // extraordinary vertex of an octahedron, and its projections' feet off orthogonal by 2e-3; a
+  // review, thirty-eighth session). (u, v) is the ptex point; the scales are OpenSubdiv's,
+  // rotated triangles' second derivatives negated as it negates them (basis() undoes that).
+  static void add_gregory_triangle_blend_derivatives(const Far::PatchParam& param, double s, double t,
+                                                     double* wDs, double* wDt, double* wDss, double* wDst,
+                                                     double* wDtt) {
+    static constexpr int kPoint[6] = {3, 4, 8, 9, 13, 14};  // the Gregory interior points
+    // N and D of each G as c + cs s + ct t, with u = s, v = t, w = 1 - s - t: G = u / (u + v),
+    // v / (u + v), v / (v + w), w / (v + w), w / (w + u), u / (w + u).
+    static constexpr double kN[6][3] = {{0, 1, 0}, {0, 0, 1}, {0, 0, 1}, {1, -1, -1}, {1, -1, -1}, {0, 1, 0}};
+    static constexpr double kD[6][3] = {{0, 1, 1}, {0, 1, 1}, {1, -1, 0}, {1, -1, 0}, {1, 0, -1}, {1, 0, -1}};
+    param.NormalizeTriangle(s, t);
+    const double sign = param.IsTriangleRotated() ? -1.0 : 1.0;
+    const double scale = sign * static_cast<double>(1 << param.GetDepth());
+    const double scale2 = sign * scale * scale;
+    const double u = s, v = t, w = 1.0 - s - t;
+    // The quartic Bezier weights of the three interior points (p112, p211, p121), each pair's,
+    // and their first derivatives.
+    const double B[3] = {12 * w * w * u * v, 12 * u * u * v * w, 12 * v * v * u * w};
+    const double Bs[3] = {12 * v * w * (w - 2 * u), 12 * u * v * (2 * w - u), 12 * v * v * (w - u)};
+    const double Bt[3] = {12 * u * w * (w - 2 * v), 12 * u * u * (w - v), 12 * u * v * (2 * w - v)};
+    for (int i = 0; i < 6; ++i) {
+      const double d = kD[i][0] + kD[i][1] * s + kD[i][2] * t;
+      if (!(d > 0)) continue;  // a corner, where Far takes G constant and B vanishes
+      const double n = kN[i][0] + kN[i][1] * s + kN[i][2] * t;
+      const double g = n / d;
+      const double as = kN[i][1] - kD[i][1] * g, at = kN[i][2] - kD[i][2] * g;  // G_x = a_x / D
+      const int b = i / 2, k = kPoint[i];
+      // B / D, B_x / D and B / D^2 stay bounded where D vanishes (B vanishes as fast there).
+      const double bd = B[b] / d, bsd = Bs[b] / d, btd = Bt[b] / d, bdd = bd / d;
+      wDs[k] += bd * as * scale;
+      wDt[k] += bd * at * scale;
+      if (wDss) {
+        // (B G)_xy = B_x G_y + B_y G_x + B G_xy, G_xy = -(D_x a_y + D_y a_x) / D^2.
+        wDss[k] += (2 * bsd * as - 2 * kD[i][1] * as * bdd) * scale2;
+        wDst[k] += (bsd * at + btd * as - (kD[i][1] * at + kD[i][2] * as) * bdd) * scale2;
+        wDtt[k] += (2 * btd * at - 2 * kD[i][2] * at * bdd) * scale2;
+      }
+    }
+  }
+
   // Basis weights at p (clamped into the domain) and the patch's point indices.
   Far::ConstIndexArray basis(const LimitPoint& p, double* wP, double* wDu, double* wDv, double* wDuu,
                              double* wDuv, double* wDvv) const {
@@ -505,8 +549,11 @@ class SubdivSurface::Impl {
     if (!h) throw SolverError("no limit patch at ptex face " + vtx(p.face));
     table_->EvaluateBasis(*h, u, v, wP, wDu, wDv, wDuu, wDuv, wDvv);
     const Far::ConstIndexArray cv = table_->GetPatchVertices(*h);
-    if (wDu && table_->GetPatchDescriptor(*h).GetType() == Far::PatchDescriptor::GREGORY_BASIS)
+    const Far::PatchDescriptor::Type type = table_->GetPatchDescriptor(*h).GetType();
+    if (wDu && type == Far::PatchDescriptor::GREGORY_BASIS)
       add_gregory_blend_derivatives(table_->GetPatchParam(*h), u, v, wDu, wDv, wDuu, wDuv, wDvv);
+    if (wDu && type == Far::PatchDescriptor::GREGORY_TRIANGLE)
+      add_gregory_triangle_blend_derivatives(table_->GetPatchParam(*h), u, v, wDu, wDv, wDuu, wDuv, wDvv);
     // OpenSubdiv 3.5 negates the second derivatives of rotated triangle patches (the middle
     // triangle of a Loop split, parameterized backwards) along with the first ones; the chain rule
     // gives them a factor (-1)^2 = 1. Checked against finite differences in the tests.

@@ -22,6 +22,7 @@ struct CageFitCmdOptions {
 
 int run_cage_fit(const CageFitCmdOptions& o) {
   check_outputs(o.output, {}, o.report, {o.scan});
+  check_cage_format(o.output);  // before the fit, not after it
   const Log log(o.quiet);
   Stopwatch sw;
   log.phase("reading " + o.scan);

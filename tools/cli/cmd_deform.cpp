@@ -96,6 +96,7 @@ int run_deform(const DeformCmdOptions& o) {
   const Method method = parse_method(o.method);
   check_outputs(o.output, {o.base_output}, o.report, {o.input, o.edit, o.cage, o.cage_tags});
   const bool subdiv = o.base == "subdiv";
+  if (subdiv && !o.base_output.empty()) check_cage_format(o.base_output);  // --write-base writes the cage
   // Options that do not go together: usage errors (exit 2, with the pointer to --help), as CLI11's.
   if (!subdiv && (!o.cage.empty() || !o.cage_tags.empty() || o.cage_faces > 0))
     throw CLI::ValidationError("--cage, --cage-tags and --cage-faces need --base subdiv");

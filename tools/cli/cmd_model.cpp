@@ -488,7 +488,7 @@ int run_export(const ExportCmdOptions& o) {
     throw InvalidInput(o.model + ": band " + std::to_string(k) + " out of range (the model has bands 0 .. " +
                        std::to_string(model.num_bands() - 1) + ")");
   if (o.cage) {
-    // Polygons as they are (a Catmull-Clark cage keeps its quads); STL takes triangles only.
+    // Polygons as they are (a Catmull-Clark cage keeps its quads); not STL (check_cage_format()).
     const PolyMesh& c = model.band(0).cage;
     write_cage(c, o.output);
     std::cout << "wrote " << o.output << " (control cage, " << c.num_vertices() << " vertices, "

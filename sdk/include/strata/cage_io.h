@@ -28,11 +28,16 @@ SubdivTags read_subdiv_tags(const std::string& path);
 //! Reads a cage with its polygons as the file lists them (read_mesh(path, &polygons)); the file
 //! must be a valid mesh once its polygons are triangulated.
 //! \throw as read_mesh(); InvalidInput "<path>: vertex <i> has a coordinate of magnitude ..."
-//!        beyond kMaxCoordinate.
+//!        beyond kMaxCoordinate; IoError for an .stl path (STL loses the vertex numbering that
+//!        tags name, and rounds to floats).
 PolyMesh read_cage(const std::string& path);
 
+//! Checks that \p path's format keeps a cage as read_cage() and write_cage() need (for a
+//! command's output, before its work). \throw IoError for .stl.
+void check_cage_format(const std::string& path);
+
 //! Writes a cage with its polygons (write_polygon_mesh, atomically); read_cage gives it back.
-//! \throw as write_polygon_mesh() (e.g. STL and a non-triangle face); InvalidInput as
+//! \throw IoError for an .stl path (as read_cage()); as write_polygon_mesh(); InvalidInput as
 //!        check_coordinates() for what read_cage() would refuse, before anything is written.
 void write_cage(const PolyMesh& cage, const std::string& path);
 
