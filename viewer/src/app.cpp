@@ -803,8 +803,7 @@ void App::checkpoint() {
   if (!committed_) return;
   // Recorded by the worker when it gets there (take_checkpoints()): committed_ is older while a
   // job is queued or runs.
-  worker_->checkpoint();
-  redo_.clear();
+  worker_->checkpoint();  // redo_ is cleared once it arrives (take_checkpoints())
 }
 
 void App::take_checkpoints() {
@@ -815,11 +814,18 @@ void App::take_checkpoints() {
     }
     undo_.push_back(std::move(d));
     if (undo_.size() > 32) undo_.erase(undo_.begin());
+    // A new step: what was undone before it is gone. Cleared here, not when the checkpoint was
+    // asked for: a drag that failed to start drops its checkpoint and keeps the redo stack.
+    redo_.clear();
   }
 }
 
 void App::undo() {
   if (dragging_ || worker_->busy()) return;
+  // A job that finished since this frame's snapshot was taken (the key callbacks run first):
+  // its commit is committed_ before the undo, not after it (the UI and the worker went apart; a
+  // review, thirty-eighth session).
+  take_snapshot();
   take_checkpoints();  // one the worker recorded since this frame took them
   if (undo_.empty()) return;
   redo_.push_back(committed_);
@@ -835,6 +841,7 @@ void App::undo() {
 
 void App::redo() {
   if (dragging_ || worker_->busy()) return;
+  take_snapshot();  // as undo()
   take_checkpoints();
   if (redo_.empty()) return;
   undo_.push_back(committed_);

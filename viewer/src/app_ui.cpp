@@ -69,9 +69,11 @@ void App::draw_band_panel() {
     if (committed_->is_model() && k > 0 && uk < amplitudes_.size()) {
       ImGui::SameLine();
       ImGui::SetNextItemWidth(110);
-      if (ImGui::SliderFloat("##amplitude", &amplitudes_[uk], 0.0f, 2.0f, "a=%.2f"))
-        worker_->set_amplitude(k, amplitudes_[uk]);
+      // The checkpoint before the change: the slider moves to the click on the frame it
+      // activates, and undo went back to the clicked value (a review, thirty-eighth session).
+      const bool changed = ImGui::SliderFloat("##amplitude", &amplitudes_[uk], 0.0f, 2.0f, "a=%.2f");
       if (ImGui::IsItemActivated()) checkpoint();
+      if (changed) worker_->set_amplitude(k, amplitudes_[uk]);
       ImGui::SameLine();
       const bool muted = amplitudes_[uk] == 0.0f;
       if (ImGui::SmallButton(muted ? "unmute" : "mute")) {

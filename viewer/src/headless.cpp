@@ -97,9 +97,42 @@ void write_png(const std::string& path, const std::vector<std::uint8_t>& rgba, i
   });
 }
 
+// The render's outputs (the PNG, --save, --export) are writable and neither the input nor one
+// another, before anything is loaded: an export over the input scan, or a screenshot over the
+// saved model, replaced it and exited 0 (a review, thirty-eighth session).
+void check_outputs(const Options& o) {
+  namespace fs = std::filesystem;
+  auto same = [](const std::string& a, const std::string& b) {
+    std::error_code ec, ec2;
+    if (fs::equivalent(a, b, ec)) return true;
+    return fs::weakly_canonical(fs::absolute(a, ec2), ec2).lexically_normal() ==
+           fs::weakly_canonical(fs::absolute(b, ec2), ec2).lexically_normal();
+  };
+  const std::vector<std::pair<const char*, const std::string*>> outputs = {
+      {"--screenshot", &o.screenshot}, {"--save", &o.save}, {"--export", &o.export_mesh}};
+  for (std::size_t a = 0; a < outputs.size(); ++a) {
+    const std::string& path = *outputs[a].second;
+    if (path.empty()) continue;
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw IoError(path + ": is a directory, expected a file name");
+    check_replaceable(path);
+    const fs::path dir = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");
+    if (!fs::is_directory(dir, ec))
+      throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
+    if (same(path, o.input))
+      throw InvalidInput(path + ": " + outputs[a].first +
+                         " would replace the input; write it to another file");
+    for (std::size_t b = a + 1; b < outputs.size(); ++b)
+      if (!outputs[b].second->empty() && same(path, *outputs[b].second))
+        throw InvalidInput(path + ": " + outputs[a].first + " and " + outputs[b].first +
+                           " name the same file");
+  }
+}
+
 }  // namespace
 
 std::string run_headless(const Options& options) {
+  check_outputs(options);
   nlohmann::json report;
   const auto t_load = Clock::now();
   Document document = Document::load(options.input);
@@ -112,6 +145,7 @@ std::string run_headless(const Options& options) {
     report["build_s"] = seconds_since(t_build);
   }
   document.check_band(options.band);
+  if (!options.save.empty()) (void)document.model();  // a plain mesh has none: said before the work
   if (options.show >= 0) document.check_band(options.show);
   for (const auto& [k, a] : options.amplitudes) document.check_band(k);
 
@@ -121,7 +155,16 @@ std::string run_headless(const Options& options) {
     const EditScript script = read_edit_script(path);
     for (std::size_t i = 0; i < script.edits.size(); ++i) {
       nlohmann::json provenance = {{"source", "strata-viewer"}, {"script", path}, {"step", i}};
-      document.edit(options.band, script.edits[i], provenance.dump());
+      // The script and step behind an engine error, as the CLI names them.
+      const std::string where =
+          path + ": edit " + std::to_string(i + 1) + " of " + std::to_string(script.edits.size());
+      try {
+        document.edit(options.band, script.edits[i], provenance.dump());
+      } catch (const InvalidInput& e) {
+        throw InvalidInput(where + ": " + e.what());
+      } catch (const SolverError& e) {
+        throw SolverError(where + ": " + e.what());
+      }
       ++steps;
     }
   }
@@ -138,28 +181,6 @@ std::string run_headless(const Options& options) {
   settings.cage = options.cage;
   const SceneData scene = make_scene(document, settings);
   report["scene_s"] = seconds_since(t_scene);
-  if (!options.save.empty()) layers::write_model(document.model(), options.save);
-  // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
-  if (!options.export_mesh.empty()) {
-    std::vector<std::string> notes;  // images named as the format names them (attributes_for_format())
-    const MeshAttributes attributes =
-        attributes_for_format(document.attributes(scene.shown_band), options.export_mesh, &notes);
-    write_mesh(scene.mesh, attributes, options.export_mesh);
-    // Its material library and images beside it, but never at the screenshot's path.
-    std::error_code ec;
-    const auto screenshot = std::filesystem::weakly_canonical(options.screenshot, ec);
-    const CompanionWriter write = [&](const std::string& path, const std::string& bytes) {
-      std::error_code ec2;
-      if (std::filesystem::weakly_canonical(path, ec2) == screenshot)
-        std::cerr << "strata-viewer: note: " << path
-                  << " is the screenshot; the scan's file of that name is not written" << std::endl;
-      else
-        write_text_file_atomically(path, bytes);
-    };
-    for (const std::string& note : write_companion_files(attributes, options.export_mesh, write))
-      notes.push_back(note);
-    for (const std::string& note : notes) std::cerr << "strata-viewer: note: " << note << std::endl;
-  }
   report["band_shown"] = scene.shown_band;
   report["bands"] = document.num_bands();
   report["triangles"] = scene.mesh.num_faces();
@@ -224,6 +245,30 @@ std::string run_headless(const Options& options) {
   if (gl_error_count() > 0)
     throw std::runtime_error(std::to_string(gl_error_count()) +
                              " OpenGL errors while rendering (listed above)");
+  // The files last, once the render succeeded (a failed render left the model and the mesh
+  // written, exiting 1), the PNG after them.
+  if (!options.save.empty()) layers::write_model(document.model(), options.save);
+  // The shown band's colours, texture coordinates and materials go with it (its vertex numbering).
+  if (!options.export_mesh.empty()) {
+    std::vector<std::string> notes;  // images named as the format names them (attributes_for_format())
+    const MeshAttributes attributes =
+        attributes_for_format(document.attributes(scene.shown_band), options.export_mesh, &notes);
+    write_mesh(scene.mesh, attributes, options.export_mesh);
+    // Its material library and images beside it, but never at the screenshot's path.
+    std::error_code ec;
+    const auto screenshot = std::filesystem::weakly_canonical(options.screenshot, ec);
+    const CompanionWriter write = [&](const std::string& path, const std::string& bytes) {
+      std::error_code ec2;
+      if (std::filesystem::weakly_canonical(path, ec2) == screenshot)
+        std::cerr << "strata-viewer: note: " << path
+                  << " is the screenshot; the scan's file of that name is not written" << std::endl;
+      else
+        write_text_file_atomically(path, bytes);
+    };
+    for (const std::string& note : write_companion_files(attributes, options.export_mesh, write))
+      notes.push_back(note);
+    for (const std::string& note : notes) std::cerr << "strata-viewer: note: " << note << std::endl;
+  }
   const auto t_write = Clock::now();
   write_png(options.screenshot, pixels, options.width, options.height);
   report["write_s"] = seconds_since(t_write);

@@ -287,6 +287,10 @@ void Worker::end_drag() {
       [this](Document& d) {
         if (drag_failed_) {  // nothing was dragged: no exact solve to report
           drag_failed_ = false;
+          // Nor an undo step: its checkpoint goes, as a cancelled drag's (it was the document as
+          // it still is, and undo stepped to it; a review, thirty-eighth session).
+          std::lock_guard<std::mutex> lock(mutex_);
+          checkpoints_.push_back(nullptr);
           return std::string();
         }
         const auto t0 = std::chrono::steady_clock::now();
@@ -370,6 +374,10 @@ void Worker::replace(Document document) {
         mesh_editor_.reset();
         mesh_dragging_ = false;
         d = *shared;
+        // What the next checkpoint records: the document undo or redo went to, not the one
+        // before it (the next undo brought back the change just undone; a review, thirty-eighth
+        // session).
+        last_commit_ = shared;
         return std::string();
       },
       false);

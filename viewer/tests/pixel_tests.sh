@@ -225,9 +225,23 @@ bad "bad --view" "--view: unknown view 'sideways'" "$MESH" --view sideways
 bad "bad --size" "--size width expects an integer in \[16, 8192\], got '0'" "$MESH" --size 0x10
 bad "bad edit script" "bad_edit\.json: edit\.region\.sphere\.center: expected three numbers" "$MESH" --edit "$T/bad_edit.json"
 bad "unknown option" "unknown option '--frobnicate'" "$MESH" --frobnicate
-out=$("$VIEWER" "$MESH" --screenshot "$T/nodir/x.png" 2>&1 >/dev/null) && code=0 || code=$?
-[[ $code -eq 1 && $out == "strata-viewer: error: "*"nodir/x.png: cannot create a temporary file"* ]] && pass "unwritable output: $out" ||
-  fail "unwritable output ($code: $out)"
+# An engine error names the script and the edit behind it, as the CLI does.
+printf '{"region": {"sphere": {"center": [100, 100, 100], "radius": 0.1}}, "handle": {"vertices": [0]}, "transform": {}}' \
+  > "$T/nosel.json"
+bad "edit that selects nothing" "nosel\.json: edit 1 of 1: the region selects no vertex" "$MESH" --edit "$T/nosel.json"
+# Outputs over the input or over one another are refused before any work (a review, thirty-eighth
+# session: each replaced the file and exited 0).
+cp "$MESH" "$T/input.obj"
+bad "--export over the input" "input\.obj: --export would replace the input" "$T/input.obj" --export "$T/input.obj"
+bad "--save over the screenshot" "keep\.png: --screenshot and --save name the same file" "$T/model.strata" \
+  --save "$T/keep.png"
+cmp -s "$MESH" "$T/input.obj" || fail "the input was replaced"
+# A render that fails writes none of its outputs (the model and the mesh were left behind).
+out=$("$VIEWER" "$T/model.strata" --save "$T/saved.strata" --export "$T/exported.obj" --screenshot "$T/nodir/x.png" \
+  2>&1 >/dev/null) && code=0 || code=$?
+[[ $code -eq 1 && $out == "strata-viewer: error: "*"nodir/x.png: cannot write: directory "*"nodir does not exist"* ]] &&
+  pass "unwritable output: $out" || fail "unwritable output ($code: $out)"
+[[ ! -e "$T/saved.strata" && ! -e "$T/exported.obj" ]] || fail "a failed render left its other outputs"
 
 if ((fails)); then
   echo "$fails pixel test(s) failed"

@@ -62,5 +62,48 @@ TEST(ViewerWorker, ACancelledDragAndAFailedOpenDropTheirCheckpoints) {
   EXPECT_NE(s->message.find("/nonexistent/strata/scan.obj"), std::string::npos) << s->message;
 }
 
+// A drag whose start fails (its region selects nothing) drops its checkpoint too: it was the
+// document as it still is, and undo stepped to it (a review, thirty-eighth session).
+TEST(ViewerWorker, ADragThatFailedToStartDropsItsCheckpoint) {
+  Worker w(bumps());
+  w.checkpoint();
+  w.begin_drag(0, Selection::halfspace(Vec3(0, 0, 100), Vec3(0, 0, 1)),
+               Selection::halfspace(Vec3(0, 0, 101), Vec3(0, 0, 1)));
+  w.update_drag(EditTransform::rotation(Vec3(1, 0, 0), 10.0, Vec3(0, 0, 1)));
+  w.end_drag();
+  w.wait_idle();
+  const std::vector<std::shared_ptr<const Document>> cps = w.take_checkpoints();
+  ASSERT_EQ(cps.size(), 2u);
+  EXPECT_TRUE(cps[0]);
+  EXPECT_FALSE(cps[1]);
+  const std::optional<Snapshot> s = w.take(0);
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->error);  // the begin's error is the one shown
+}
+
+// After an undo (replace() with the checkpoint), the next checkpoint is the document undo went
+// to: it recorded the one before the undo, so the next undo brought back the change just undone
+// (a review, thirty-eighth session).
+TEST(ViewerWorker, ACheckpointAfterAnUndoIsTheDocumentUndoWentTo) {
+  Worker w(bumps());
+  w.build_layers(3);
+  w.checkpoint();
+  w.set_amplitude(2, 0.0);
+  w.wait_idle();
+  std::vector<std::shared_ptr<const Document>> cps = w.take_checkpoints();
+  ASSERT_EQ(cps.size(), 1u);
+  ASSERT_TRUE(cps[0]);
+  EXPECT_EQ(cps[0]->amplitude(2), 1.0);
+  w.replace(*cps[0]);  // undo
+  w.checkpoint();
+  w.set_amplitude(1, 0.5);
+  w.wait_idle();
+  cps = w.take_checkpoints();
+  ASSERT_EQ(cps.size(), 1u);
+  ASSERT_TRUE(cps[0]);
+  EXPECT_EQ(cps[0]->amplitude(2), 1.0);
+  EXPECT_EQ(cps[0]->amplitude(1), 1.0);
+}
+
 }  // namespace
 }  // namespace strata::viewer
