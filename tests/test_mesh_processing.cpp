@@ -122,6 +122,18 @@ TEST(TaubinSmooth, IsPlainTaubinWhereNoFaceNearsCollapse) {
   }
 }
 
+// Coincident vertices become one, numbered in order of first use (-0 as +0); a face whose
+// corners join is dropped.
+TEST(WeldVertices, JoinsEqualPositionsInOrderOfFirstUse) {
+  TriMesh m;
+  m.vertices = {Vec3(0, 0, 0),    Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 0, 0),
+                Vec3(-0.0, 1, 0), Vec3(1, 1, 0), Vec3(1, 1, 0)};
+  m.faces = {{0, 1, 2}, {3, 5, 4}, {3, 5, 6}};
+  const TriMesh w = weld_vertices(m);
+  EXPECT_EQ(w.vertices, (std::vector<Vec3>{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)}));
+  EXPECT_EQ(w.faces, (std::vector<Face>{{0, 1, 2}, {1, 3, 2}}));
+}
+
 TEST(TaubinSmooth, NoFaceOfAStripCollapses) {
   const TriMesh m = strip(1);
   // Plain Taubin collapses the square (this is what the floor is for) ...

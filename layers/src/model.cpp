@@ -502,43 +502,15 @@ DetailMagnitude LayeredModel::detail_magnitude(int k) const {
 
 namespace {
 
-// \p scan with its coincident vertices (equal coordinates) joined, for the coarse bands: a scan
-// whose parts share vertex positions but not vertices (seams cut into slabs, a triangle soup)
-// was smoothed, decimated and fitted as separate sheets, and an edit opened its seams (the camel
-// in 4 slabs: 0.222 apart after the neck bend; a review, thirty-eighth session). The scan itself
+// \p scan with its coincident vertices joined (weld_vertices()), for the coarse bands: a scan whose
+// parts share vertex positions but not vertices (seams cut into slabs, a triangle soup) was
+// smoothed, decimated and fitted as separate sheets, and an edit opened its seams (the camel in
+// 4 slabs: 0.222 apart after the neck bend; a review, thirty-eighth session). The scan itself
 // stays the finest band. The scan as it is if nothing coincides, or if joining makes it invalid
 // (an edge of more than two faces: sheets that touch along a line).
 TriMesh welded_for_bands(const TriMesh& scan) {
-  struct Key {
-    std::size_t operator()(const Vec3& p) const {
-      std::size_t h = 0;
-      for (int k = 0; k < 3; ++k) {
-        const double x = p[k] == 0.0 ? 0.0 : p[k];  // -0 as 0
-        std::uint64_t bits;
-        std::memcpy(&bits, &x, sizeof bits);
-        h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
-        h ^= h >> 29;
-      }
-      return h;
-    }
-  };
-  std::unordered_map<Vec3, int, Key> first;
-  first.reserve(scan.vertices.size());
-  std::vector<int> to(scan.vertices.size());
-  TriMesh w;
-  for (std::size_t i = 0; i < scan.vertices.size(); ++i) {
-    const auto [it, fresh] = first.emplace(scan.vertices[i], static_cast<int>(w.vertices.size()));
-    if (fresh) w.vertices.push_back(scan.vertices[i]);
-    to[i] = it->second;
-  }
+  TriMesh w = weld_vertices(scan);
   if (w.vertices.size() == scan.vertices.size()) return scan;
-  w.faces.reserve(scan.faces.size());
-  for (const Face& f : scan.faces) {
-    const Face g{to[f[0]], to[f[1]], to[f[2]]};
-    if (g[0] == g[1] || g[1] == g[2] || g[2] == g[0]) return scan;  // a face whose corners coincide
-    w.faces.push_back(g);
-  }
-  w.vertices.shrink_to_fit();
   try {
     validate_mesh(w, "the welded scan");
   } catch (const InvalidInput&) {

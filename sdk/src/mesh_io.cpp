@@ -31,6 +31,7 @@
 
 #include "internal/polygon.h"
 #include "internal/read_file.h"
+#include "internal/welder.h"
 #include "strata/atomic_file.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_processing.h"
@@ -1550,35 +1551,20 @@ TriMesh read_ply(const std::string& name, std::string_view data, FaceRecord* rec
 // STL. Corners are welded: bitwise-equal positions (with -0 == +0) become one vertex, numbered in
 // order of first use.
 
+// The STL readers' welder: internal::Welder with the readers' vertex-count limit.
 class Welder {
  public:
   explicit Welder(const std::string& name) : name_(name) {}
   long long index_of(const Vec3& p) {
-    Key k;
-    for (int c = 0; c < 3; ++c) {
-      const double x = p[c] == 0.0 ? 0.0 : p[c];  // merge -0 and +0
-      std::memcpy(&k[c], &x, sizeof x);
-    }
-    const auto [it, inserted] = map_.try_emplace(k, static_cast<long long>(vertices.size()));
-    if (inserted) {
-      check_vertex_count(static_cast<long long>(vertices.size()) + 1, name_);
-      vertices.push_back(p);
-    }
-    return it->second;
+    const long long i = welder_.index_of(p);
+    if (i + 1 == static_cast<long long>(welder_.vertices.size())) check_vertex_count(i + 1, name_);
+    return i;
   }
-  std::vector<Vec3> vertices;
+  std::vector<Vec3>& vertices() { return welder_.vertices; }
 
  private:
-  using Key = std::array<uint64_t, 3>;
-  struct KeyHash {
-    size_t operator()(const Key& k) const {
-      uint64_t h = 0x9E3779B97F4A7C15ull;
-      for (uint64_t x : k) h = (h ^ x) * 0x100000001B3ull + (h >> 29);
-      return static_cast<size_t>(h);
-    }
-  };
   const std::string& name_;
-  std::unordered_map<Key, long long, KeyHash> map_;
+  internal::Welder welder_;
 };
 
 TriMesh read_stl_binary(const std::string& name, std::string_view data, uint32_t count) {
@@ -1597,7 +1583,7 @@ TriMesh read_stl_binary(const std::string& name, std::string_view data, uint32_t
                       [&] { return "facet " + std::to_string(t) + " (corners weld to equal positions)"; });
   }
   TriMesh mesh;
-  mesh.vertices = std::move(welder.vertices);
+  mesh.vertices = std::move(welder.vertices());
   mesh.faces = faces.finish(mesh.vertices);
   return mesh;
 }
@@ -1652,7 +1638,7 @@ TriMesh read_stl_ascii(const std::string& name, std::string_view text) {
     ++facet;
   }
   TriMesh mesh;
-  mesh.vertices = std::move(welder.vertices);
+  mesh.vertices = std::move(welder.vertices());
   mesh.faces = faces.finish(mesh.vertices);
   return mesh;
 }
@@ -2203,7 +2189,7 @@ TriMesh stl_image(const TriMesh& mesh, const std::string& name, bool binary) {
     }
     out.faces.push_back(g);
   }
-  out.vertices = std::move(welder.vertices);
+  out.vertices = std::move(welder.vertices());
   return out;
 }
 

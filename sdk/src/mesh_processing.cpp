@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "internal/topology.h"
+#include "internal/welder.h"
 #include "strata/exceptions.h"
 
 namespace strata {
@@ -142,6 +143,21 @@ std::optional<TriMesh> split_for_openmesh(const TriMesh& mesh, const char* what)
 }
 
 }  // namespace
+
+TriMesh weld_vertices(const TriMesh& mesh) {
+  internal::Welder welder;
+  std::vector<int> to(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    to[i] = static_cast<int>(welder.index_of(mesh.vertices[i]));
+  TriMesh w;
+  w.vertices = std::move(welder.vertices);
+  w.faces.reserve(mesh.faces.size());
+  for (const Face& f : mesh.faces) {
+    const Face g{to[f[0]], to[f[1]], to[f[2]]};
+    if (g[0] != g[1] && g[1] != g[2] && g[2] != g[0]) w.faces.push_back(g);
+  }
+  return w;
+}
 
 std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   if (steps < 0) throw InvalidInput("taubin_smooth: steps must be >= 0");

@@ -165,7 +165,7 @@ scale_obj $G/edited_base.obj tiny_edited.obj 1e-150
 scale_obj $G/detail.obj tiny_detail.obj 1e-21
 expect_fail "tiny edited base"      "tiny_edited.obj has an extent (bounding box diagonal) of .*, below the engine's range" \
   $(rec $G/detail.obj $G/base.obj tiny_edited.obj)
-expect_fail "tiny detail"           "tiny_detail.obj has an extent (bounding box diagonal) of .*, below the engine's range" \
+expect_fail "tiny detail"           "encoding tiny_detail.obj over .*: detail mesh has an extent (bounding box diagonal) of .*, below the engine's range" \
   $(rec tiny_detail.obj $G/base.obj $G/edited_base.obj)
 mkdir -p assets_tiny/tiny
 cp $G/detail.obj $G/base.obj assets_tiny/tiny/ && cp tiny_edited.obj assets_tiny/tiny/edited_base.obj

@@ -520,7 +520,6 @@ EncodedInput encode_input(const NamedMesh& detail, const NamedMesh& base, const 
             " vertices) over the base (" + std::to_string(base.mesh.num_faces()) + " faces)");
   EncodedInput e;
   Stopwatch sw;
-  check_extent(detail.mesh.vertices, detail.mesh.faces, detail.name);
   try {  // the engine's errors name the meshes by role; the user named files
     e.encoding = encode_detail(detail.mesh, base.mesh);
   } catch (const InvalidInput& ex) {

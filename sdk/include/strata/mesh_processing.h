@@ -28,6 +28,12 @@ namespace strata {
 //!        (one NaN spread over the mesh).
 std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 
+//! \p mesh with its coincident vertices joined: bitwise-equal positions (-0 as +0) become one
+//! vertex, numbered in order of first use (as the STL readers weld corners); faces whose corners
+//! then coincide are dropped. A scan whose parts share positions but not vertices (seams cut
+//! into slabs, a triangle soup) becomes one surface. \p mesh's faces must index its vertices.
+TriMesh weld_vertices(const TriMesh& mesh);
+
 //! Quadric-error decimation (Garland and Heckbert, OpenMesh's decimater) of \p mesh to about
 //! \p target_faces faces, refusing collapses that flip a face normal by more than 45 degrees or
 //! create slivers (aspect ratio above 8). Unreferenced vertices are dropped and the rest renumbered.
