@@ -1,10 +1,11 @@
 // See reference_hierarchy.h. Kept as the SDK had it (2026-11-27), OpenMesh doing the topology.
 #include "reference_hierarchy.h"
 
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+
+#include "internal/openmesh.h"  // OpenMesh as the SDK includes it
 
 namespace strata::testing {
 namespace {

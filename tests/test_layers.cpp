@@ -8,9 +8,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <random>
 #include <regex>
 
@@ -423,6 +425,66 @@ TEST(Layers, AScanInUnweldedPartsIsBuiltAsOneSurface) {
   for (const std::vector<int>& c : copies)
     for (std::size_t k = 1; k < c.size(); ++k) gap = std::max(gap, (x[c[k]] - x[c[0]]).norm());
   EXPECT_LE(gap, 0.01 * bbox_diagonal(camel.vertices));
+}
+
+// Scan debris: the camel with 300 tetrahedra (0.3% of its diagonal across) floating 1.7% of the
+// diagonal off its surface. Decimated with the camel, the tetrahedra kept their faces and took the
+// camel's share of the cage (78 of 1,278 faces were the camel's); the neck bend then left band 1
+// unconverged (max error 1.75) and 661 new pairs in the finest band. Each tetrahedron is now
+// decimated alone (decimate_mesh()), and the camel keeps its own cage.
+// (Release only: run_tests.sh's ASAN_EXCLUDE; DecimateMesh.SmallPartsDoNotTakeTheRestsFaces runs
+// the decimation's part there.)
+TEST(Layers, ScanDebrisLeavesTheSurfaceItsCage) {
+  const TriMesh camel = read_scan("camel");
+  const double diag = bbox_diagonal(camel.vertices);
+  std::vector<Vec3> normal(camel.vertices.size(), Vec3::Zero());
+  for (const Face& f : camel.faces) {
+    const Vec3 n =
+        (camel.vertices[f[1]] - camel.vertices[f[0]]).cross(camel.vertices[f[2]] - camel.vertices[f[0]]);
+    for (int v : f) normal[v] += n;
+  }
+  TriMesh scan = camel;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> pick(0, camel.num_vertices() - 1);
+  const double h = 0.003 * diag / (2 * std::sqrt(2.0));  // a regular tetrahedron 0.003 diag across
+  for (int t = 0; t < 300; ++t) {
+    const int v = pick(rng);
+    const Vec3 c = camel.vertices[v] + 0.017 * diag * normal[v].normalized();
+    const int b = scan.num_vertices();
+    for (const Vec3& s : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)})
+      scan.vertices.push_back(c + h * s);
+    for (const Face& f : {Face{0, 1, 2}, Face{0, 3, 1}, Face{0, 2, 3}, Face{1, 3, 2}})
+      scan.faces.push_back({b + f[0], b + f[1], b + f[2]});
+  }
+  LayeredModel model = LayeredModel::build(scan);
+  // The cage's faces by connected part: the camel's (the largest) and 300 tetrahedra whole.
+  const PolyMesh& cage = model.band(0).cage;
+  std::vector<int> parent(cage.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+  for (const auto& f : cage.faces)
+    for (int v : f) parent[find(v)] = find(f[0]);
+  std::map<int, int> faces_of_part;
+  for (const auto& f : cage.faces) ++faces_of_part[find(f[0])];
+  int largest = 0, fours = 0;
+  for (const auto& [root, n] : faces_of_part) {
+    largest = std::max(largest, n);
+    fours += n == 4;
+  }
+  EXPECT_EQ(fours, 300);
+  EXPECT_EQ(static_cast<int>(faces_of_part.size()), 301);
+  EXPECT_GE(largest, model_of("camel").band(0).cage.num_faces() * 9 / 10);
+  // The neck bend converges in every band. The camel's own faces get new pairs among themselves
+  // (120; 1,296 before, 0 without the debris): camel vertices within reach of a tetrahedron, 37
+  // here, are encoded over it (README, known limit of build).
+  const layers::CascadeReport r = model.edit(0, camel_neck_bend());
+  for (const layers::BandRebuild& b : r.rebuilt)
+    EXPECT_LE(b.volume.max_relative_error, 1e-3) << "band " << b.band;
+  const std::vector<Vec3>& x = model.band(2).mesh.vertices;
+  const IntersectionResult out = find_self_intersections(
+      std::vector<Vec3>(x.begin(), x.begin() + camel.num_vertices()), camel.faces, {true});
+  const IntersectionResult in = find_self_intersections(camel.vertices, camel.faces, {true});
+  EXPECT_LE(count_new_intersections(in, out), 300u);
 }
 
 TEST(Layers, NinetyDegreeNeckBendAtBandZeroAddsNoIntersectionsToTheFinestBand) {

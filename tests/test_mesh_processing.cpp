@@ -270,6 +270,20 @@ TEST(OrientFaces, AMoebiusStripIsRefused) {
   EXPECT_EQ(m.faces, before.faces);
 }
 
+namespace {
+// Appends a regular tetrahedron of edge about \p size centred at \p c, outward-oriented.
+void append_tetrahedron(TriMesh& m, const Vec3& c, double size) {
+  const int b = m.num_vertices();
+  const double h = size / (2 * std::sqrt(2.0));
+  for (const Vec3& s : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)})
+    m.vertices.push_back(c + h * s);
+  m.faces.push_back({b, b + 1, b + 2});
+  m.faces.push_back({b, b + 3, b + 1});
+  m.faces.push_back({b, b + 2, b + 3});
+  m.faces.push_back({b + 1, b + 3, b + 2});
+}
+}  // namespace
+
 // Two tetrahedra touching at vertex 3 only: every edge has two faces, but the faces around
 // vertex 3 form two fans, which OpenMesh cannot hold (its add_face dropped a face of them, with
 // only a line on stderr, and a cage fit went on with the rest).
@@ -319,6 +333,46 @@ TEST(DecimateMesh, ANonManifoldVertexIsSplitAndNoFaceIsLost) {
   EXPECT_GE(model.band(0).cage.num_faces(), 8);
   EXPECT_EQ(open_edges(model.band(0).cage.faces), 0);
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
+// Scan debris: a sphere of 1,280 faces with 40 tetrahedra beside it, decimated to 200 faces.
+// Decimated together, the tetrahedra (which cannot go below their 4 faces) kept 160 of the 200 and
+// the sphere got the other 40; each small part is now decimated alone, and the sphere gets the
+// whole target. A part that does get a share decimates with the largest as before.
+TEST(DecimateMesh, SmallPartsDoNotTakeTheRestsFaces) {
+  TriMesh m = test::icosphere(3);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int debris = 40;
+  for (int t = 0; t < debris; ++t) {
+    const Vec3 c = 1.5 * Vec3(u(rng), u(rng), u(rng)).normalized();
+    append_tetrahedron(m, c, 0.01);
+  }
+  const TriMesh d = decimate_mesh(m, 200);
+  EXPECT_NO_THROW(validate_mesh(d, "decimated"));
+  // Faces on the sphere (corners within 0.2 of the unit sphere) and on the tetrahedra (1.5 away).
+  int on_sphere = 0, on_debris = 0;
+  for (const Face& f : d.faces) {
+    const double r = (d.vertices[f[0]] + d.vertices[f[1]] + d.vertices[f[2]]).norm() / 3;
+    on_sphere += std::abs(r - 1.0) < 0.2;
+    on_debris += std::abs(r - 1.5) < 0.05;
+  }
+  EXPECT_EQ(on_sphere + on_debris, d.num_faces());
+  EXPECT_EQ(on_debris, 4 * debris);
+  EXPECT_GE(on_sphere, 196);
+  EXPECT_LE(on_sphere, 200);
+  // The sphere's faces first, then the tetrahedra's, each as it was.
+  for (int j = on_sphere; j < d.num_faces(); ++j)
+    EXPECT_NEAR((d.vertices[d.faces[j][0]]).norm(), 1.5, 0.02) << j;
+  // A second sphere of half the faces gets a share: the two decimate together, as before.
+  TriMesh two = test::icosphere(3);
+  const TriMesh half = test::icosphere(2, 0.5, Vec3(3, 0, 0));
+  const int offset = two.num_vertices();
+  two.vertices.insert(two.vertices.end(), half.vertices.begin(), half.vertices.end());
+  for (const Face& f : half.faces) two.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  const TriMesh both = decimate_mesh(two, 200);
+  EXPECT_LE(both.num_faces(), 200);
+  EXPECT_GE(both.num_faces(), 196);
 }
 
 // What validate_mesh() refuses too (decimate_mesh() has it as a precondition) is refused, not

@@ -1,9 +1,10 @@
 // The vertex-space multigrid of the Gauss-Newton volume step (internal/vertex_multigrid.h),
-// against a dense reference solve, and the reconstruction built on it.
+// against a direct (sparse LDL^T) reference solve, and the reconstruction built on it.
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 
@@ -102,49 +103,55 @@ StepSystem make_system(cases::DetailKind kind, int triangles, double jitter) {
   return s;
 }
 
-// The dense reference: (J^T J + eps I + eps_lap L) delta = J^T r over the free vertices, with J
+// The direct reference: (J^T J + eps I + eps_lap L) delta = J^T r over the free vertices, with J
 // rounded to single precision as the solver takes it and L the Laplacian of the symmetrized
-// regularization weights.
-std::vector<Vec3> dense_solve(const StepSystem& s, double eps, double eps_lap) {
+// regularization weights, solved by a sparse LDL^T factorization (Eigen's own, not the SDK's
+// solvers; a dense one took most of these tests' time under the sanitizers).
+std::vector<Vec3> direct_solve(const StepSystem& s, double eps, double eps_lap) {
   const int n = s.enc.num_detail_vertices();
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(3 * n);
+  // Each dof's column among the free ones (-1: fixed).
+  std::vector<int> column(3 * n, -1);
+  int m = 0;
+  for (int v = 0; v < n; ++v)
+    if (s.fixed.empty() || !s.fixed[v])
+      for (int c = 0; c < 3; ++c) column[3 * v + c] = m++;
+  std::vector<Eigen::Triplet<double>> entries;
+  auto add = [&](int i, int k, double x) {
+    if (column[i] >= 0 && column[k] >= 0) entries.emplace_back(column[i], column[k], x);
+  };
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(m);
   for (std::size_t j = 0; j < s.grad.size(); ++j) {
     Eigen::Matrix<double, 9, 1> g;
     for (int c = 0; c < 3; ++c) g.segment<3>(3 * c) = s.grad[j][c].cast<float>().cast<double>();
     const Face& f = s.enc.detail_faces[j];
     for (int a = 0; a < 3; ++a) {
-      b.segment<3>(3 * f[a]) += s.r[j] * g.segment<3>(3 * a);
+      for (int x = 0; x < 3; ++x)
+        if (column[3 * f[a] + x] >= 0) b[column[3 * f[a] + x]] += s.r[j] * g[3 * a + x];
       for (int c = 0; c < 3; ++c)
-        K.block<3, 3>(3 * f[a], 3 * f[c]) += g.segment<3>(3 * a) * g.segment<3>(3 * c).transpose();
+        for (int x = 0; x < 3; ++x)
+          for (int y = 0; y < 3; ++y) add(3 * f[a] + x, 3 * f[c] + y, g[3 * a + x] * g[3 * c + y]);
     }
   }
-  K.diagonal().array() += eps;
+  for (int i = 0; i < 3 * n; ++i) add(i, i, eps);
   for (int k = 0; k < n; ++k)
     for (int t = s.enc.weight_offsets[k]; t < s.enc.weight_offsets[k + 1]; ++t) {
       const int l = s.enc.weight_neighbors[t];
       const double w = 0.5 * eps_lap * s.enc.weights[t];  // half of w(k,l); w(l,k) adds the other half
       for (int c = 0; c < 3; ++c) {
-        K(3 * k + c, 3 * k + c) += w;
-        K(3 * l + c, 3 * l + c) += w;
-        K(3 * k + c, 3 * l + c) -= w;
-        K(3 * l + c, 3 * k + c) -= w;
+        add(3 * k + c, 3 * k + c, w);
+        add(3 * l + c, 3 * l + c, w);
+        add(3 * k + c, 3 * l + c, -w);
+        add(3 * l + c, 3 * k + c, -w);
       }
     }
-  std::vector<int> free;
-  for (int v = 0; v < n; ++v)
-    if (s.fixed.empty() || !s.fixed[v])
-      for (int c = 0; c < 3; ++c) free.push_back(3 * v + c);
-  const int m = static_cast<int>(free.size());
-  Eigen::MatrixXd Kf(m, m);
-  Eigen::VectorXd bf(m);
-  for (int i = 0; i < m; ++i) {
-    bf[i] = b[free[i]];
-    for (int k = 0; k < m; ++k) Kf(i, k) = K(free[i], free[k]);
-  }
-  const Eigen::VectorXd x = Kf.ldlt().solve(bf);
+  Eigen::SparseMatrix<double> K(m, m);
+  K.setFromTriplets(entries.begin(), entries.end());  // sums repeated entries
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(K);
+  EXPECT_EQ(ldlt.info(), Eigen::Success);
+  const Eigen::VectorXd x = ldlt.solve(b);
   std::vector<Vec3> delta(n, Vec3::Zero());
-  for (int i = 0; i < m; ++i) delta[free[i] / 3][free[i] % 3] = x[i];
+  for (int i = 0; i < 3 * n; ++i)
+    if (column[i] >= 0) delta[i / 3][i % 3] = x[column[i]];
   return delta;
 }
 
@@ -172,9 +179,9 @@ double linear_residual(const StepSystem& s, const std::vector<Vec3>& delta) {
 
 }  // namespace
 
-// Run to convergence, the preconditioned CG lands on the dense solution of the same system, with
+// Run to convergence, the preconditioned CG lands on the direct solution of the same system, with
 // and without the smoothness term: the hierarchy only preconditions, it does not change the step.
-TEST(VertexMultigrid, ConvergesToTheDenseSolutionOfTheDampedStep) {
+TEST(VertexMultigrid, ConvergesToTheDirectSolutionOfTheDampedStep) {
   const StepSystem s = make_system(cases::DetailKind::Bumps, 1200, 0.4);
   const internal::VertexMultigrid mg = s.hierarchy();
   ASSERT_GE(mg.level_sizes().size(), 2u);
@@ -184,7 +191,7 @@ TEST(VertexMultigrid, ConvergesToTheDenseSolutionOfTheDampedStep) {
     std::vector<Vec3> delta;
     // (The damped minimizer keeps a residual, so the stopping test never ends this solve early.)
     const internal::VertexStepResult res = mg.solve(s.view(1e-4 * d, lap * d), 0.0, 1000, delta, ws, nullptr);
-    const std::vector<Vec3> ref = dense_solve(s, 1e-4 * d, lap * d);
+    const std::vector<Vec3> ref = direct_solve(s, 1e-4 * d, lap * d);
     EXPECT_LT(relative_difference(delta, ref), 1e-6) << "eps_lap " << lap;
     // The reported residual is the true one (up to J's rounding to single precision).
     EXPECT_NEAR(res.relative_residual, linear_residual(s, delta), 1e-5);
@@ -247,7 +254,7 @@ TEST(VertexMultigrid, ARegularizationGraphBeyondTheFacesIsAppliedWhole) {
   s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, plain, ws, nullptr);
   add_non_face_edges(s);
   s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, extra, ws, nullptr);
-  EXPECT_LT(relative_difference(extra, dense_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
+  EXPECT_LT(relative_difference(extra, direct_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
   EXPECT_GT(relative_difference(extra, plain), 1e-3);  // the extra edges do change the step
 
   StepSystem big = make_system(cases::DetailKind::Rings, 20000, 0.4);
@@ -273,7 +280,7 @@ TEST(VertexMultigrid, AnEdgeOfThreeFacesAndARepeatedCornerKeepTheReferenceStep) 
   std::vector<Vec3> delta;
   internal::VertexMultigrid::Workspace ws;
   s.hierarchy().solve(s.view(1e-4 * d, 1e-1 * d), 0.0, 1000, delta, ws, nullptr);
-  EXPECT_LT(relative_difference(delta, dense_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
+  EXPECT_LT(relative_difference(delta, direct_solve(s, 1e-4 * d, 1e-1 * d)), 1e-6);
 }
 
 // Fixed (pinned) vertices: delta is exactly 0 there, and the rest is the reference solution of
@@ -296,7 +303,7 @@ TEST(VertexMultigrid, FixedVerticesDoNotMove) {
     if (s.fixed[v]) {
       ASSERT_EQ(delta[v], Vec3::Zero()) << v;
     }
-  EXPECT_LT(relative_difference(delta, dense_solve(s, 1e-4 * d, 1e-2 * d)), 1e-6);
+  EXPECT_LT(relative_difference(delta, direct_solve(s, 1e-4 * d, 1e-2 * d)), 1e-6);
 }
 
 // What the solver is for: on a scan-like (irregular) triangulation of a 20k-prism bend, ten
