@@ -41,12 +41,12 @@ TriMesh weld_vertices(const TriMesh& mesh);
 //! fan first, so that no face is lost (OpenMesh holds only manifold vertices). The result keeps the
 //! mesh's orientation.
 //! A connected part (faces joined by a vertex, after that split) too small to keep 4 faces of the
-//! target by its share of the faces, as scan debris, is decimated alone to 4 faces (a part of 4
-//! or fewer is kept as it is; the largest part is never small), and the other parts share the
-//! whole target: decimated with them, the small parts, which cannot go below their few faces,
-//! took the rest's budget. Their faces come after the rest's, and the result then has more than
-//! \p target_faces faces. A collapse that the checks above refuse can leave any part above its
-//! share.
+//! target by its share of the faces (target_faces * its faces < 4 * all faces), as scan debris,
+//! is decimated alone to 4 or 5 faces (a part of 5 or fewer is kept as it is; the largest part is
+//! never small), and the other parts share the whole target: decimated with them, the small parts,
+//! which cannot go below their few faces, took the rest's budget. Their faces come after the
+//! rest's, and the result can then have more than \p target_faces faces. A collapse that the
+//! checks above refuse can leave any part above its share.
 //! \pre mesh is a valid triangle mesh (validate_mesh()); what would crash OpenMesh or give NaN
 //!      vertices is checked.
 //! \throw InvalidInput if target_faces < 4 or the mesh has fewer than 4 faces, a face index is
