@@ -270,20 +270,6 @@ TEST(OrientFaces, AMoebiusStripIsRefused) {
   EXPECT_EQ(m.faces, before.faces);
 }
 
-namespace {
-// Appends a regular tetrahedron of edge about \p size centred at \p c, outward-oriented.
-void append_tetrahedron(TriMesh& m, const Vec3& c, double size) {
-  const int b = m.num_vertices();
-  const double h = size / (2 * std::sqrt(2.0));
-  for (const Vec3& s : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)})
-    m.vertices.push_back(c + h * s);
-  m.faces.push_back({b, b + 1, b + 2});
-  m.faces.push_back({b, b + 3, b + 1});
-  m.faces.push_back({b, b + 2, b + 3});
-  m.faces.push_back({b + 1, b + 3, b + 2});
-}
-}  // namespace
-
 // Two tetrahedra touching at vertex 3 only: every edge has two faces, but the faces around
 // vertex 3 form two fans, which OpenMesh cannot hold (its add_face dropped a face of them, with
 // only a line on stderr, and a cage fit went on with the rest).
@@ -346,7 +332,7 @@ TEST(DecimateMesh, SmallPartsDoNotTakeTheRestsFaces) {
   const int debris = 40;
   for (int t = 0; t < debris; ++t) {
     const Vec3 c = 1.5 * Vec3(u(rng), u(rng), u(rng)).normalized();
-    append_tetrahedron(m, c, 0.01);
+    test::append_tetrahedron(m, c, 0.01);
   }
   const TriMesh d = decimate_mesh(m, 200);
   EXPECT_NO_THROW(validate_mesh(d, "decimated"));
@@ -366,10 +352,7 @@ TEST(DecimateMesh, SmallPartsDoNotTakeTheRestsFaces) {
     EXPECT_NEAR((d.vertices[d.faces[j][0]]).norm(), 1.5, 0.02) << j;
   // A second sphere of half the faces gets a share: the two decimate together, as before.
   TriMesh two = test::icosphere(3);
-  const TriMesh half = test::icosphere(2, 0.5, Vec3(3, 0, 0));
-  const int offset = two.num_vertices();
-  two.vertices.insert(two.vertices.end(), half.vertices.begin(), half.vertices.end());
-  for (const Face& f : half.faces) two.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  test::append_mesh(two, test::icosphere(2, 0.5, Vec3(3, 0, 0)));
   const TriMesh both = decimate_mesh(two, 200);
   EXPECT_LE(both.num_faces(), 200);
   EXPECT_GE(both.num_faces(), 196);
@@ -427,10 +410,7 @@ TEST(DecimateMesh, SmallOpenPartsKeepFourFacesAndAShareOfFourIsNotSmall) {
   }
   // Two grids of 98 faces each, target 8: each part's share is 4 faces, so they decimate together.
   TriMesh two = grid(7, 0.0);
-  const TriMesh upper = grid(7, 10.0);
-  const int offset = two.num_vertices();
-  two.vertices.insert(two.vertices.end(), upper.vertices.begin(), upper.vertices.end());
-  for (const Face& f : upper.faces) two.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  test::append_mesh(two, grid(7, 10.0));
   const TriMesh both = decimate_mesh(two, 8);
   EXPECT_LE(both.num_faces(), 8);  // 11 with the second grid alone (8 + 3)
 }

@@ -84,4 +84,21 @@ inline TriMesh icosphere(int levels, double radius = 1.0, const Vec3& centre = V
   return m;
 }
 
+//! Appends \p part to \p m as a separate part (its vertices after m's).
+inline void append_mesh(TriMesh& m, const TriMesh& part) {
+  const int offset = m.num_vertices();
+  m.vertices.insert(m.vertices.end(), part.vertices.begin(), part.vertices.end());
+  for (const Face& f : part.faces) m.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+}
+
+//! Appends a regular tetrahedron of edge \p size centred at \p c, outward-oriented.
+inline void append_tetrahedron(TriMesh& m, const Vec3& c, double size) {
+  const double h = size / (2 * std::sqrt(2.0));
+  TriMesh t;
+  for (const Vec3& s : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)})
+    t.vertices.push_back(c + h * s);
+  t.faces = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+  append_mesh(m, t);
+}
+
 }  // namespace strata::test
