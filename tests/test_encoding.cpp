@@ -7,11 +7,14 @@
 #include <set>
 
 #include "internal/closest_point.h"
+#include "internal/parts.h"
 #include "paper_cases.h"
 #include "strata/encoding.h"
 #include "strata/exceptions.h"
 #include "strata/metrics.h"
+#include "strata/subdiv.h"
 #include "test_files.h"
+#include "test_meshes.h"
 
 using namespace strata;
 
@@ -429,4 +432,112 @@ TEST(Encoding, ANormalDisplacementHasOneProjectionPerVertex) {
     EXPECT_EQ(e.report.num_ambiguous, 0) << c.name << " " << s.triangles;
     EXPECT_EQ(e.report.max_tangential_offset, 0.0) << c.name << " " << s.triangles;
   }
+}
+
+namespace {
+
+// Scan debris: the unit sphere with a tetrahedron (edge 0.04) 4% off its surface over each of its
+// 12 icosahedron vertices, over a base of radius 0.9 with a tetrahedron of edge 0.02 at each. A
+// sphere vertex under a tetrahedron is 0.1 from its own base and about 0.035 from the
+// tetrahedron's. Both meshes have the sphere's vertices and faces first.
+struct DebrisScene {
+  TriMesh detail, base;
+  int sphere_vertices = 0, base_sphere_faces = 0;
+};
+
+DebrisScene debris_scene(const TriMesh& base_sphere) {
+  DebrisScene s;
+  s.detail = test::icosphere(3);
+  s.base = base_sphere;
+  s.sphere_vertices = s.detail.num_vertices();
+  s.base_sphere_faces = s.base.num_faces();
+  for (const Vec3& d : test::icosphere(0).vertices) {
+    test::append_tetrahedron(s.detail, 1.04 * d, 0.04);
+    test::append_tetrahedron(s.base, 1.04 * d, 0.02);
+  }
+  return s;
+}
+
+// Which base part face j of the scene's base is on: -1 the sphere's, else its tetrahedron's.
+int debris_part(const DebrisScene& s, int j) {
+  return j < s.base_sphere_faces ? -1 : (j - s.base_sphere_faces) / 4;
+}
+int debris_part_of_vertex(const DebrisScene& s, int i) {
+  return i < s.sphere_vertices ? -1 : (i - s.sphere_vertices) / 4;
+}
+
+PolyMesh as_cage(const TriMesh& m) {
+  PolyMesh c;
+  c.vertices = m.vertices;
+  for (const Face& f : m.faces) c.faces.push_back({f[0], f[1], f[2]});
+  return c;
+}
+
+}  // namespace
+
+// Each detail vertex takes its base point on its own part's base: the sphere's on the sphere's,
+// each tetrahedron's on its own. Encoded alone, the sphere puts vertices on the tetrahedra's
+// bases (the setting is one where it matters), and its part of the whole encoding is the sphere
+// encoded alone over the base sphere alone, bit for bit.
+TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBase) {
+  const DebrisScene s = debris_scene(test::icosphere(2, 0.9));
+  const DetailEncoding e = encode_detail(s.detail, s.base);
+  for (int i = 0; i < s.detail.num_vertices(); ++i)
+    ASSERT_EQ(debris_part(s, e.base_points[i].face), debris_part_of_vertex(s, i)) << "vertex " << i;
+  const TriMesh sphere = test::icosphere(3);
+  int on_debris = 0;
+  for (const BasePoint& bp : encode_detail(sphere, s.base).base_points)
+    on_debris += debris_part(s, bp.face) >= 0;
+  EXPECT_GT(on_debris, 0);
+  const DetailEncoding alone = encode_detail(sphere, test::icosphere(2, 0.9));
+  for (int i = 0; i < s.sphere_vertices; ++i) {
+    ASSERT_EQ(e.base_points[i].face, alone.base_points[i].face) << "vertex " << i;
+    ASSERT_EQ(e.base_points[i].bary, alone.base_points[i].bary) << "vertex " << i;
+  }
+}
+
+// The same over a limit surface: a Loop cage of the 0.9 sphere with a tetrahedron cage at each
+// piece of debris (the limit points' ptex faces are the cage's triangles).
+TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBaseOverALimitSurface) {
+  const DebrisScene s = debris_scene(test::icosphere(1, 0.9));
+  SubdivOptions loop;
+  loop.scheme = SubdivScheme::Loop;
+  const SubdivSurface surface(as_cage(s.base), {}, loop);
+  const DetailEncoding e = encode_detail(s.detail, surface);
+  EXPECT_EQ(e.report.num_fallback, 0);
+  for (int i = 0; i < s.detail.num_vertices(); ++i)
+    ASSERT_EQ(debris_part(s, e.limit_points[i].face), debris_part_of_vertex(s, i)) << "vertex " << i;
+  int on_debris = 0;
+  for (const LimitPoint& p : project_to_limit(surface, test::icosphere(3).vertices).points)
+    on_debris += debris_part(s, p.face) >= 0;
+  EXPECT_GT(on_debris, 0);
+  // project_mesh_to_limit() of one part is project_to_limit().
+  const TriMesh sphere = test::icosphere(3);
+  const Projection whole = project_mesh_to_limit(surface, sphere),
+                   points = project_to_limit(surface, sphere.vertices);
+  for (int i = 0; i < sphere.num_vertices(); ++i) {
+    ASSERT_EQ(whole.points[i].face, points.points[i].face) << "vertex " << i;
+    ASSERT_EQ(whole.points[i].u, points.points[i].u) << "vertex " << i;
+  }
+}
+
+// A base part goes to the detail part most of its vertices are closest to; parts are joined at
+// equal positions (an unwelded seam), and one part on either side restricts nothing.
+TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
+  const DebrisScene s = debris_scene(test::icosphere(2, 0.9));
+  const internal::PartMatch m = internal::match_parts(s.detail, s.base.vertices, s.base.faces);
+  ASSERT_EQ(m.groups.size(), 13u);
+  EXPECT_EQ(m.groups[0].size(), static_cast<std::size_t>(s.base_sphere_faces));
+  for (std::size_t g = 1; g < m.groups.size(); ++g) EXPECT_EQ(m.groups[g].size(), 4u) << "group " << g;
+  // An unwelded copy of a vertex's position joins its faces' parts.
+  TriMesh seam;
+  seam.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  seam.faces = {{0, 1, 2}, {3, 5, 4}};
+  EXPECT_EQ(internal::connected_parts(seam.vertices, seam.faces, false).count, 2);
+  EXPECT_EQ(internal::connected_parts(seam.vertices, seam.faces, true).count, 1);
+  EXPECT_TRUE(internal::match_parts(seam, s.base.vertices, s.base.faces).empty());
+  EXPECT_TRUE(internal::match_parts(s.detail, seam.vertices, seam.faces).empty());
+  // A detail part no base part lies on (the base has no debris) searches the whole base.
+  const TriMesh sphere_base = test::icosphere(2, 0.9);
+  EXPECT_TRUE(internal::match_parts(s.detail, sphere_base.vertices, sphere_base.faces).empty());
 }

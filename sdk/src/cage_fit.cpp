@@ -67,7 +67,7 @@ Distances distances(const SubdivSurface& s, const std::vector<Vec3>& x, const st
 // fitting targets.
 class CageFitter {
  public:
-  CageFitter(const PolyMesh& cage, const std::vector<Vec3>& targets, const CageFitOptions& o)
+  CageFitter(const PolyMesh& cage, const TriMesh& targets, const CageFitOptions& o)
       : o_(o),
         targets_(targets),
         surface_(cage, {}, loop_options(o.subdiv)),
@@ -79,15 +79,17 @@ class CageFitter {
     LtL_decimated_ = LtL_ * decimated_;
   }
 
-  // One round: foot points of the targets on the current limit, then the cage that minimizes
+  // One round: foot points of the targets on the current limit (each on its own part's: scan
+  // debris near the surface, with its own small part of the cage, pulled that part onto the
+  // surface), then the cage that minimizes
   //   sum_i |S(p_i; C) - t_i|^2 + mu |L (C - C_0)|^2 + eps |C - C_prev|^2,
   // where S(p_i; C) = w_i^T C is linear in C through the limit stencil w_i and C_0 is the
   // decimated cage. The smoothness term asks for a smooth displacement of the decimated cage
   // rather than a flat cage (|L C|^2 would shrink curved parts). The small eps keeps cage
   // vertices that no target sees at their place.
   void round() {
-    const Projection pr = project_to_limit(surface_, targets_, o_.projection);
-    const int m = static_cast<int>(targets_.size()), n = surface_.num_control_points();
+    const Projection pr = project_mesh_to_limit(surface_, targets_, o_.projection);
+    const int m = targets_.num_vertices(), n = surface_.num_control_points();
     std::vector<SubdivSurface::Stencil> st(m);
     tbb::parallel_for(0, m, [&](int i) { st[i] = surface_.stencil(pr.points[i]); });
     std::vector<Eigen::Triplet<double>> t;
@@ -104,7 +106,7 @@ class CageFitter {
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(N);
     if (ldlt.info() != Eigen::Success) throw SolverError("cage fit: the least-squares system is singular");
     Eigen::MatrixXd T(m, 3), C(n, 3);
-    for (int i = 0; i < m; ++i) T.row(i) = targets_[i].transpose();
+    for (int i = 0; i < m; ++i) T.row(i) = targets_.vertices[i].transpose();
     const std::vector<Vec3>& prev = surface_.control_points();
     for (int j = 0; j < n; ++j) C.row(j) = prev[j].transpose();
     const Eigen::MatrixXd X = ldlt.solve(At * T + mu * LtL_decimated_ + eps * C);
@@ -124,7 +126,7 @@ class CageFitter {
   }
 
   const CageFitOptions& o_;
-  const std::vector<Vec3>& targets_;
+  const TriMesh& targets_;
   SubdivSurface surface_;
   Eigen::MatrixXd decimated_;        // C_0, n x 3
   Eigen::SparseMatrix<double> LtL_;  // L^T L of the cage's Laplacian, fixed over the rounds
@@ -194,15 +196,19 @@ CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
 
   // The fit's targets are the vertices in faces: a stray point (validate_mesh() allows them) would
   // pull the cage towards itself.
-  std::vector<char> used(scan.vertices.size(), 0);
+  // Their faces are kept (renumbered) for the projections' parts.
+  std::vector<int> used(scan.vertices.size(), -1);
   for (const Face& f : scan.faces)
-    for (int v : f) used[v] = 1;
-  std::vector<Vec3> smooth_used, scan_used;
+    for (int v : f) used[v] = 0;
+  TriMesh smooth_used, scan_used;
   for (std::size_t i = 0; i < used.size(); ++i)
-    if (used[i]) {
-      smooth_used.push_back(smooth[i]);
-      scan_used.push_back(scan.vertices[i]);
+    if (used[i] == 0) {
+      used[i] = smooth_used.num_vertices();
+      smooth_used.vertices.push_back(smooth[i]);
+      scan_used.vertices.push_back(scan.vertices[i]);
     }
+  for (const Face& f : scan.faces) smooth_used.faces.push_back({used[f[0]], used[f[1]], used[f[2]]});
+  scan_used.faces = smooth_used.faces;
 
   t0 = Clock::now();
   // The decimated cage is the fit's own: a cage it cannot subdivide (a vertex of the scan's in
@@ -219,13 +225,13 @@ CageFit fit_centred(const TriMesh& scan, const CageFitOptions& options) {
   const SubdivSurface& s = fitter.surface();
   fit.cage = s.cage();
   fit.cage.vertices = s.control_points();
-  const double diag = std::max(bbox_diagonal(scan_used), 1e-300);
+  const double diag = std::max(bbox_diagonal(scan_used.vertices), 1e-300);
   const Distances target_d =
-      distances(s, smooth_used, project_to_limit(s, smooth_used, options.projection).points);
+      distances(s, smooth_used.vertices, project_mesh_to_limit(s, smooth_used, options.projection).points);
   fit.rms_error = target_d.rms / diag;
   fit.max_error = target_d.max / diag;
-  const Projection scan_p = project_to_limit(s, scan_used, options.projection);
-  const Distances scan_d = distances(s, scan_used, scan_p.points);
+  const Projection scan_p = project_mesh_to_limit(s, scan_used, options.projection);
+  const Distances scan_d = distances(s, scan_used.vertices, scan_p.points);
   fit.scan_rms_distance = scan_d.rms / diag;
   fit.scan_max_distance = scan_d.max / diag;
   fit.scan_fallback = scan_p.num_fallback;

@@ -14,6 +14,7 @@
 #include "internal/closest_point.h"
 #include "internal/offset_roots.h"
 #include "internal/option_error.h"
+#include "internal/parts.h"
 #include "internal/renumber.h"
 #include "internal/topology.h"
 #include "internal/vectors.h"
@@ -36,13 +37,18 @@ void check_mesh(const TriMesh& m, const char* what) {
 // Working state of one encode_detail() call.
 class Encoder {
  public:
-  Encoder(const TriMesh& base, const EncodeOptions& o)
+  Encoder(const TriMesh& detail, const TriMesh& base, const EncodeOptions& o)
       : base_(base),
         opt_(o),
         normals_(vertex_normals(base.vertices, base.faces)),
         adj_(internal::build_adjacency(base.num_vertices(), base.faces)),
         tree_(base.vertices, base.faces),
-        unit_(std::min(1.0, bbox_diagonal(base.vertices))) {}
+        parts_(internal::match_parts(detail, base.vertices, base.faces)),
+        unit_(std::min(1.0, bbox_diagonal(base.vertices))) {
+    part_trees_.reserve(parts_.groups.size());
+    for (const std::vector<int>& faces : parts_.groups)
+      part_trees_.emplace_back(base.vertices, base.faces, faces);
+  }
 
   // One thread's ring-search state: the faces of the rings, and each base face's last stamp.
   struct Scratch {
@@ -50,12 +56,15 @@ class Encoder {
   };
   Scratch scratch() const { return Scratch{std::vector<int>(base_.faces.size(), -1), {}}; }
 
-  // Base point of detail vertex p (index i, for the ring-search marks). Depends on nothing but
-  // p, so vertices may be projected in any order and on any thread (each with its own scratch).
+  // Base point of detail vertex p (index i, for its part and the ring-search marks), on the base
+  // parts under p's own part (internal::match_parts(): the rings grow within the closest face's
+  // part). Depends on nothing but p and its part, so vertices may be projected in any order and
+  // on any thread (each with its own scratch).
   BasePoint project(int i, const Vec3& p, EncodeReport& report, Scratch& sc) const {
     std::vector<int>& ring = sc.ring;
     std::vector<int>& mark = sc.mark;
-    const auto hit = tree_.closest(p);
+    const int group = parts_.group(i);
+    const auto hit = (group < 0 ? tree_ : part_trees_[group]).closest(p);
     if (hit.face < 0) throw SolverError("no closest base face for detail vertex " + std::to_string(i));
     const double dc = std::sqrt(hit.distance_sq);
     const double T = opt_.max_distance_ratio * dc + 1e-12 * unit_;
@@ -148,6 +157,8 @@ class Encoder {
   std::vector<Vec3> normals_;
   internal::Adjacency adj_;
   internal::TriangleTree tree_;
+  internal::PartMatch parts_;
+  std::vector<internal::TriangleTree> part_trees_;  // one per group of parts_
   // The absolute tolerances' unit: 1, or the base's diagonal if it is smaller, so that a mesh
   // scaled by 1e-9 encodes as at 1 (T bounds the root search: meshes of diagonal 1 or more keep
   // their encodings bit for bit).
@@ -281,7 +292,7 @@ DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const E
     // numbering (a scan whose file hashes its vertices) is visited along a Morton curve of the
     // positions instead, so that consecutive queries share the base tree's paths in the caches
     // (the same points, projected in another order).
-    const Encoder enc(base, options);
+    const Encoder enc(detail, base, options);
     const std::vector<int> order = internal::locality_renumbering(detail.vertices, detail.faces).old_of_new;
     tbb::enumerable_thread_specific<Encoder::Scratch> scratch([&] { return enc.scratch(); });
     std::mutex counts;
@@ -309,7 +320,7 @@ DetailEncoding encode_detail(const TriMesh& detail, const SubdivSurface& base,
                              const ProjectOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   check_mesh(detail, "detail");
-  Projection pr = project_to_limit(base, detail.vertices, options);
+  Projection pr = project_mesh_to_limit(base, detail, options);
   DetailEncoding e = encoding_over_limit(detail, base, std::move(pr.points));
   e.report.num_projected = pr.num_converged;
   e.report.num_fallback = pr.num_fallback;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "internal/closest_point.h"
+#include "internal/parts.h"
 #include "internal/ptex_domain.h"
 #include "strata/exceptions.h"
 #include "strata/subdiv.h"
@@ -19,13 +20,20 @@ namespace {
 // The working state of one projection run; project() is const and thread-safe.
 class Projector {
  public:
-  Projector(const SubdivSurface& s, const ProjectOptions& o)
+  // With \p mesh, the points are its vertices, each projected within its part's surface parts.
+  Projector(const SubdivSurface& s, const ProjectOptions& o, const TriMesh* mesh)
       : surface_(s),
         opt_(o),
         corners_(s.ptex_corners()),
         tess_(s.tessellate(o.seed_resolution)),
         tree_(tess_.mesh.vertices, tess_.mesh.faces),
-        on_surface_(1e-12 * bbox_diagonal(s.control_points())) {}
+        on_surface_(1e-12 * bbox_diagonal(s.control_points())) {
+    if (!mesh) return;
+    parts_ = internal::match_parts(*mesh, tess_.mesh.vertices, tess_.mesh.faces);
+    part_trees_.reserve(parts_.groups.size());
+    for (const std::vector<int>& faces : parts_.groups)
+      part_trees_.emplace_back(tess_.mesh.vertices, tess_.mesh.faces, faces);
+  }
 
   struct Result {
     LimitPoint point;
@@ -34,8 +42,11 @@ class Projector {
     int iterations = 0;
   };
 
-  Result project(const Vec3& p) const {
-    const internal::TriangleTree::Hit hit = tree_.closest(p);
+  // The foot point of point i at p: seeded on its part's tessellation faces, and Newton's steps
+  // cross ptex edges only, so it stays on the connected part of the seed.
+  Result project(int i, const Vec3& p) const {
+    const int group = parts_.group(i);
+    const internal::TriangleTree::Hit hit = (group < 0 ? tree_ : part_trees_[group]).closest(p);
     const auto& uv = tess_.face_uv[hit.face];
     const Eigen::Vector2d seed = hit.bary[0] * uv[0] + hit.bary[1] * uv[1] + hit.bary[2] * uv[2];
     Result r;
@@ -238,12 +249,30 @@ class Projector {
   LimitTessellation tess_;
   internal::TriangleTree tree_;
   double on_surface_;
+  internal::PartMatch parts_;
+  std::vector<internal::TriangleTree> part_trees_;  // one per group of parts_
 };
+
+Projection project_points(const SubdivSurface& surface, const std::vector<Vec3>& points,
+                          const ProjectOptions& options, const TriMesh* mesh);
 
 }  // namespace
 
 Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3>& points,
                             const ProjectOptions& options) {
+  return project_points(surface, points, options, nullptr);
+}
+
+Projection project_mesh_to_limit(const SubdivSurface& surface, const TriMesh& mesh,
+                                 const ProjectOptions& options) {
+  return project_points(surface, mesh.vertices, options, &mesh);
+}
+
+namespace {
+
+// project_to_limit(), for the vertices of \p mesh if given (project_mesh_to_limit()).
+Projection project_points(const SubdivSurface& surface, const std::vector<Vec3>& points,
+                          const ProjectOptions& options, const TriMesh* mesh) {
   const auto t0 = std::chrono::steady_clock::now();
   if (options.seed_resolution < 1 || options.max_iterations < 1 || !(options.orthogonality_tolerance > 0) ||
       !(options.seam_tolerance >= options.orthogonality_tolerance))
@@ -264,10 +293,10 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
   out.converged.assign(n, 0);
   std::vector<int> iterations(n, 0);
   std::vector<char> on_boundary(n, 0);
-  const Projector proj(surface, options);
+  const Projector proj(surface, options, mesh);
   auto body = [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
-      const Projector::Result r = proj.project(points[i]);
+      const Projector::Result r = proj.project(static_cast<int>(i), points[i]);
       out.points[i] = r.point;
       out.converged[i] = r.converged ? 1 : 0;
       iterations[i] = r.iterations;
@@ -289,5 +318,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
+
+}  // namespace
 
 }  // namespace strata

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "internal/openmesh.h"
+#include "internal/parts.h"
 #include "internal/topology.h"
 #include "internal/welder.h"
 #include "strata/exceptions.h"
@@ -321,27 +322,10 @@ TriMesh decimate_manifold(const TriMesh& mesh, int target) {
 // The faces of each connected part of \p mesh (faces joined by a shared vertex), each part's in
 // order, the parts in order of their first face.
 std::vector<std::vector<int>> connected_parts(const TriMesh& mesh) {
-  std::vector<int> parent(mesh.vertices.size());
-  for (std::size_t v = 0; v < parent.size(); ++v) parent[v] = static_cast<int>(v);
-  auto find = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const Face& f : mesh.faces)
-    for (int c = 1; c < 3; ++c) {
-      const int a = find(f[0]), b = find(f[c]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
-  std::vector<int> part_of_root(mesh.vertices.size(), -1);
-  std::vector<std::vector<int>> parts;
-  for (std::size_t j = 0; j < mesh.faces.size(); ++j) {
-    int& part = part_of_root[find(mesh.faces[j][0])];
-    if (part < 0) {
-      part = static_cast<int>(parts.size());
-      parts.emplace_back();
-    }
-    parts[part].push_back(static_cast<int>(j));
-  }
+  const internal::Parts p = internal::connected_parts(mesh.vertices, mesh.faces, false);
+  std::vector<std::vector<int>> parts(p.count);
+  for (std::size_t j = 0; j < mesh.faces.size(); ++j)
+    parts[p.of_face(mesh.faces[j])].push_back(static_cast<int>(j));
   return parts;
 }
 

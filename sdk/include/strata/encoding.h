@@ -103,17 +103,21 @@ void check_encode_options(const EncodeOptions& options);
 //! to the base's interpolated (Phong) vertex normal at q_i, then stores the target volumes, the
 //! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
 //! have any connectivity. Where no such point exists near the closest point, the closest point
-//! is used and counted in the report. The projections, the target volumes and the weights run on
-//! TBB's threads (the caller's task arena); the result does not depend on their number.
-//! \pre detail and base are valid triangle meshes (see validate_mesh()).
-//! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates, or
-//! an option is out of range (check_encode_options()), or a base point's face has no normal
-//! (evaluate_base_frames()).
+//! is used and counted in the report. With several connected parts on both sides (a scan with
+//! debris), q_i is sought only on the base's parts under p_i's own part: each part of the base
+//! goes to the detail part its points lie nearest to on average (parts joined at bitwise-equal
+//! positions: unwelded seams), and a detail part that no base part goes to searches the whole
+//! base, as every vertex does when either side is one part. The projections, the target volumes and the
+//! weights run on TBB's threads (the caller's task arena); the result does not depend on their number. \pre
+//! detail and base are valid triangle meshes (see validate_mesh()). \throw InvalidInput if a mesh is empty or
+//! has out-of-range indices or non-finite coordinates, or an option is out of range (check_encode_options()),
+//! or a base point's face has no normal (evaluate_base_frames()).
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
-//! foot point of the detail vertex on the limit surface along the limit normal
-//! (project_to_limit()), stored as (ptex face, u, v), which is exact on every edited cage. Then,
+//! foot point of the detail vertex on the limit surface along the limit normal, on the surface's
+//! parts under the vertex's own part (project_mesh_to_limit()), stored as (ptex face, u, v), which
+//! is exact on every edited cage. Then,
 //! as over a triangle base, the target volumes, displacement lengths and regularization weights.
 //! Projections that do not converge are counted as fallbacks in the report (num_fallback) and
 //! keep their tangential offset.

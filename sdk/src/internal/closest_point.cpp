@@ -62,19 +62,33 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 TriangleTree::TriangleTree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces)
     : vertices_(vertices), faces_(faces) {
-  const int n = static_cast<int>(faces.size());
+  build_over(nullptr);
+}
+
+TriangleTree::TriangleTree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                           const std::vector<int>& subset)
+    : vertices_(vertices), faces_(faces) {
+  build_over(&subset);
+}
+
+// Builds over local indices 0..n-1 (the subset's positions), then names the faces: over the whole
+// mesh the local index is the face's, and the tree is the one built before subsets existed.
+void TriangleTree::build_over(const std::vector<int>* subset) {
+  const int n = static_cast<int>(subset ? subset->size() : faces_.size());
   order_.resize(n);
   std::vector<Eigen::AlignedBox3d> boxes(n);
   std::vector<Vec3> centroids(n);
   for (int i = 0; i < n; ++i) {
     order_[i] = i;
-    const Face& f = faces[i];
-    boxes[i] = Eigen::AlignedBox3d(vertices[f[0]]);
-    boxes[i].extend(vertices[f[1]]).extend(vertices[f[2]]);
-    centroids[i] = (vertices[f[0]] + vertices[f[1]] + vertices[f[2]]) / 3.0;
+    const Face& f = faces_[subset ? (*subset)[i] : i];
+    boxes[i] = Eigen::AlignedBox3d(vertices_[f[0]]);
+    boxes[i].extend(vertices_[f[1]]).extend(vertices_[f[2]]);
+    centroids[i] = (vertices_[f[0]] + vertices_[f[1]] + vertices_[f[2]]) / 3.0;
   }
   nodes_.reserve(2 * n / 4 + 2);
   if (n > 0) build(0, n, boxes, centroids);
+  if (subset)
+    for (int& i : order_) i = (*subset)[i];
 }
 
 int TriangleTree::build(int begin, int end, std::vector<Eigen::AlignedBox3d>& boxes,

@@ -15,6 +15,10 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 class TriangleTree {
  public:
   TriangleTree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
+  //! A tree over the faces \p subset of the mesh only (indices into \p faces; copied). Hits name
+  //! the mesh's own face indices.
+  TriangleTree(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+               const std::vector<int>& subset);
 
   struct Hit {
     int face = -1;
@@ -31,6 +35,7 @@ class TriangleTree {
     int left = -1, right = -1;  // children, or -1 for a leaf
     int begin = 0, end = 0;     // leaf range in order_
   };
+  void build_over(const std::vector<int>* subset);
   int build(int begin, int end, std::vector<Eigen::AlignedBox3d>& boxes, std::vector<Vec3>& centroids);
 
   const std::vector<Vec3>& vertices_;

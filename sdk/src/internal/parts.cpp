@@ -1,0 +1,162 @@
+#include "internal/parts.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <utility>
+
+#include "internal/closest_point.h"
+#include "internal/welder.h"
+
+namespace strata::internal {
+
+Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                      bool join_equal_positions) {
+  const int nv = static_cast<int>(vertices.size());
+  std::vector<int> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  auto join = [&](int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (const Face& f : faces)
+    for (int c = 1; c < 3; ++c) join(f[0], f[c]);
+  if (join_equal_positions) {
+    Welder welder;
+    std::vector<int> first;  // per welded position: the first vertex there
+    for (int v = 0; v < nv; ++v) {
+      const auto w = static_cast<std::size_t>(welder.index_of(vertices[v]));
+      if (w == first.size())
+        first.push_back(v);
+      else
+        join(first[w], v);
+    }
+  }
+  Parts p;
+  p.of_vertex.assign(nv, -1);
+  std::vector<int> part_of_root(nv, -1);
+  for (const Face& f : faces) {
+    int& part = part_of_root[find(f[0])];
+    if (part < 0) part = p.count++;
+  }
+  for (const Face& f : faces)
+    for (int v : f) p.of_vertex[v] = part_of_root[find(v)];
+  return p;
+}
+
+namespace {
+
+// The points of each base part that decide where it lies: its vertices and its faces' centroids,
+// at most kSamples of each (evenly strided: the cost stays bounded by the parts' count, and a
+// large part's side of the vote is clear from a few), and the centroid of its vertices.
+constexpr int kSamples = 128;
+
+std::vector<std::vector<Vec3>> part_samples(const Parts& bp, const std::vector<Vec3>& x,
+                                            const std::vector<Face>& faces) {
+  std::vector<int> nv(bp.count, 0), nf(bp.count, 0);
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (bp.of_vertex[v] >= 0) ++nv[bp.of_vertex[v]];
+  for (const Face& f : faces) ++nf[bp.of_face(f)];
+  auto stride = [](int n) { return (n + kSamples - 1) / kSamples; };
+  std::vector<std::vector<Vec3>> samples(bp.count);
+  std::vector<Vec3> sum(bp.count, Vec3::Zero());
+  std::vector<int> seen(bp.count, 0);
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (const int p = bp.of_vertex[v]; p >= 0) {
+      sum[p] += x[v];
+      if (seen[p]++ % stride(nv[p]) == 0) samples[p].push_back(x[v]);
+    }
+  std::fill(seen.begin(), seen.end(), 0);
+  for (const Face& f : faces)
+    if (const int p = bp.of_face(f); seen[p]++ % stride(nf[p]) == 0)
+      samples[p].push_back((x[f[0]] + x[f[1]] + x[f[2]]) / 3.0);
+  for (int p = 0; p < bp.count; ++p) samples[p].push_back(sum[p] / nv[p]);
+  return samples;
+}
+
+// The closest points of \p points on \p tree, as distances (on TBB's threads).
+std::vector<double> distances_to(const TriangleTree& tree, const std::vector<Vec3>& points) {
+  std::vector<double> d(points.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        d[i] = std::sqrt(tree.closest(points[i]).distance_sq);
+                    });
+  return d;
+}
+
+}  // namespace
+
+PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_vertices,
+                      const std::vector<Face>& base_faces) {
+  PartMatch m;
+  const Parts dp = connected_parts(detail.vertices, detail.faces, true);
+  if (dp.count < 2) return m;
+  const Parts bp = connected_parts(base_vertices, base_faces, true);
+  if (bp.count < 2) return m;
+  const std::vector<std::vector<Vec3>> samples = part_samples(bp, base_vertices, base_faces);
+  // The candidates for each base part: the detail parts of its samples' closest detail faces.
+  const TriangleTree tree(detail.vertices, detail.faces);
+  std::vector<std::vector<int>> candidates(bp.count);
+  tbb::parallel_for(tbb::blocked_range<int>(0, bp.count, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int p = r.begin(); p != r.end(); ++p) {
+      for (const Vec3& x : samples[p])
+        candidates[p].push_back(dp.of_face(detail.faces[tree.closest(x).face]));
+      std::sort(candidates[p].begin(), candidates[p].end());
+      candidates[p].erase(std::unique(candidates[p].begin(), candidates[p].end()), candidates[p].end());
+    }
+  });
+  // A base part near several detail parts goes to the one its samples are nearest to on average
+  // (the lower part on a tie): a closest face alone gave debris close to the surface to the
+  // surface. Each contested candidate gets a tree of its own faces.
+  std::vector<std::vector<int>> faces_of(dp.count);
+  for (int j = 0; j < static_cast<int>(detail.faces.size()); ++j)
+    faces_of[dp.of_face(detail.faces[j])].push_back(j);
+  std::vector<std::unique_ptr<TriangleTree>> part_tree(dp.count);
+  std::vector<int> owner(bp.count, -1);
+  for (int p = 0; p < bp.count; ++p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int d : candidates[p]) {
+      if (candidates[p].size() == 1) {
+        owner[p] = d;
+        break;
+      }
+      if (!part_tree[d])
+        part_tree[d] = std::make_unique<TriangleTree>(detail.vertices, detail.faces, faces_of[d]);
+      const std::vector<double> dist = distances_to(*part_tree[d], samples[p]);
+      const double mean = std::accumulate(dist.begin(), dist.end(), 0.0) / static_cast<double>(dist.size());
+      if (mean < best) {
+        best = mean;
+        owner[p] = d;
+      }
+    }
+  }
+  std::vector<int> group_of_part(dp.count, -1);
+  for (int j = 0; j < static_cast<int>(base_faces.size()); ++j) {
+    const int d = owner[bp.of_face(base_faces[j])];
+    int& g = group_of_part[d];
+    if (g < 0) {
+      g = static_cast<int>(m.groups.size());
+      m.groups.emplace_back();
+    }
+    m.groups[g].push_back(j);
+  }
+  // One group holding every base face restricts nothing.
+  if (m.groups.size() == 1) return PartMatch{};
+  m.group_of_vertex.resize(detail.vertices.size());
+  for (std::size_t v = 0; v < detail.vertices.size(); ++v)
+    m.group_of_vertex[v] = dp.of_vertex[v] < 0 ? -1 : group_of_part[dp.of_vertex[v]];
+  return m;
+}
+
+}  // namespace strata::internal

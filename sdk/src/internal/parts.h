@@ -1,0 +1,45 @@
+// Internal: the connected parts of a mesh, and which parts of a base lie under which parts of a
+// detail mesh, so that a detail vertex takes its base point on its own part's base (scan debris
+// near a surface is not that surface's base). Used by the encodings (encode_detail()) and the
+// decimation. Not part of the API.
+#pragma once
+
+#include <vector>
+
+#include "strata/mesh.h"
+
+namespace strata::internal {
+
+//! The connected parts of a mesh's faces: the corners of a face are in one part.
+struct Parts {
+  std::vector<int> of_vertex;  //!< each vertex's part, -1 for a vertex that no face uses
+  int count = 0;               //!< parts, numbered in order of their first face
+  int of_face(const Face& f) const { return of_vertex[f[0]]; }
+};
+
+//! The parts of (\p vertices, \p faces). With \p join_equal_positions, vertices at bitwise-equal
+//! positions are in one part too (a scan's unwelded seams: its sheets are one surface).
+//! \pre every face index is in range.
+Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                      bool join_equal_positions);
+
+//! The base faces on which each detail vertex may take its base point.
+//! Each part of the base goes to the detail part that most of its vertices lie closest to. A
+//! detail vertex may then take its base point only on the base parts of its own part. A detail
+//! part with no base part, or a vertex of no face, may take it anywhere (group -1).
+//! empty() when that restricts nothing: one detail part or one base part, the common case, so that
+//! such encodings are those of a search over the whole base.
+struct PartMatch {
+  std::vector<std::vector<int>> groups;  //!< the base faces open to each group (a detail part)
+  std::vector<int> group_of_vertex;      //!< per detail vertex: its group, or -1 for any base face
+  bool empty() const { return groups.empty(); }
+  int group(int vertex) const { return groups.empty() ? -1 : group_of_vertex[vertex]; }
+};
+
+//! Matches the parts of the base (\p base_vertices, \p base_faces) to those of \p detail (parts
+//! joined at equal positions on both). Runs on TBB's threads; the result does not depend on them.
+//! \pre both meshes have faces and every face index is in range.
+PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_vertices,
+                      const std::vector<Face>& base_faces);
+
+}  // namespace strata::internal
