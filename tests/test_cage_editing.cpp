@@ -270,3 +270,27 @@ TEST(CageEditor, RejectsBadSelections) {
   rings.handle_solved_rings = std::numeric_limits<int>::max();
   EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, rings), InvalidInput);
 }
+
+// The region's vertices are encoded over their own part's base, as encode_detail() would encode
+// the whole mesh: the submesh of a region over the sphere is one part, and projected alone it put
+// 50 sphere vertices on the tetrahedra's cages (a review).
+TEST(CageEditor, ScanDebrisIsNotTheRegionsBase) {
+  const test::DebrisScene s = test::debris_scene(test::icosphere(1, 0.9));
+  const PolyMesh cage = test::triangle_cage(s.base);
+  SubdivOptions loop;
+  loop.scheme = SubdivScheme::Loop;
+  std::vector<char> region(cage.num_vertices(), 0), handle(cage.num_vertices(), 0);
+  for (int v = 0; v < test::icosphere(1).num_vertices(); ++v) {
+    region[v] = cage.vertices[v].z() > 0.0;
+    handle[v] = cage.vertices[v].z() > 0.6;
+  }
+  const CageEditor editor(s.detail, SubdivSurface(cage, {}, loop), region, handle);
+  const DetailEncoding& e = editor.encoding();
+  int sphere = 0;
+  for (std::size_t k = 0; k < e.detail_rest.size(); ++k) {
+    const bool on_sphere = e.detail_rest[k].norm() < 1.0 + 1e-9;
+    sphere += on_sphere;
+    ASSERT_EQ(on_sphere, e.limit_points[k].face < s.base_sphere_faces) << "region vertex " << k;
+  }
+  EXPECT_GT(sphere, 100);
+}

@@ -436,27 +436,7 @@ TEST(Encoding, ANormalDisplacementHasOneProjectionPerVertex) {
 
 namespace {
 
-// Scan debris: the unit sphere with a tetrahedron (edge 0.04) 4% off its surface over each of its
-// 12 icosahedron vertices, over a base of radius 0.9 with a tetrahedron of edge 0.02 at each. A
-// sphere vertex under a tetrahedron is 0.1 from its own base and about 0.035 from the
-// tetrahedron's. Both meshes have the sphere's vertices and faces first.
-struct DebrisScene {
-  TriMesh detail, base;
-  int sphere_vertices = 0, base_sphere_faces = 0;
-};
-
-DebrisScene debris_scene(const TriMesh& base_sphere) {
-  DebrisScene s;
-  s.detail = test::icosphere(3);
-  s.base = base_sphere;
-  s.sphere_vertices = s.detail.num_vertices();
-  s.base_sphere_faces = s.base.num_faces();
-  for (const Vec3& d : test::icosphere(0).vertices) {
-    test::append_tetrahedron(s.detail, 1.04 * d, 0.04);
-    test::append_tetrahedron(s.base, 1.04 * d, 0.02);
-  }
-  return s;
-}
+using test::DebrisScene;
 
 // Which base part face j of the scene's base is on: -1 the sphere's, else its tetrahedron's.
 int debris_part(const DebrisScene& s, int j) {
@@ -466,11 +446,24 @@ int debris_part_of_vertex(const DebrisScene& s, int i) {
   return i < s.sphere_vertices ? -1 : (i - s.sphere_vertices) / 4;
 }
 
-PolyMesh as_cage(const TriMesh& m) {
-  PolyMesh c;
-  c.vertices = m.vertices;
-  for (const Face& f : m.faces) c.faces.push_back({f[0], f[1], f[2]});
-  return c;
+// The faces of \p m whose centroids \p keep, with their vertices, renumbered.
+template <class Keep>
+TriMesh faces_where(const TriMesh& m, Keep keep) {
+  TriMesh out;
+  std::vector<int> id(m.vertices.size(), -1);
+  for (const Face& f : m.faces) {
+    if (!keep((m.vertices[f[0]] + m.vertices[f[1]] + m.vertices[f[2]]) / 3.0)) continue;
+    Face g;
+    for (int c = 0; c < 3; ++c) {
+      if (id[f[c]] < 0) {
+        id[f[c]] = out.num_vertices();
+        out.vertices.push_back(m.vertices[f[c]]);
+      }
+      g[c] = id[f[c]];
+    }
+    out.faces.push_back(g);
+  }
+  return out;
 }
 
 }  // namespace
@@ -480,7 +473,7 @@ PolyMesh as_cage(const TriMesh& m) {
 // bases (the setting is one where it matters), and its part of the whole encoding is the sphere
 // encoded alone over the base sphere alone, bit for bit.
 TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBase) {
-  const DebrisScene s = debris_scene(test::icosphere(2, 0.9));
+  const DebrisScene s = test::debris_scene(test::icosphere(2, 0.9));
   const DetailEncoding e = encode_detail(s.detail, s.base);
   for (int i = 0; i < s.detail.num_vertices(); ++i)
     ASSERT_EQ(debris_part(s, e.base_points[i].face), debris_part_of_vertex(s, i)) << "vertex " << i;
@@ -499,10 +492,10 @@ TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBase) {
 // The same over a limit surface: a Loop cage of the 0.9 sphere with a tetrahedron cage at each
 // piece of debris (the limit points' ptex faces are the cage's triangles).
 TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBaseOverALimitSurface) {
-  const DebrisScene s = debris_scene(test::icosphere(1, 0.9));
+  const DebrisScene s = test::debris_scene(test::icosphere(1, 0.9));
   SubdivOptions loop;
   loop.scheme = SubdivScheme::Loop;
-  const SubdivSurface surface(as_cage(s.base), {}, loop);
+  const SubdivSurface surface(test::triangle_cage(s.base), {}, loop);
   const DetailEncoding e = encode_detail(s.detail, surface);
   EXPECT_EQ(e.report.num_fallback, 0);
   for (int i = 0; i < s.detail.num_vertices(); ++i)
@@ -524,7 +517,7 @@ TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBaseOverALimitSurface) {
 // A base part goes to the detail part most of its vertices are closest to; parts are joined at
 // equal positions (an unwelded seam), and one part on either side restricts nothing.
 TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
-  const DebrisScene s = debris_scene(test::icosphere(2, 0.9));
+  const DebrisScene s = test::debris_scene(test::icosphere(2, 0.9));
   const internal::PartMatch m = internal::match_parts(s.detail, s.base.vertices, s.base.faces);
   ASSERT_EQ(m.groups.size(), 13u);
   EXPECT_EQ(m.groups[0].size(), static_cast<std::size_t>(s.base_sphere_faces));
@@ -540,4 +533,40 @@ TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
   // A detail part no base part lies on (the base has no debris) searches the whole base.
   const TriMesh sphere_base = test::icosphere(2, 0.9);
   EXPECT_TRUE(internal::match_parts(s.detail, sphere_base.vertices, sphere_base.faces).empty());
+}
+
+// A base part that no detail part lies on (a tetrahedron of the base alone, 0.5 below a sphere
+// whose two caps are the detail's parts) is matched to the nearer cap; it must not become that
+// cap's whole base (a review: all 421 vertices of the lower cap were encoded over it, with normal
+// offsets up to 1.14). Each cap's base is also the part it lies on.
+TEST(Encoding, ABasePartUnderNoDetailPartIsNoPartsWholeBase) {
+  const TriMesh fine = test::icosphere(4);
+  TriMesh detail = faces_where(fine, [](const Vec3& c) { return c.z() > -0.5; });
+  test::append_mesh(detail, faces_where(fine, [](const Vec3& c) { return c.z() < -0.7; }));
+  TriMesh base = test::icosphere(2);
+  const int sphere_faces = base.num_faces();
+  test::append_tetrahedron(base, Vec3(0, 0, -1.6), 0.2);
+  const DetailEncoding e = encode_detail(detail, base);
+  // The base points of the caps encoded over the sphere without the tetrahedron (the same points;
+  // on an edge or a corner through either face, as the trees differ).
+  const DetailEncoding without = encode_detail(detail, test::icosphere(2));
+  for (int i = 0; i < detail.num_vertices(); ++i) {
+    ASSERT_LT(e.base_points[i].face, sphere_faces) << "vertex " << i;
+    ASSERT_LT((e.base_rest_points[i] - without.base_rest_points[i]).norm(), 1e-12) << "vertex " << i;
+  }
+}
+
+// A mesh with a face index out of range is refused by name, not read out of bounds.
+TEST(Encoding, ProjectMeshToLimitRefusesAnOutOfRangeIndex) {
+  SubdivOptions loop;
+  loop.scheme = SubdivScheme::Loop;
+  const SubdivSurface surface(test::triangle_cage(test::icosphere(1)), {}, loop);
+  TriMesh m = test::icosphere(1);
+  m.faces[3][2] = 50000000;
+  try {
+    project_mesh_to_limit(surface, m);
+    FAIL() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("project_mesh_to_limit: face 3"), std::string::npos) << e.what();
+  }
 }

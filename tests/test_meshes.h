@@ -10,6 +10,7 @@
 #include "strata/intersections.h"
 #include "strata/mesh.h"
 #include "strata/reconstruction.h"
+#include "strata/subdiv.h"
 
 namespace strata::test {
 
@@ -99,6 +100,37 @@ inline void append_tetrahedron(TriMesh& m, const Vec3& c, double size) {
     t.vertices.push_back(c + h * s);
   t.faces = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
   append_mesh(m, t);
+}
+
+//! Scan debris: the unit sphere (icosphere(3)) with a tetrahedron of edge 0.04 4% off its surface
+//! over each of its 12 icosahedron vertices, over a base (\p base_sphere, e.g. a sphere of
+//! radius 0.9) with a tetrahedron of edge 0.02 at each. A sphere vertex under a tetrahedron is
+//! about 0.1 from a 0.9 base and about 0.035 from the tetrahedron's. Both meshes have the
+//! sphere's vertices and faces first, then each tetrahedron's 4.
+struct DebrisScene {
+  TriMesh detail, base;
+  int sphere_vertices = 0, base_sphere_faces = 0;
+};
+
+inline DebrisScene debris_scene(const TriMesh& base_sphere) {
+  DebrisScene s;
+  s.detail = icosphere(3);
+  s.base = base_sphere;
+  s.sphere_vertices = s.detail.num_vertices();
+  s.base_sphere_faces = s.base.num_faces();
+  for (const Vec3& d : icosphere(0).vertices) {
+    append_tetrahedron(s.detail, 1.04 * d, 0.04);
+    append_tetrahedron(s.base, 1.04 * d, 0.02);
+  }
+  return s;
+}
+
+//! \p m's triangles as a cage (for a Loop surface).
+inline PolyMesh triangle_cage(const TriMesh& m) {
+  PolyMesh c;
+  c.vertices = m.vertices;
+  for (const Face& f : m.faces) c.faces.push_back({f[0], f[1], f[2]});
+  return c;
 }
 
 }  // namespace strata::test

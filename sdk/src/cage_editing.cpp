@@ -210,7 +210,8 @@ class CageEditor::Impl {
   // does not.
   void encode(const std::vector<char>& region, const std::vector<char>& handle) {
     const int nv = mesh_.num_vertices();
-    const Projection pr = project_to_limit(base_, mesh_.vertices, opt_.projection);
+    // Projected once, on the whole mesh's parts (a region's submesh may be of other parts, or one).
+    const Projection pr = project_mesh_to_limit(base_, mesh_, opt_.projection);
     std::vector<char> moves(nv, 0), nonrigid(nv, 0);
     tbb::parallel_for(0, nv, [&](int i) {
       const SubdivSurface::Stencil st = base_.stencil(pr.points[i]);
@@ -244,7 +245,16 @@ class CageEditor::Impl {
     if (detail.faces.empty()) throw InvalidInput("no detail vertex depends on the region's cage vertices");
     for (int v : sub_vertices_) detail.vertices.push_back(mesh_.vertices[v]);
     DetailEncoding& enc = detail_.encoding();
-    enc = encode_detail(detail, base_, opt_.projection);
+    std::vector<LimitPoint> points;
+    points.reserve(sub_vertices_.size());
+    int fallback = 0;
+    for (int v : sub_vertices_) {
+      points.push_back(pr.points[v]);
+      fallback += !pr.converged[v];
+    }
+    enc = encode_detail_at(detail, base_, std::move(points));
+    enc.report.num_projected = detail.num_vertices() - fallback;
+    enc.report.num_fallback = fallback;
     // The rest of the mesh, fixed, for the solver's fold check (as RegionEditor's).
     detail_.set_intersection_context(context_around(mesh_.faces, moves, sub_vertices_, mesh_.vertices));
     moves_.swap(moves);

@@ -265,6 +265,7 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
 
 Projection project_mesh_to_limit(const SubdivSurface& surface, const TriMesh& mesh,
                                  const ProjectOptions& options) {
+  check_face_indices(mesh.vertices.size(), mesh.faces, "project_mesh_to_limit");
   return project_points(surface, mesh.vertices, options, &mesh);
 }
 

@@ -74,9 +74,9 @@ struct CageFit {
 };
 
 //! Fits a Loop control cage to \p scan. Vertices in no face are ignored (neither decimated nor
-//! fitted to). A scan of several connected parts gets a cage of as many, each fitted to its own
-//! part's points: each point's foot point is sought on the cage parts under its own part
-//! (project_mesh_to_limit()), so that scan debris near the surface is not pulled onto it.
+//! fitted to). The decimation keeps the scan's connected parts apart, and each point's foot point
+//! is sought on its own part's base (project_mesh_to_limit()), so that each part of the cage is
+//! fitted to its own part's points: scan debris near the surface is not pulled onto it.
 //! \pre nothing: the scan is checked.
 //! \throw InvalidInput if the scan fails validate_mesh(), has a coordinate beyond kMaxCoordinate,
 //!        or fewer faces than the cage would have, or if an option is out of range (faces not 0

@@ -104,14 +104,14 @@ void check_encode_options(const EncodeOptions& options);
 //! displacement lengths and the regularization weights (paper, sections 3 and 4.2). The base may
 //! have any connectivity. Where no such point exists near the closest point, the closest point
 //! is used and counted in the report. With several connected parts on both sides (a scan with
-//! debris), q_i is sought only on the base's parts under p_i's own part: each part of the base
-//! goes to the detail part its points lie nearest to on average (parts joined at bitwise-equal
-//! positions: unwelded seams), and a detail part that no base part goes to searches the whole
-//! base, as every vertex does when either side is one part. The projections, the target volumes and the
-//! weights run on TBB's threads (the caller's task arena); the result does not depend on their number. \pre
-//! detail and base are valid triangle meshes (see validate_mesh()). \throw InvalidInput if a mesh is empty or
-//! has out-of-range indices or non-finite coordinates, or an option is out of range (check_encode_options()),
-//! or a base point's face has no normal (evaluate_base_frames()).
+//! debris), q_i is sought only on the base of p_i's own part, the parts matched as by
+//! project_mesh_to_limit() (a vertex of no face searches the whole base). The projections, the
+//! target volumes and the weights run on TBB's threads (the caller's task arena); the result
+//! does not depend on their number.
+//! \pre detail and base are valid triangle meshes (see validate_mesh()).
+//! \throw InvalidInput if a mesh is empty or has out-of-range indices or non-finite coordinates,
+//!        or an option is out of range (check_encode_options()), or a base point's face has no
+//!        normal (evaluate_base_frames()).
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the

@@ -272,16 +272,16 @@ Projection project_to_limit(const SubdivSurface& surface, const std::vector<Vec3
                             const ProjectOptions& options = {});
 
 //! The foot points of the vertices of \p mesh, as project_to_limit() finds them, except that each
-//! vertex's is sought only on the parts of the surface under the vertex's own connected part of
-//! the mesh: scan debris near a surface, with its own small part of the cage, is not that
-//! surface's base, nor is the surface the debris's. A connected part of the surface (on its seed
-//! tessellation) lies under the mesh part that most of its tessellation's vertices are closest
-//! to; parts are joined at bitwise-equal positions on both sides (unwelded seams). A mesh part
-//! with no surface part under it, and a vertex of no face, search the whole surface. With one
-//! part on either side (the common case) the result is project_to_limit(surface, mesh.vertices,
-//! options)'s. encode_detail() over a limit surface projects this way.
-//! \pre every face index of \p mesh is in range (validate_mesh()).
-//! \throw InvalidInput as project_to_limit().
+//! vertex's is sought only on its own connected part's base: scan debris near a surface, with its
+//! own small part of the cage, is not that surface's base, nor is the surface the debris's. The
+//! parts of the mesh and of the surface (on its seed tessellation; both joined at bitwise-equal
+//! positions, as unwelded seams) are matched both ways, each to the part of the other that its
+//! sample points lie nearest to on average; a mesh part's base is the surface parts matched to it
+//! and the surface part it is matched to. A vertex of no face searches the whole surface. With
+//! one part on either side (the common case) the result is project_to_limit(surface,
+//! mesh.vertices, options)'s. encode_detail() over a limit surface, fit_cage() and CageEditor
+//! project this way.
+//! \throw InvalidInput as project_to_limit(), or if a face index of \p mesh is out of range.
 Projection project_mesh_to_limit(const SubdivSurface& surface, const TriMesh& mesh,
                                  const ProjectOptions& options = {});
 

@@ -95,6 +95,45 @@ std::vector<double> distances_to(const TriangleTree& tree, const std::vector<Vec
   return d;
 }
 
+// For each part of mesh A (given by its samples), the part of mesh B (\p x, \p faces, parts
+// \p parts) that its samples lie nearest to on average, among the parts of their closest faces
+// (the lower part on a tie): a closest face alone gave debris that lies against a surface to the
+// surface. Each contested candidate gets a tree of its own faces.
+std::vector<int> nearest_parts(const std::vector<std::vector<Vec3>>& samples, const std::vector<Vec3>& x,
+                               const std::vector<Face>& faces, const Parts& parts) {
+  const int na = static_cast<int>(samples.size());
+  const TriangleTree tree(x, faces);
+  std::vector<std::vector<int>> candidates(na);
+  tbb::parallel_for(tbb::blocked_range<int>(0, na, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int p = r.begin(); p != r.end(); ++p) {
+      for (const Vec3& y : samples[p]) candidates[p].push_back(parts.of_face(faces[tree.closest(y).face]));
+      std::sort(candidates[p].begin(), candidates[p].end());
+      candidates[p].erase(std::unique(candidates[p].begin(), candidates[p].end()), candidates[p].end());
+    }
+  });
+  std::vector<std::vector<int>> faces_of(parts.count);
+  for (int j = 0; j < static_cast<int>(faces.size()); ++j) faces_of[parts.of_face(faces[j])].push_back(j);
+  std::vector<std::unique_ptr<TriangleTree>> part_tree(parts.count);
+  std::vector<int> nearest(na, -1);
+  for (int p = 0; p < na; ++p) {
+    if (candidates[p].size() == 1) {
+      nearest[p] = candidates[p][0];
+      continue;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (int b : candidates[p]) {
+      if (!part_tree[b]) part_tree[b] = std::make_unique<TriangleTree>(x, faces, faces_of[b]);
+      const std::vector<double> dist = distances_to(*part_tree[b], samples[p]);
+      const double mean = std::accumulate(dist.begin(), dist.end(), 0.0) / static_cast<double>(dist.size());
+      if (mean < best) {
+        best = mean;
+        nearest[p] = b;
+      }
+    }
+  }
+  return nearest;
+}
+
 }  // namespace
 
 PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_vertices,
@@ -104,55 +143,42 @@ PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_verti
   if (dp.count < 2) return m;
   const Parts bp = connected_parts(base_vertices, base_faces, true);
   if (bp.count < 2) return m;
-  const std::vector<std::vector<Vec3>> samples = part_samples(bp, base_vertices, base_faces);
-  // The candidates for each base part: the detail parts of its samples' closest detail faces.
-  const TriangleTree tree(detail.vertices, detail.faces);
-  std::vector<std::vector<int>> candidates(bp.count);
-  tbb::parallel_for(tbb::blocked_range<int>(0, bp.count, 1), [&](const tbb::blocked_range<int>& r) {
-    for (int p = r.begin(); p != r.end(); ++p) {
-      for (const Vec3& x : samples[p])
-        candidates[p].push_back(dp.of_face(detail.faces[tree.closest(x).face]));
-      std::sort(candidates[p].begin(), candidates[p].end());
-      candidates[p].erase(std::unique(candidates[p].begin(), candidates[p].end()), candidates[p].end());
-    }
-  });
-  // A base part near several detail parts goes to the one its samples are nearest to on average
-  // (the lower part on a tie): a closest face alone gave debris close to the surface to the
-  // surface. Each contested candidate gets a tree of its own faces.
-  std::vector<std::vector<int>> faces_of(dp.count);
-  for (int j = 0; j < static_cast<int>(detail.faces.size()); ++j)
-    faces_of[dp.of_face(detail.faces[j])].push_back(j);
-  std::vector<std::unique_ptr<TriangleTree>> part_tree(dp.count);
-  std::vector<int> owner(bp.count, -1);
-  for (int p = 0; p < bp.count; ++p) {
-    double best = std::numeric_limits<double>::infinity();
-    for (int d : candidates[p]) {
-      if (candidates[p].size() == 1) {
-        owner[p] = d;
-        break;
-      }
-      if (!part_tree[d])
-        part_tree[d] = std::make_unique<TriangleTree>(detail.vertices, detail.faces, faces_of[d]);
-      const std::vector<double> dist = distances_to(*part_tree[d], samples[p]);
-      const double mean = std::accumulate(dist.begin(), dist.end(), 0.0) / static_cast<double>(dist.size());
-      if (mean < best) {
-        best = mean;
-        owner[p] = d;
-      }
-    }
+  // Both ways: each base part lies on a detail part (its owner), and each detail part on a base
+  // part. A detail part's base is the base parts that lie on it and the one it lies on: a base
+  // part that no detail part lies on (debris of the base alone) went to a nearby detail part and,
+  // with only the owners, became that part's whole base.
+  const std::vector<int> owner =
+      nearest_parts(part_samples(bp, base_vertices, base_faces), detail.vertices, detail.faces, dp);
+  const std::vector<int> under =
+      nearest_parts(part_samples(dp, detail.vertices, detail.faces), base_vertices, base_faces, bp);
+  std::vector<std::vector<int>> base_parts(dp.count);  // each detail part's, sorted
+  for (int b = 0; b < bp.count; ++b) base_parts[owner[b]].push_back(b);
+  for (int d = 0; d < dp.count; ++d) {
+    std::vector<int>& s = base_parts[d];
+    if (!std::binary_search(s.begin(), s.end(), under[d]))
+      s.insert(std::upper_bound(s.begin(), s.end(), under[d]), under[d]);
   }
+  // One group per distinct set of base parts (detail parts on one base part share its tree).
   std::vector<int> group_of_part(dp.count, -1);
-  for (int j = 0; j < static_cast<int>(base_faces.size()); ++j) {
-    const int d = owner[bp.of_face(base_faces[j])];
-    int& g = group_of_part[d];
-    if (g < 0) {
-      g = static_cast<int>(m.groups.size());
-      m.groups.emplace_back();
-    }
-    m.groups[g].push_back(j);
+  std::vector<int> order(dp.count);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return base_parts[a] < base_parts[b]; });
+  std::vector<std::vector<int>> groups_parts;
+  for (int d : order) {
+    if (groups_parts.empty() || groups_parts.back() != base_parts[d]) groups_parts.push_back(base_parts[d]);
+    group_of_part[d] = static_cast<int>(groups_parts.size()) - 1;
   }
-  // One group holding every base face restricts nothing.
-  if (m.groups.size() == 1) return PartMatch{};
+  // A group of every base part restricts nothing.
+  if (groups_parts.size() == 1 && static_cast<int>(groups_parts[0].size()) == bp.count) return m;
+  std::vector<std::vector<int>> faces_of(bp.count);
+  for (int j = 0; j < static_cast<int>(base_faces.size()); ++j)
+    faces_of[bp.of_face(base_faces[j])].push_back(j);
+  m.groups.resize(groups_parts.size());
+  for (std::size_t g = 0; g < groups_parts.size(); ++g) {
+    for (int b : groups_parts[g])
+      m.groups[g].insert(m.groups[g].end(), faces_of[b].begin(), faces_of[b].end());
+    std::sort(m.groups[g].begin(), m.groups[g].end());
+  }
   m.group_of_vertex.resize(detail.vertices.size());
   for (std::size_t v = 0; v < detail.vertices.size(); ++v)
     m.group_of_vertex[v] = dp.of_vertex[v] < 0 ? -1 : group_of_part[dp.of_vertex[v]];

@@ -1,7 +1,7 @@
 // Internal: the connected parts of a mesh, and which parts of a base lie under which parts of a
 // detail mesh, so that a detail vertex takes its base point on its own part's base (scan debris
 // near a surface is not that surface's base). Used by the encodings (encode_detail()) and the
-// decimation. Not part of the API.
+// decimation (connected_parts() only). Not part of the API.
 #pragma once
 
 #include <vector>
@@ -23,14 +23,18 @@ struct Parts {
 Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                       bool join_equal_positions);
 
-//! The base faces on which each detail vertex may take its base point.
-//! Each part of the base goes to the detail part that most of its vertices lie closest to. A
-//! detail vertex may then take its base point only on the base parts of its own part. A detail
-//! part with no base part, or a vertex of no face, may take it anywhere (group -1).
-//! empty() when that restricts nothing: one detail part or one base part, the common case, so that
-//! such encodings are those of a search over the whole base.
+//! The base faces on which each detail vertex may take its base point: those of its part's base.
+//! Parts are matched both ways, each part to the part of the other mesh that its samples (up to
+//! 128 vertices and 128 face centroids, evenly strided, and the centroid of its vertices) lie
+//! nearest to on average, among the parts of their closest faces. A detail part's base is the
+//! base parts matched to it and the base part it is matched to: a base part that no detail part
+//! lies on (debris of the base alone) is matched to a nearby detail part, and would otherwise
+//! have been its whole base. A vertex of no face may take its base point anywhere (group -1).
+//! empty() when that restricts nothing: one detail part or one base part (the common case), or
+//! every detail part's base the whole base, so that such encodings are those of a search over the
+//! whole base.
 struct PartMatch {
-  std::vector<std::vector<int>> groups;  //!< the base faces open to each group (a detail part)
+  std::vector<std::vector<int>> groups;  //!< the base faces open to each group (detail parts with one base)
   std::vector<int> group_of_vertex;      //!< per detail vertex: its group, or -1 for any base face
   bool empty() const { return groups.empty(); }
   int group(int vertex) const { return groups.empty() ? -1 : group_of_vertex[vertex]; }
