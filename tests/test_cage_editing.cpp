@@ -280,7 +280,8 @@ TEST(CageEditor, ScanDebrisIsNotTheRegionsBase) {
   SubdivOptions loop;
   loop.scheme = SubdivScheme::Loop;
   std::vector<char> region(cage.num_vertices(), 0), handle(cage.num_vertices(), 0);
-  for (int v = 0; v < test::icosphere(1).num_vertices(); ++v) {
+  const int sphere_cage_vertices = test::icosphere(1).num_vertices();
+  for (int v = 0; v < sphere_cage_vertices; ++v) {
     region[v] = cage.vertices[v].z() > 0.0;
     handle[v] = cage.vertices[v].z() > 0.6;
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <string>
 
 #include "internal/closest_point.h"
 #include "internal/parts.h"
@@ -514,14 +515,15 @@ TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBaseOverALimitSurface) {
   }
 }
 
-// A base part goes to the detail part most of its vertices are closest to; parts are joined at
+// Each part goes to the part of the other mesh its samples lie nearest to; parts are joined at
 // equal positions (an unwelded seam), and one part on either side restricts nothing.
 TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
   const DebrisScene s = test::debris_scene(test::icosphere(2, 0.9));
   const internal::PartMatch m = internal::match_parts(s.detail, s.base.vertices, s.base.faces);
   ASSERT_EQ(m.groups.size(), 13u);
-  EXPECT_EQ(m.groups[0].size(), static_cast<std::size_t>(s.base_sphere_faces));
-  for (std::size_t g = 1; g < m.groups.size(); ++g) EXPECT_EQ(m.groups[g].size(), 4u) << "group " << g;
+  EXPECT_EQ(m.faces(0).size(), static_cast<std::size_t>(s.base_sphere_faces));
+  for (int g = 1; g < static_cast<int>(m.groups.size()); ++g)
+    EXPECT_EQ(m.faces(g).size(), 4u) << "group " << g;
   // An unwelded copy of a vertex's position joins its faces' parts.
   TriMesh seam;
   seam.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
@@ -530,7 +532,7 @@ TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
   EXPECT_EQ(internal::connected_parts(seam.vertices, seam.faces, true).count, 1);
   EXPECT_TRUE(internal::match_parts(seam, s.base.vertices, s.base.faces).empty());
   EXPECT_TRUE(internal::match_parts(s.detail, seam.vertices, seam.faces).empty());
-  // A detail part no base part lies on (the base has no debris) searches the whole base.
+  // A base of one part restricts nothing.
   const TriMesh sphere_base = test::icosphere(2, 0.9);
   EXPECT_TRUE(internal::match_parts(s.detail, sphere_base.vertices, sphere_base.faces).empty());
 }
@@ -569,4 +571,27 @@ TEST(Encoding, ProjectMeshToLimitRefusesAnOutOfRangeIndex) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("project_mesh_to_limit: face 3"), std::string::npos) << e.what();
   }
+}
+
+// Over a base of the detail's own connectivity (a smoothed copy: the region editors', `strata
+// deform`'s) each part's base is its own faces, even where the smoothing brought a piece of debris
+// nearer to another part than to its own (here onto the base sphere).
+TEST(PartMatch, OverTheDetailsOwnConnectivityEachPartIsItsOwnBase) {
+  TriMesh detail = test::icosphere(2);
+  const int sphere_faces = detail.num_faces();
+  test::append_tetrahedron(detail, Vec3(0, 0, 1.04), 0.04);
+  TriMesh base = detail;
+  for (int v = 0; v < test::icosphere(2).num_vertices(); ++v) base.vertices[v] *= 0.9;
+  for (std::size_t v = test::icosphere(2).vertices.size(); v < base.vertices.size(); ++v)
+    base.vertices[v] += Vec3(0, 0, -0.14);
+  const internal::PartMatch m = internal::match_parts(detail, base.vertices, base.faces);
+  ASSERT_EQ(m.groups.size(), 2u);
+  EXPECT_EQ(m.faces(m.group(0)).size(), static_cast<std::size_t>(sphere_faces));
+  EXPECT_EQ(m.faces(m.group(detail.num_vertices() - 1)),
+            (std::vector<int>{sphere_faces, sphere_faces + 1, sphere_faces + 2, sphere_faces + 3}));
+  // The same geometry under another connectivity (the faces' corners rotated) is matched by
+  // distance: the tetrahedron, on the base sphere, is the sphere's base too.
+  for (Face& f : base.faces) f = {f[1], f[2], f[0]};
+  const internal::PartMatch d = internal::match_parts(detail, base.vertices, base.faces);
+  EXPECT_GT(d.faces(d.group(0)).size(), static_cast<std::size_t>(sphere_faces));
 }

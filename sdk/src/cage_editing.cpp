@@ -255,6 +255,7 @@ class CageEditor::Impl {
     enc = encode_detail_at(detail, base_, std::move(points));
     enc.report.num_projected = detail.num_vertices() - fallback;
     enc.report.num_fallback = fallback;
+    enc.report.seconds += pr.seconds;  // the projection: the whole mesh's
     // The rest of the mesh, fixed, for the solver's fold check (as RegionEditor's).
     detail_.set_intersection_context(context_around(mesh_.faces, moves, sub_vertices_, mesh_.vertices));
     moves_.swap(moves);

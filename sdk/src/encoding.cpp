@@ -44,11 +44,8 @@ class Encoder {
         adj_(internal::build_adjacency(base.num_vertices(), base.faces)),
         tree_(base.vertices, base.faces),
         parts_(internal::match_parts(detail, base.vertices, base.faces)),
-        unit_(std::min(1.0, bbox_diagonal(base.vertices))) {
-    part_trees_.reserve(parts_.groups.size());
-    for (const std::vector<int>& faces : parts_.groups)
-      part_trees_.emplace_back(base.vertices, base.faces, faces);
-  }
+        part_trees_(base.vertices, base.faces, parts_),
+        unit_(std::min(1.0, bbox_diagonal(base.vertices))) {}
 
   // One thread's ring-search state: the faces of the rings, and each base face's last stamp.
   struct Scratch {
@@ -64,7 +61,7 @@ class Encoder {
     std::vector<int>& ring = sc.ring;
     std::vector<int>& mark = sc.mark;
     const int group = parts_.group(i);
-    const auto hit = (group < 0 ? tree_ : part_trees_[group]).closest(p);
+    const auto hit = group < 0 ? tree_.closest(p) : part_trees_.closest(group, p);
     if (hit.face < 0) throw SolverError("no closest base face for detail vertex " + std::to_string(i));
     const double dc = std::sqrt(hit.distance_sq);
     const double T = opt_.max_distance_ratio * dc + 1e-12 * unit_;
@@ -158,7 +155,7 @@ class Encoder {
   internal::Adjacency adj_;
   internal::TriangleTree tree_;
   internal::PartMatch parts_;
-  std::vector<internal::TriangleTree> part_trees_;  // one per group of parts_
+  internal::GroupedTrees part_trees_;
   // The absolute tolerances' unit: 1, or the base's diagonal if it is smaller, so that a mesh
   // scaled by 1e-9 encodes as at 1 (T bounds the root search: meshes of diagonal 1 or more keep
   // their encodings bit for bit).

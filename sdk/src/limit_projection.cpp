@@ -27,13 +27,10 @@ class Projector {
         corners_(s.ptex_corners()),
         tess_(s.tessellate(o.seed_resolution)),
         tree_(tess_.mesh.vertices, tess_.mesh.faces),
-        on_surface_(1e-12 * bbox_diagonal(s.control_points())) {
-    if (!mesh) return;
-    parts_ = internal::match_parts(*mesh, tess_.mesh.vertices, tess_.mesh.faces);
-    part_trees_.reserve(parts_.groups.size());
-    for (const std::vector<int>& faces : parts_.groups)
-      part_trees_.emplace_back(tess_.mesh.vertices, tess_.mesh.faces, faces);
-  }
+        on_surface_(1e-12 * bbox_diagonal(s.control_points())),
+        parts_(mesh ? internal::match_parts(*mesh, tess_.mesh.vertices, tess_.mesh.faces)
+                    : internal::PartMatch{}),
+        part_trees_(tess_.mesh.vertices, tess_.mesh.faces, parts_) {}
 
   struct Result {
     LimitPoint point;
@@ -46,7 +43,7 @@ class Projector {
   // cross ptex edges only, so it stays on the connected part of the seed.
   Result project(int i, const Vec3& p) const {
     const int group = parts_.group(i);
-    const internal::TriangleTree::Hit hit = (group < 0 ? tree_ : part_trees_[group]).closest(p);
+    const internal::TriangleTree::Hit hit = group < 0 ? tree_.closest(p) : part_trees_.closest(group, p);
     const auto& uv = tess_.face_uv[hit.face];
     const Eigen::Vector2d seed = hit.bary[0] * uv[0] + hit.bary[1] * uv[1] + hit.bary[2] * uv[2];
     Result r;
@@ -250,7 +247,7 @@ class Projector {
   internal::TriangleTree tree_;
   double on_surface_;
   internal::PartMatch parts_;
-  std::vector<internal::TriangleTree> part_trees_;  // one per group of parts_
+  internal::GroupedTrees part_trees_;
 };
 
 Projection project_points(const SubdivSurface& surface, const std::vector<Vec3>& points,

@@ -56,7 +56,7 @@ Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>
 
 namespace {
 
-// The points of each base part that decide where it lies: its vertices and its faces' centroids,
+// The points of each part that decide where it lies: its vertices and its faces' centroids,
 // at most kSamples of each (evenly strided: the cost stays bounded by the parts' count, and a
 // large part's side of the vote is clear from a few), and the centroid of its vertices.
 constexpr int kSamples = 128;
@@ -116,10 +116,8 @@ std::vector<int> nearest_parts(const std::vector<std::vector<Vec3>>& samples, co
   std::vector<std::unique_ptr<TriangleTree>> part_tree(parts.count);
   std::vector<int> nearest(na, -1);
   for (int p = 0; p < na; ++p) {
-    if (candidates[p].size() == 1) {
-      nearest[p] = candidates[p][0];
-      continue;
-    }
+    nearest[p] = candidates[p].front();  // were every mean not finite
+    if (candidates[p].size() == 1) continue;
     double best = std::numeric_limits<double>::infinity();
     for (int b : candidates[p]) {
       if (!part_tree[b]) part_tree[b] = std::make_unique<TriangleTree>(x, faces, faces_of[b]);
@@ -141,6 +139,17 @@ PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_verti
   PartMatch m;
   const Parts dp = connected_parts(detail.vertices, detail.faces, true);
   if (dp.count < 2) return m;
+  if (base_faces == detail.faces && base_vertices.size() == detail.vertices.size()) {
+    // The detail's own connectivity (a base smoothed from it, as the region editors' and
+    // `strata deform`'s): each part's base is its own faces, whatever the smoothing moved.
+    m.part_faces.resize(dp.count);
+    for (int j = 0; j < static_cast<int>(base_faces.size()); ++j)
+      m.part_faces[dp.of_face(base_faces[j])].push_back(j);
+    m.groups.resize(dp.count);
+    for (int d = 0; d < dp.count; ++d) m.groups[d] = {d};
+    m.group_of_vertex = dp.of_vertex;
+    return m;
+  }
   const Parts bp = connected_parts(base_vertices, base_faces, true);
   if (bp.count < 2) return m;
   // Both ways: each base part lies on a detail part (its owner), and each detail part on a base
@@ -170,19 +179,36 @@ PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_verti
   }
   // A group of every base part restricts nothing.
   if (groups_parts.size() == 1 && static_cast<int>(groups_parts[0].size()) == bp.count) return m;
-  std::vector<std::vector<int>> faces_of(bp.count);
+  m.part_faces.resize(bp.count);
   for (int j = 0; j < static_cast<int>(base_faces.size()); ++j)
-    faces_of[bp.of_face(base_faces[j])].push_back(j);
-  m.groups.resize(groups_parts.size());
-  for (std::size_t g = 0; g < groups_parts.size(); ++g) {
-    for (int b : groups_parts[g])
-      m.groups[g].insert(m.groups[g].end(), faces_of[b].begin(), faces_of[b].end());
-    std::sort(m.groups[g].begin(), m.groups[g].end());
-  }
+    m.part_faces[bp.of_face(base_faces[j])].push_back(j);
+  m.groups = std::move(groups_parts);
   m.group_of_vertex.resize(detail.vertices.size());
   for (std::size_t v = 0; v < detail.vertices.size(); ++v)
     m.group_of_vertex[v] = dp.of_vertex[v] < 0 ? -1 : group_of_part[dp.of_vertex[v]];
   return m;
+}
+
+std::vector<int> PartMatch::faces(int g) const {
+  std::vector<int> f;
+  for (int b : groups[g]) f.insert(f.end(), part_faces[b].begin(), part_faces[b].end());
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+GroupedTrees::GroupedTrees(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
+                           const PartMatch& match)
+    : match_(match) {
+  trees_.reserve(match.part_faces.size());
+  for (const std::vector<int>& part : match.part_faces) trees_.emplace_back(vertices, faces, part);
+}
+
+TriangleTree::Hit GroupedTrees::closest(int g, const Vec3& p) const {
+  TriangleTree::Hit best;
+  best.distance_sq = std::numeric_limits<double>::infinity();
+  for (int b : match_.groups[g])
+    if (const TriangleTree::Hit h = trees_[b].closest(p); h.distance_sq < best.distance_sq) best = h;
+  return best;
 }
 
 }  // namespace strata::internal

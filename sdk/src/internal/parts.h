@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "internal/closest_point.h"
 #include "strata/mesh.h"
 
 namespace strata::internal {
@@ -29,15 +30,36 @@ Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>
 //! nearest to on average, among the parts of their closest faces. A detail part's base is the
 //! base parts matched to it and the base part it is matched to: a base part that no detail part
 //! lies on (debris of the base alone) is matched to a nearby detail part, and would otherwise
-//! have been its whole base. A vertex of no face may take its base point anywhere (group -1).
+//! have been its whole base. Such a part stays in that detail part's base, so debris that lies
+//! against a surface can still be its base where its vertices are nearer to it than to their own
+//! base. Over a base with the detail's own connectivity (a smoothed copy) each part's base is its
+//! own faces. A vertex of no face may take its base point anywhere (group -1).
 //! empty() when that restricts nothing: one detail part or one base part (the common case), or
 //! every detail part's base the whole base, so that such encodings are those of a search over the
 //! whole base.
 struct PartMatch {
-  std::vector<std::vector<int>> groups;  //!< the base faces open to each group (detail parts with one base)
-  std::vector<int> group_of_vertex;      //!< per detail vertex: its group, or -1 for any base face
+  std::vector<std::vector<int>> part_faces;  //!< the base faces of each base part
+  std::vector<std::vector<int>> groups;      //!< the base parts open to each group, ascending
+  std::vector<int> group_of_vertex;          //!< per detail vertex: its group, or -1 for any base face
   bool empty() const { return groups.empty(); }
   int group(int vertex) const { return groups.empty() ? -1 : group_of_vertex[vertex]; }
+  //! The base faces open to group \p g, ascending.
+  std::vector<int> faces(int g) const;
+};
+
+//! Closest points within a PartMatch's groups: one tree per base part, which every group that
+//! holds the part shares (a copy of the surface's faces per group was k times the surface for k
+//! pieces of debris beside it).
+class GroupedTrees {
+ public:
+  //! The base mesh (\p vertices, \p faces) and \p match must outlive this.
+  GroupedTrees(const std::vector<Vec3>& vertices, const std::vector<Face>& faces, const PartMatch& match);
+  //! The closest point on group \p g's faces (the lower part's on a tie).
+  TriangleTree::Hit closest(int g, const Vec3& p) const;
+
+ private:
+  const PartMatch& match_;
+  std::vector<TriangleTree> trees_;  // one per base part
 };
 
 //! Matches the parts of the base (\p base_vertices, \p base_faces) to those of \p detail (parts
