@@ -116,10 +116,10 @@ void check_encode_options(const EncodeOptions& options);
 DetailEncoding encode_detail(const TriMesh& detail, const TriMesh& base, const EncodeOptions& options = {});
 
 //! Encodes \p detail over the limit surface of a control cage (issue 4): each base point is the
-//! foot point of the detail vertex on the limit surface along the limit normal, on the surface's
-//! parts under the vertex's own part (project_mesh_to_limit()), stored as (ptex face, u, v), which
-//! is exact on every edited cage. Then,
-//! as over a triangle base, the target volumes, displacement lengths and regularization weights.
+//! foot point of the detail vertex on the limit surface along the limit normal, on its own
+//! part's base (project_mesh_to_limit()), stored as (ptex face, u, v), which is exact on every
+//! edited cage. Then, as over a triangle base, the target volumes, displacement lengths and
+//! regularization weights.
 //! Projections that do not converge are counted as fallbacks in the report (num_fallback) and
 //! keep their tangential offset.
 //! \throw InvalidInput if the detail mesh is empty or has out-of-range indices or non-finite

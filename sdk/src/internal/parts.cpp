@@ -177,8 +177,8 @@ PartMatch match_parts(const TriMesh& detail, const std::vector<Vec3>& base_verti
     if (groups_parts.empty() || groups_parts.back() != base_parts[d]) groups_parts.push_back(base_parts[d]);
     group_of_part[d] = static_cast<int>(groups_parts.size()) - 1;
   }
-  // A group of every base part restricts nothing.
-  if (groups_parts.size() == 1 && static_cast<int>(groups_parts[0].size()) == bp.count) return m;
+  // One group holds every base part (each is in its owner's set), so it restricts nothing.
+  if (groups_parts.size() == 1) return m;
   m.part_faces.resize(bp.count);
   for (int j = 0; j < static_cast<int>(base_faces.size()); ++j)
     m.part_faces[bp.of_face(base_faces[j])].push_back(j);
