@@ -271,27 +271,40 @@ TEST(CageEditor, RejectsBadSelections) {
   EXPECT_THROW(CageEditor(s.c.detail, SubdivSurface(s.cage), s.region, s.handle, rings), InvalidInput);
 }
 
-// The region's vertices are encoded over their own part's base, as encode_detail() would encode
-// the whole mesh: the submesh of a region over the sphere is one part, and projected alone it put
-// 50 sphere vertices on the tetrahedra's cages (a review).
+// The region's vertices are encoded over their own part's base, at the points the whole mesh's
+// projection gives them: the submesh of a region over the sphere is one part, and projected alone
+// it put 50 sphere vertices on the tetrahedra's cages (a review). The region takes tetrahedron
+// cages too, so that vertices of both kinds are checked.
 TEST(CageEditor, ScanDebrisIsNotTheRegionsBase) {
   const test::DebrisScene s = test::debris_scene(test::icosphere(1, 0.9));
   const PolyMesh cage = test::triangle_cage(s.base);
   SubdivOptions loop;
   loop.scheme = SubdivScheme::Loop;
+  const SubdivSurface surface(cage, {}, loop);
   std::vector<char> region(cage.num_vertices(), 0), handle(cage.num_vertices(), 0);
   const int sphere_cage_vertices = test::icosphere(1).num_vertices();
-  for (int v = 0; v < sphere_cage_vertices; ++v) {
+  for (int v = 0; v < cage.num_vertices(); ++v) {
     region[v] = cage.vertices[v].z() > 0.0;
-    handle[v] = cage.vertices[v].z() > 0.6;
+    handle[v] = v < sphere_cage_vertices && cage.vertices[v].z() > 0.6;
   }
   const CageEditor editor(s.detail, SubdivSurface(cage, {}, loop), region, handle);
   const DetailEncoding& e = editor.encoding();
-  int sphere = 0;
+  const Projection whole = project_mesh_to_limit(surface, s.detail);
+  int sphere = 0, debris = 0;
   for (std::size_t k = 0; k < e.detail_rest.size(); ++k) {
-    const bool on_sphere = e.detail_rest[k].norm() < 1.0 + 1e-9;
-    sphere += on_sphere;
-    ASSERT_EQ(on_sphere, e.limit_points[k].face < s.base_sphere_faces) << "region vertex " << k;
+    // The detail vertex at region vertex k's position (the scene's vertices are distinct).
+    const auto at = std::find(s.detail.vertices.begin(), s.detail.vertices.end(), e.detail_rest[k]);
+    ASSERT_NE(at, s.detail.vertices.end()) << "region vertex " << k;
+    const int i = static_cast<int>(at - s.detail.vertices.begin());
+    const int part = i < s.sphere_vertices ? -1 : (i - s.sphere_vertices) / 4;
+    const LimitPoint& p = e.limit_points[k];
+    (part < 0 ? sphere : debris) += 1;
+    ASSERT_EQ(p.face < s.base_sphere_faces ? -1 : (p.face - s.base_sphere_faces) / 4, part)
+        << "region vertex " << k;
+    ASSERT_EQ(p.face, whole.points[i].face) << "region vertex " << k;
+    ASSERT_EQ(p.u, whole.points[i].u) << "region vertex " << k;
+    ASSERT_EQ(p.v, whole.points[i].v) << "region vertex " << k;
   }
   EXPECT_GT(sphere, 100);
+  EXPECT_GT(debris, 0);
 }

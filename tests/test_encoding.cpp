@@ -512,6 +512,7 @@ TEST(Encoding, ScanDebrisAndTheSurfaceEachKeepTheirOwnBaseOverALimitSurface) {
   for (int i = 0; i < sphere.num_vertices(); ++i) {
     ASSERT_EQ(whole.points[i].face, points.points[i].face) << "vertex " << i;
     ASSERT_EQ(whole.points[i].u, points.points[i].u) << "vertex " << i;
+    ASSERT_EQ(whole.points[i].v, points.points[i].v) << "vertex " << i;
   }
 }
 
@@ -521,9 +522,18 @@ TEST(PartMatch, BasePartsGoToTheDetailPartTheyLieOn) {
   const DebrisScene s = test::debris_scene(test::icosphere(2, 0.9));
   const internal::PartMatch m = internal::match_parts(s.detail, s.base.vertices, s.base.faces);
   ASSERT_EQ(m.groups.size(), 13u);
-  EXPECT_EQ(m.faces(0).size(), static_cast<std::size_t>(s.base_sphere_faces));
-  for (int g = 1; g < static_cast<int>(m.groups.size()); ++g)
-    EXPECT_EQ(m.faces(g).size(), 4u) << "group " << g;
+  // Each detail vertex's base is its own part's: the sphere's the base sphere's faces, tetrahedron
+  // t's the faces of the base tetrahedron t (a review: with the sizes alone checked, a shift of
+  // every tetrahedron onto its neighbour's base passed).
+  for (int i = 0; i < s.detail.num_vertices(); ++i) {
+    std::vector<int> want;
+    const int t = debris_part_of_vertex(s, i);
+    if (t < 0)
+      for (int j = 0; j < s.base_sphere_faces; ++j) want.push_back(j);
+    else
+      for (int j = 0; j < 4; ++j) want.push_back(s.base_sphere_faces + 4 * t + j);
+    ASSERT_EQ(m.faces(m.group(i)), want) << "detail vertex " << i;
+  }
   // An unwelded copy of a vertex's position joins its faces' parts.
   TriMesh seam;
   seam.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
@@ -564,12 +574,14 @@ TEST(Encoding, ProjectMeshToLimitRefusesAnOutOfRangeIndex) {
   loop.scheme = SubdivScheme::Loop;
   const SubdivSurface surface(test::triangle_cage(test::icosphere(1)), {}, loop);
   TriMesh m = test::icosphere(1);
-  m.faces[3][2] = 50000000;
-  try {
-    project_mesh_to_limit(surface, m);
-    FAIL() << "no exception";
-  } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("project_mesh_to_limit: face 3"), std::string::npos) << e.what();
+  for (const int bad : {50000000, -1}) {
+    m.faces[3][2] = bad;
+    try {
+      project_mesh_to_limit(surface, m);
+      FAIL() << "no exception for index " << bad;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("project_mesh_to_limit: face 3"), std::string::npos) << e.what();
+    }
   }
 }
 
