@@ -105,8 +105,9 @@ void check_encode_options(const EncodeOptions& options);
 //! have any connectivity. Where no such point exists near the closest point, the closest point
 //! is used and counted in the report. With several connected parts on both sides (a scan with
 //! debris), q_i is sought only on the base of p_i's own part, the parts matched as by
-//! project_mesh_to_limit(), or, over a base of the detail's own connectivity (a smoothed copy),
-//! by their faces (a vertex of no face searches the whole base). The projections, the
+//! project_mesh_to_limit(); over a base of the detail's own connectivity (a smoothed copy), on
+//! p_i's part's own faces whenever the detail has several parts, however the base's positions
+//! join them (a vertex of no face searches the whole base). The projections, the
 //! target volumes and the weights run on TBB's threads (the caller's task arena); the result
 //! does not depend on their number.
 //! \pre detail and base are valid triangle meshes (see validate_mesh()).

@@ -120,8 +120,17 @@ int TriangleTree::build(int begin, int end, std::vector<Eigen::AlignedBox3d>& bo
 }
 
 TriangleTree::Hit TriangleTree::closest(const Vec3& p) const {
+  return closest(p, std::numeric_limits<double>::infinity());
+}
+
+const Eigen::AlignedBox3d& TriangleTree::bounds() const {
+  static const Eigen::AlignedBox3d empty;
+  return nodes_.empty() ? empty : nodes_.front().box;
+}
+
+TriangleTree::Hit TriangleTree::closest(const Vec3& p, double bound_sq) const {
   Hit best;
-  best.distance_sq = std::numeric_limits<double>::infinity();
+  best.distance_sq = bound_sq;
   if (nodes_.empty()) return best;
   int stack[128];
   int top = 0;

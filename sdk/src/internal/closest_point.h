@@ -28,6 +28,12 @@ class TriangleTree {
   };
   //! The closest point on the mesh to p. \pre the mesh has at least one face.
   Hit closest(const Vec3& p) const;
+  //! The closest point nearer than sqrt(\p bound_sq), or a Hit with face -1 and distance_sq
+  //! bound_sq if there is none. Where there is one it is closest(p)'s, the same face (the bound
+  //! only skips what closest() would not take).
+  Hit closest(const Vec3& p, double bound_sq) const;
+  //! The box around the tree's faces (empty for a tree of no faces).
+  const Eigen::AlignedBox3d& bounds() const;
 
  private:
   struct Node {

@@ -196,18 +196,94 @@ std::vector<int> PartMatch::faces(int g) const {
   return f;
 }
 
+namespace {
+// A group of at most this many parts is searched part by part (each part's box tested first).
+constexpr std::size_t kPartsSearchedInTurn = 8;
+}  // namespace
+
 GroupedTrees::GroupedTrees(const std::vector<Vec3>& vertices, const std::vector<Face>& faces,
                            const PartMatch& match)
     : match_(match) {
   trees_.reserve(match.part_faces.size());
   for (const std::vector<int>& part : match.part_faces) trees_.emplace_back(vertices, faces, part);
+  boxes_.resize(match.groups.size());
+  for (std::size_t g = 0; g < match.groups.size(); ++g) {
+    if (match.groups[g].size() <= kPartsSearchedInTurn) continue;
+    PartBoxes& t = boxes_[g];
+    t.parts = match.groups[g];
+    t.nodes.reserve(t.parts.size() / 2 + 2);
+    build(t, 0, static_cast<int>(t.parts.size()));
+  }
+}
+
+// Median split of the parts' box centres along the longest axis; leaves of at most 4 parts.
+int GroupedTrees::build(PartBoxes& t, int begin, int end) const {
+  const int id = static_cast<int>(t.nodes.size());
+  t.nodes.emplace_back();
+  Eigen::AlignedBox3d box, centres;
+  for (int i = begin; i < end; ++i) {
+    box.extend(trees_[t.parts[i]].bounds());
+    centres.extend(trees_[t.parts[i]].bounds().center());
+  }
+  t.nodes[id].box = box;
+  if (end - begin <= 4) {
+    t.nodes[id].begin = begin;
+    t.nodes[id].end = end;
+    return id;
+  }
+  int axis;
+  centres.sizes().maxCoeff(&axis);
+  const int mid = (begin + end) / 2;
+  std::nth_element(t.parts.begin() + begin, t.parts.begin() + mid, t.parts.begin() + end, [&](int a, int b) {
+    const double ca = trees_[a].bounds().center()[axis], cb = trees_[b].bounds().center()[axis];
+    return ca < cb || (ca == cb && a < b);
+  });
+  const int left = build(t, begin, mid);
+  const int right = build(t, mid, end);
+  t.nodes[id].left = left;
+  t.nodes[id].right = right;
+  return id;
 }
 
 TriangleTree::Hit GroupedTrees::closest(int g, const Vec3& p) const {
+  constexpr double inf = std::numeric_limits<double>::infinity();
   TriangleTree::Hit best;
-  best.distance_sq = std::numeric_limits<double>::infinity();
-  for (int b : match_.groups[g])
-    if (const TriangleTree::Hit h = trees_[b].closest(p); h.distance_sq < best.distance_sq) best = h;
+  best.distance_sq = inf;
+  int best_part = std::numeric_limits<int>::max();
+  // Part b's closest point replaces the best if nearer, or as near from a lower part: the result
+  // of searching the parts in ascending order, in any order. Each part's search is bounded by the
+  // best so far (then it finds its closest point only if that is the nearer one, and the same).
+  auto visit = [&](int b) {
+    const double box = trees_[b].bounds().squaredExteriorDistance(p);
+    if (box > best.distance_sq || (box == best.distance_sq && b > best_part)) return;
+    const double bound = b < best_part ? std::nextafter(best.distance_sq, inf) : best.distance_sq;
+    const TriangleTree::Hit h = trees_[b].closest(p, bound);
+    if (h.face >= 0) {
+      best = h;
+      best_part = b;
+    }
+  };
+  const PartBoxes& t = boxes_[g];
+  if (t.nodes.empty()) {
+    for (int b : match_.groups[g]) visit(b);
+    return best;
+  }
+  int stack[128];  // a balanced tree: depth log2(parts / 4), and at most one more entry per level
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BoxNode& node = t.nodes[stack[--top]];
+    if (node.box.squaredExteriorDistance(p) > best.distance_sq) continue;
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) visit(t.parts[i]);
+      continue;
+    }
+    // The nearer child first, so that the bound tightens early.
+    const bool left_first = t.nodes[node.left].box.squaredExteriorDistance(p) <=
+                            t.nodes[node.right].box.squaredExteriorDistance(p);
+    stack[top++] = left_first ? node.right : node.left;
+    stack[top++] = left_first ? node.left : node.right;
+  }
   return best;
 }
 

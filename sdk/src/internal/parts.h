@@ -34,9 +34,9 @@ Parts connected_parts(const std::vector<Vec3>& vertices, const std::vector<Face>
 //! against a surface can still be its base where its vertices are nearer to it than to their own
 //! base. Over a base with the detail's own connectivity (a smoothed copy) each part's base is its
 //! own faces. A vertex of no face may take its base point anywhere (group -1).
-//! empty() when that restricts nothing: one detail part or one base part (the common case), or
-//! every detail part's base the whole base, so that such encodings are those of a search over the
-//! whole base.
+//! empty() when that restricts nothing: one detail part, or (over a base of another
+//! connectivity) one base part (the common case), or every detail part's base the whole base, so
+//! that such encodings are those of a search over the whole base.
 struct PartMatch {
   std::vector<std::vector<int>> part_faces;  //!< the base faces of each base part
   std::vector<std::vector<int>> groups;      //!< the base parts open to each group, ascending
@@ -49,17 +49,32 @@ struct PartMatch {
 
 //! Closest points within a PartMatch's groups: one tree per base part, which every group that
 //! holds the part shares (a copy of the surface's faces per group was k times the surface for k
-//! pieces of debris beside it).
+//! pieces of debris beside it), and over a group of many parts a tree of its parts' boxes, so
+//! that a query visits the parts near it only (searching every part's tree in turn cost 20.7 s
+//! for a sphere's 10k vertices over a base with 50,000 pieces of debris against 0.13 s without).
 class GroupedTrees {
  public:
   //! The base mesh (\p vertices, \p faces) and \p match must outlive this.
   GroupedTrees(const std::vector<Vec3>& vertices, const std::vector<Face>& faces, const PartMatch& match);
-  //! The closest point on group \p g's faces (the lower part's on a tie).
+  //! The closest point on group \p g's faces: the nearest part's closest point, the lower part's
+  //! on a tie, as a search of each part's tree in ascending order would find it.
   TriangleTree::Hit closest(int g, const Vec3& p) const;
 
  private:
+  struct BoxNode {
+    Eigen::AlignedBox3d box;
+    int left = -1, right = -1;  // children, or -1 for a leaf
+    int begin = 0, end = 0;     // leaf range in PartBoxes::parts
+  };
+  struct PartBoxes {
+    std::vector<int> parts;  // the group's parts, in leaf order
+    std::vector<BoxNode> nodes;
+  };
+  int build(PartBoxes& t, int begin, int end) const;
+
   const PartMatch& match_;
   std::vector<TriangleTree> trees_;  // one per base part
+  std::vector<PartBoxes> boxes_;     // per group: empty for a group of few parts (searched in turn)
 };
 
 //! Matches the parts of the base (\p base_vertices, \p base_faces) to those of \p detail (parts
