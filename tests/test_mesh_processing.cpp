@@ -146,6 +146,23 @@ TEST(TaubinSmooth, NoFaceOfAStripCollapses) {
     double moved = 0.0;
     for (int v = 0; v < m.num_vertices(); ++v) moved = std::max(moved, (x[v] - m.vertices[v]).norm());
     EXPECT_GT(moved, 0.2) << steps << " steps";
+    // Nor grown: with the floor per pass, the expanding passes went on where the shrinking ones
+    // were held, and the square was 231 across after 100 steps (a review).
+    EXPECT_LE(bbox_diagonal(x), bbox_diagonal(m.vertices)) << steps << " steps";
+  }
+  // Its faces' own scales: beside an unreferenced vertex at 1e100 or a triangle at 1e170 (the
+  // mesh's extent), the square's areas in the mesh's scale underflowed to 0 and the floor never
+  // fired (it was smoothed to a point).
+  for (const double far : {1e100, 1e170}) {
+    TriMesh with = m;
+    with.vertices.push_back(Vec3(far, 0, 0));
+    const std::vector<Vec3> lone = taubin_smooth(with, 100);
+    EXPECT_GE(min_area_ratio(m, {lone.begin(), lone.begin() + m.num_vertices()}), 0.01) << far;
+    with.vertices.push_back(Vec3(far, 1e155, 0));
+    with.vertices.push_back(Vec3(far, 0, 1e155));
+    with.faces.push_back({m.num_vertices(), m.num_vertices() + 1, m.num_vertices() + 2});
+    const std::vector<Vec3> part = taubin_smooth(with, 100);
+    EXPECT_GE(min_area_ratio(m, {part.begin(), part.begin() + m.num_vertices()}), 0.01) << far;
   }
   // Scaled by a power of two, the same (exactly, scaled): the floor held at 2^+-530 too, where
   // the areas' cross products overflowed to inf or underflowed to 0 and it never fired.

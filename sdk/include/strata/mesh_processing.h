@@ -13,13 +13,14 @@ namespace strata {
 //! passes: a low-pass filter that, unlike plain Laplacian smoothing, does not shrink the surface.
 //! A boundary vertex averages its neighbours along boundary edges only (edges of one face), so
 //! open boundaries are smoothed along themselves instead of pulled inwards (also where an inner
-//! edge joins two boundary vertices: an ear's third edge, a fan over a polygon). No face collapses: a pass
-//! that would leave a face with less than 1% of its area in \p mesh keeps that face's vertices where the pass
-//! before left them (and so on for the faces around them), so that ears on a boundary and the slivers of CAD
-//! meshes, which uniform weights flatten onto a line, keep an area. Faces may turn over where the
-//! smoothing flattens a fold (10 of the camel's 19,536 at the 10 steps of a band, 25 at 30; the
-//! decimation after it refuses collapses that flip a normal). Holding them too (their vertices
-//! kept where a pass would turn them) left the man's finest band with 215 projections falling back
+//! edge joins two boundary vertices: an ear's third edge, a fan over a polygon). No face collapses: a step
+//! (its two passes) that would leave a face with less than 1% of its area in \p mesh keeps that face's
+//! vertices where the step before left them (and so on for the faces around them), so that ears on a
+//! boundary and the slivers of CAD meshes, which uniform weights flatten onto a line, keep an area, and a
+//! small part that plain Taubin would shrink to a point stops at that area (neither collapsed nor grown).
+//! Faces may turn over where the smoothing flattens a fold (10 of the camel's 19,536 at the 10 steps of a
+//! band, 25 at 30; the decimation after it refuses collapses that flip a normal). Holding them too (their
+//! vertices kept where a pass would turn them) left the man's finest band with 215 projections falling back
 //! instead of under 1%, thirty-eighth session. Where no face comes near collapsing (the scans of
 //! assets/scans at the default 10 steps of a cage fit or a band), the result is plain Taubin
 //! smoothing.
