@@ -176,11 +176,14 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   tbb::parallel_for(0, m.num_vertices(), [&](int v) {
     if (!boundary[v]) return;
     for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
-      const int w = adj.neighbors[k];
+      // The faces of v and w are counted over the one of them with fewer (a fan's hub has many).
+      int a = v, b = adj.neighbors[k];
+      if (adj.face_offsets[b + 1] - adj.face_offsets[b] < adj.face_offsets[a + 1] - adj.face_offsets[a])
+        std::swap(a, b);
       int faces = 0;
-      for (int i = adj.face_offsets[v]; i < adj.face_offsets[v + 1]; ++i) {
+      for (int i = adj.face_offsets[a]; i < adj.face_offsets[a + 1]; ++i) {
         const Face& f = m.faces[adj.faces[i]];
-        faces += f[0] == w || f[1] == w || f[2] == w;
+        faces += f[0] == b || f[1] == b || f[2] == b;
       }
       along[k] = faces == 1;
     }

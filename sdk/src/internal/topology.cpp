@@ -89,7 +89,11 @@ std::vector<std::array<int, 3>> face_neighbors(int nv, const std::vector<Face>& 
   std::vector<std::array<int, 3>> out(faces.size(), {-1, -1, -1});
   for (int fi = 0; fi < static_cast<int>(faces.size()); ++fi)
     for (int e = 0; e < 3; ++e) {
-      const int a = faces[fi][e], b = faces[fi][(e + 1) % 3];
+      // The faces of the endpoint of fewer faces are searched for the other: over the hub's
+      // faces, a fan's every edge at its hub cost its valence (quadratic in it; a review).
+      int a = faces[fi][e], b = faces[fi][(e + 1) % 3];
+      if (adj.face_offsets[b + 1] - adj.face_offsets[b] < adj.face_offsets[a + 1] - adj.face_offsets[a])
+        std::swap(a, b);
       for (int k = adj.face_offsets[a]; k < adj.face_offsets[a + 1]; ++k) {
         const int g = adj.faces[k];
         if (g == fi) continue;

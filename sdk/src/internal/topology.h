@@ -34,7 +34,8 @@ Adjacency build_adjacency(int num_vertices, const std::vector<Face>& faces,
 //! need (a mesh's other defects, e.g. zero-area faces, are the callers' to judge).
 void check_face_indices(const std::vector<Face>& faces, int num_vertices, const std::string& what);
 
-//! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary).
+//! Face -> the faces sharing an edge with it (up to 3, -1 where the edge is a boundary; on an edge
+//! of more than two faces, one of the others).
 std::vector<std::array<int, 3>> face_neighbors(int num_vertices, const std::vector<Face>& faces);
 
 //! Edge distance of each vertex from the nearest seed (seeds[i] != 0), capped at cap: vertices
