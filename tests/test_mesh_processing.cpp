@@ -132,6 +132,17 @@ TEST(WeldVertices, JoinsEqualPositionsInOrderOfFirstUse) {
   const TriMesh w = weld_vertices(m);
   EXPECT_EQ(w.vertices, (std::vector<Vec3>{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)}));
   EXPECT_EQ(w.faces, (std::vector<Face>{{0, 1, 2}, {1, 3, 2}}));
+  // A face index out of range is refused by name (it was read out of bounds; a review).
+  for (const int bad : {7, -1}) {
+    TriMesh b = m;
+    b.faces[1][2] = bad;
+    try {
+      weld_vertices(b);
+      FAIL() << "no exception for index " << bad;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("weld_vertices: face 1"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(TaubinSmooth, NoFaceOfAStripCollapses) {

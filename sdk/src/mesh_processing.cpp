@@ -147,6 +147,7 @@ std::optional<TriMesh> split_for_openmesh(const TriMesh& mesh, const char* what)
 }  // namespace
 
 TriMesh weld_vertices(const TriMesh& mesh) {
+  check_face_indices(mesh.vertices.size(), mesh.faces, "weld_vertices");
   internal::Welder welder;
   std::vector<int> to(mesh.vertices.size());
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)

@@ -32,7 +32,9 @@ std::vector<Vec3> taubin_smooth(const TriMesh& mesh, int steps);
 //! \p mesh with its coincident vertices joined: bitwise-equal positions (-0 as +0) become one
 //! vertex, numbered in order of first use (as the STL readers weld corners); faces whose corners
 //! then coincide are dropped. A scan whose parts share positions but not vertices (seams cut
-//! into slabs, a triangle soup) becomes one surface. \p mesh's faces must index its vertices.
+//! into slabs, a triangle soup) becomes one surface.
+//! \throw InvalidInput if a face index is out of range (as the other functions here; it was read
+//!        out of bounds).
 TriMesh weld_vertices(const TriMesh& mesh);
 
 //! Quadric-error decimation (Garland and Heckbert, OpenMesh's decimater) of \p mesh to about
