@@ -185,6 +185,16 @@ TEST(TaubinSmooth, NoFaceOfAStripCollapses) {
     for (int v = 0; v < m.num_vertices(); ++v)
       EXPECT_EQ(xs[v], Vec3(std::ldexp(1.0, e) * unit[v])) << "2^" << e << ", vertex " << v;
   }
+  // Near the largest doubles the neighbour sums overflowed (a 100-face sphere of radius 4.5e307
+  // came out all inf and NaN; a review): scaled by 2^1022 a sphere is smoothed as at radius 1,
+  // scaled, exactly.
+  const TriMesh sphere = test::icosphere(2);
+  const std::vector<Vec3> small = taubin_smooth(sphere, 3);
+  TriMesh huge = sphere;
+  for (Vec3& v : huge.vertices) v *= std::ldexp(1.0, 1022);
+  const std::vector<Vec3> big = taubin_smooth(huge, 3);
+  for (int v = 0; v < sphere.num_vertices(); ++v)
+    ASSERT_EQ(big[v], Vec3(std::ldexp(1.0, 1022) * small[v])) << "vertex " << v;
   // Above the floor at every pass (the first 5 steps), it is plain Taubin.
   double lowest = 0.0;
   const std::vector<Vec3> ref = reference_taubin(m, 5, &lowest), x = taubin_smooth(m, 5);

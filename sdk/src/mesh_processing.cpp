@@ -235,7 +235,20 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
         sum += x[w];
         ++n;
       }
-      next[v] = n > 0 ? Vec3(x[v] + factor * (sum / n - x[v])) : x[v];
+      if (n == 0) {
+        next[v] = x[v];
+        return;
+      }
+      Vec3 mean = sum / n;
+      if (!sum.allFinite()) {
+        // The sum overflowed (coordinates near 1e308): the mean of the terms scaled by an exact
+        // power of two, so that finite input stays finite (it gave inf and NaN; a review).
+        Vec3 scaled = Vec3::Zero();
+        for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k)
+          if (!boundary[v] || along[k]) scaled += std::ldexp(1.0, -8) * x[adj.neighbors[k]];
+        mean = std::ldexp(1.0, 8) * (scaled / n);
+      }
+      next[v] = x[v] + factor * (mean - x[v]);
     });
     x.swap(next);
   };
