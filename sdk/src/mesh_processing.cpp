@@ -169,26 +169,24 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   std::vector<Vec3> x = m.vertices;
   if (steps == 0) return x;
   const internal::Adjacency adj = internal::build_adjacency(m.num_vertices(), m.faces);
-  const std::vector<char> boundary = internal::boundary_vertices(m.num_vertices(), m.faces);
-  // Per neighbour slot of a boundary vertex: whether the edge to it is a boundary edge (one face).
-  // A boundary vertex averages those neighbours only: a chord between two boundary vertices (an
-  // ear's third edge, a fan over a polygon) would pull the rim inwards.
-  std::vector<char> along(adj.neighbors.size(), 0);
-  tbb::parallel_for(0, m.num_vertices(), [&](int v) {
-    if (!boundary[v]) return;
-    for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
-      // The faces of v and w are counted over the one of them with fewer (a fan's hub has many).
-      int a = v, b = adj.neighbors[k];
-      if (adj.face_offsets[b + 1] - adj.face_offsets[b] < adj.face_offsets[a + 1] - adj.face_offsets[a])
-        std::swap(a, b);
-      int faces = 0;
-      for (int i = adj.face_offsets[a]; i < adj.face_offsets[a + 1]; ++i) {
-        const Face& f = m.faces[adj.faces[i]];
-        faces += f[0] == b || f[1] == b || f[2] == b;
-      }
-      along[k] = faces == 1;
+  // The boundary edges (of one face) and their vertices, from the faces' neighbours
+  // (boundary_vertices()'s definition). Per neighbour slot: whether the edge to it is a boundary
+  // edge. A boundary vertex averages those neighbours only: a chord between two boundary vertices
+  // (an ear's third edge, a fan over a polygon) would pull the rim inwards.
+  const std::vector<std::array<int, 3>> fn = internal::face_neighbors(m.num_vertices(), m.faces);
+  std::vector<char> boundary(x.size(), 0), along(adj.neighbors.size(), 0);
+  auto slot = [&](int a, int b) {  // b's place among a's neighbours (sorted)
+    const auto first = adj.neighbors.begin() + adj.neighbor_offsets[a];
+    return std::lower_bound(first, adj.neighbors.begin() + adj.neighbor_offsets[a + 1], b) -
+           adj.neighbors.begin();
+  };
+  for (std::size_t j = 0; j < m.faces.size(); ++j)
+    for (int e = 0; e < 3; ++e) {
+      if (fn[j][e] >= 0) continue;
+      const int a = m.faces[j][e], b = m.faces[j][(e + 1) % 3];
+      boundary[a] = boundary[b] = 1;
+      along[slot(a, b)] = along[slot(b, a)] = 1;
     }
-  });
   std::vector<Vec3> next(x.size()), start;
   // Twice each face's area in the mesh, each in its own scale: no step leaves a face below
   // kMinAreaRatio of it.
@@ -227,27 +225,21 @@ std::vector<Vec3> taubin_smooth(const TriMesh& m, int steps) {
   };
   auto pass = [&](double factor) {
     tbb::parallel_for(0, m.num_vertices(), [&](int v) {
-      Vec3 sum = Vec3::Zero();
-      int n = 0;
-      for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
-        const int w = adj.neighbors[k];
-        if (boundary[v] && !along[k]) continue;
-        sum += x[w];
-        ++n;
-      }
-      if (n == 0) {
-        next[v] = x[v];
-        return;
-      }
-      Vec3 mean = sum / n;
-      if (!sum.allFinite()) {
-        // The sum overflowed (coordinates near 1e308): the mean of the terms scaled by an exact
-        // power of two, so that finite input stays finite (it gave inf and NaN; a review).
-        Vec3 scaled = Vec3::Zero();
-        for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k)
-          if (!boundary[v] || along[k]) scaled += std::ldexp(1.0, -8) * x[adj.neighbors[k]];
-        mean = std::ldexp(1.0, 8) * (scaled / n);
-      }
+      // The mean of v's neighbours (along the boundary for a boundary vertex), each scaled by s.
+      auto mean_of = [&](double s) {
+        Vec3 sum = Vec3::Zero();
+        int n = 0;
+        for (int k = adj.neighbor_offsets[v]; k < adj.neighbor_offsets[v + 1]; ++k) {
+          if (boundary[v] && !along[k]) continue;
+          sum += s * x[adj.neighbors[k]];
+          ++n;
+        }
+        return n > 0 ? Vec3(sum / n) : Vec3(x[v] * s);
+      };
+      Vec3 mean = mean_of(1.0);
+      // A sum that overflowed (coordinates near 1e308): the mean of the terms scaled by an exact
+      // power of two, so that finite input stays finite (it gave inf and NaN; a review).
+      if (!mean.allFinite()) mean = std::ldexp(1.0, 8) * mean_of(std::ldexp(1.0, -8));
       next[v] = x[v] + factor * (mean - x[v]);
     });
     x.swap(next);
