@@ -1353,6 +1353,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.multigrid.smoothness = 0.03;
   o.reconstruct.multigrid.polish_damping = 2e-8;
   o.reconstruct.multigrid.single_precision_cycles = false;
+  o.reconstruct.multigrid.smoothing_degree = 3;
   o.reconstruct.local_polish_rings = 3;
   o.reconstruct.local_polish_max_motion = 6e-3;
   o.reconstruct.max_factorized_steps = 17;
@@ -1386,6 +1387,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
   EXPECT_GT(back.multigrid.retry_iterations, 0);
   EXPECT_FALSE(back.multigrid.single_precision_cycles);
+  EXPECT_EQ(back.multigrid.smoothing_degree, 3);  // written since 2026-12-02
 
   EXPECT_TRUE(back.fold_repair_local_first);  // the default, written since 2026-11-27
   EXPECT_EQ(back.fold_repair_local_rings, ReconstructOptions{}.fold_repair_local_rings);
@@ -1446,7 +1448,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
       ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
       j["options"]["reconstruct"].erase(key);
     }
-    for (const char* key : {"retry_iterations", "single_precision_cycles"}) {
+    for (const char* key : {"retry_iterations", "single_precision_cycles", "smoothing_degree"}) {
       ASSERT_TRUE(j["options"]["reconstruct"]["multigrid"].contains(key)) << key;
       j["options"]["reconstruct"]["multigrid"].erase(key);
     }
@@ -1462,6 +1464,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     EXPECT_EQ(read.max_constraint_motion, defaults.max_constraint_motion);  // the bound on
     EXPECT_EQ(read.multigrid.retry_iterations, defaults.multigrid.retry_iterations);
     EXPECT_EQ(read.multigrid.single_precision_cycles, defaults.multigrid.single_precision_cycles);
+    EXPECT_EQ(read.multigrid.smoothing_degree, 2);  // the degree such files were solved with
   }
   layers::StrataContainer bad = c;
   nlohmann::json m = nlohmann::json::parse(bad.model_json);
@@ -1476,6 +1479,12 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   layers::write_strata_container(bad, tmp.file("bad2.strata"));
   expect_rejected(tmp.file("bad2.strata"), "an unknown tangential regularization",
                   "options.reconstruct: unknown tangential_regularization 'laplacian'");
+  m = nlohmann::json::parse(c.model_json);
+  m["options"]["reconstruct"]["multigrid"]["smoothing_degree"] = 0;
+  bad.model_json = m.dump();
+  layers::write_strata_container(bad, tmp.file("bad3.strata"));
+  expect_rejected(tmp.file("bad3.strata"), "a smoothing degree of 0",
+                  "'smoothing_degree' in options.reconstruct.multigrid is 0, outside 1..8");
 }
 
 // The cage's refinement budget is part of its limit surface's options: it was not written before

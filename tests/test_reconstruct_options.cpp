@@ -147,6 +147,8 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
             "reconstruction option local_polish_max_fraction = 1.5 is out of range (0 to 1)");
   EXPECT_EQ(refusal("multigrid.retry_iterations", "-1"),
             "reconstruction option multigrid.retry_iterations = -1 is out of range (0-100000)");
+  EXPECT_EQ(refusal("multigrid.smoothing_degree", "9"),
+            "reconstruction option multigrid.smoothing_degree = 9 is out of range (1-8)");
   EXPECT_EQ(refusal("coarsest_max_cycles", "-1"),
             "reconstruction option coarsest_max_cycles = -1 is out of range (0-100000; 0 is max_cycles)");
   EXPECT_EQ(refusal("volume_scales", "3"), "accepted");

@@ -862,8 +862,14 @@ TEST(Reconstruction, EnumAndBoundOptionsOutOfRangeAreRejected) {
   refused(o, "max_constraint_motion");
   o.max_constraint_motion = std::numeric_limits<double>::infinity();
   refused(o, "max_constraint_motion");
+  o = ReconstructOptions{};
+  o.multigrid.smoothing_degree = 0;
+  refused(o, "multigrid.smoothing_degree");
+  o.multigrid.smoothing_degree = 9;
+  refused(o, "multigrid.smoothing_degree");
   EXPECT_NO_THROW(check_reconstruct_options(ReconstructOptions{}));
   EXPECT_NO_THROW(check_reconstruct_options(multigrid_reconstruct_options()));
+  EXPECT_NO_THROW(check_reconstruct_options(cycle_schedule_reconstruct_options()));
 }
 
 // A solve that diverges (regularization weights at 1e25: in range, but no solve follows them) is a

@@ -339,10 +339,68 @@ TEST(VertexMultigrid, ASinglePrecisionCycleLowersTheResidualAsFar) {
   EXPECT_NE(single, twice);  // the two preconditioners do differ
 }
 
+// The smoother's degree (MultigridStepOptions::smoothing_degree) changes the preconditioner, not
+// the step: run to convergence every degree lands on the direct solution; 0 is the hierarchy's
+// degree, 2; and in ten iterations degree 1 still lowers the residual of the 20k bend tenfold.
+TEST(VertexMultigrid, EverySmoothingDegreeConvergesToTheDirectSolution) {
+  const StepSystem s = make_system(cases::DetailKind::Bumps, 1200, 0.4);
+  const internal::VertexMultigrid mg = s.hierarchy();
+  const double d = s.diag();
+  const std::vector<Vec3> ref = direct_solve(s, 1e-4 * d, 1e-2 * d);
+  std::vector<std::vector<Vec3>> short_runs;
+  for (const int degree : {0, 1, 2, 3}) {
+    internal::VertexStepSystem sys = s.view(1e-4 * d, 1e-2 * d);
+    sys.smoothing_degree = degree;
+    internal::VertexMultigrid::Workspace ws;
+    std::vector<Vec3> delta;
+    mg.solve(sys, 0.0, 1000, delta, ws, nullptr);
+    EXPECT_LT(relative_difference(delta, ref), 1e-6) << "degree " << degree;
+    mg.solve(sys, 0.0, 4, delta, ws, nullptr);
+    short_runs.push_back(delta);
+  }
+  EXPECT_EQ(short_runs[0], short_runs[2]);  // 0: the hierarchy's own degree, 2
+  EXPECT_NE(short_runs[1], short_runs[2]);
+  EXPECT_NE(short_runs[3], short_runs[2]);
+
+  const StepSystem big = make_system(cases::DetailKind::Bumps, 20000, 0.4);
+  const internal::VertexMultigrid bmg = big.hierarchy();
+  internal::VertexStepSystem sys = big.view(1e-6 * big.diag(), 1e-2 * big.diag());
+  sys.smoothing_degree = 1;
+  internal::VertexMultigrid::Workspace ws;
+  std::vector<Vec3> delta;
+  const internal::VertexStepResult res = bmg.solve(sys, 0.0, 10, delta, ws, nullptr, true);
+  EXPECT_LT(res.relative_residual, 0.1);
+  EXPECT_NEAR(res.relative_residual, linear_residual(big, delta), 1e-4);
+}
+
 // Threads change nothing: every sum is taken in one order.
 TEST(VertexMultigrid, TheSameStepOnOneThreadAndThree) {
   expect_the_same_step_on_one_thread_and_three(make_system(cases::DetailKind::Rings, 20000, 0.4));
 }
+
+namespace {
+// The paper's bend of \p kind over a scan-like triangulation (12k prisms) rebuilt with \p ro on
+// one thread, checked against the acceptance: converged, max / RMS error, total volume, no
+// whole-level factorization (only the polish's local end factorizes, a neighbourhood each), and
+// no new intersections where the displacement vectors fold. Returns the solve's statistics.
+ReconstructStats expect_a_clean_bend(cases::DetailKind kind, ReconstructOptions ro) {
+  const cases::CylinderCase c = cylinder_case(kind, 12000, 0.4);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  ro.threads = 1;
+  const ReconstructResult r = VolumeReconstructor(e, ro).reconstruct(c.edited_base.vertices);
+  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
+  const VolumeMetrics m = volume_metrics(e, fr, r.positions);
+  EXPECT_TRUE(r.stats.converged);
+  EXPECT_LE(m.max_relative_error, 1e-3);
+  EXPECT_LE(m.rms_relative_error, 1e-4);
+  EXPECT_LT(std::abs(m.total_volume_change), 1e-3);
+  EXPECT_EQ(r.stats.factorizations, r.stats.local_factorizations);
+  EXPECT_EQ(find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs, 0u);
+  EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u) << c.name;
+  EXPECT_GT(find_self_intersections(reconstruct_vectors(e, fr), c.detail.faces).num_pairs, 0u);
+  return r.stats;
+}
+}  // namespace
 
 // The reconstruction on it (multigrid_reconstruct_options()): the paper's bend over a scan-like
 // triangulation, to the accuracy of the acceptance, with no new intersections where displacement
@@ -350,24 +408,27 @@ TEST(VertexMultigrid, TheSameStepOnOneThreadAndThree) {
 class MultigridBend : public ::testing::TestWithParam<cases::DetailKind> {};
 
 TEST_P(MultigridBend, ConvergesWithoutFoldsOrFactorizations) {
-  const cases::CylinderCase c = cylinder_case(GetParam(), 12000, 0.4);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  ReconstructOptions ro = multigrid_reconstruct_options();
-  ro.threads = 1;
-  const VolumeReconstructor rec(e, ro);
-  const ReconstructResult r = rec.reconstruct(c.edited_base.vertices);
-  const BaseFrames fr = evaluate_base_frames(e, c.edited_base.vertices);
-  const VolumeMetrics m = volume_metrics(e, fr, r.positions);
-  EXPECT_TRUE(r.stats.converged);
-  EXPECT_LE(m.max_relative_error, 1e-3);
-  EXPECT_LE(m.rms_relative_error, 1e-4);
-  EXPECT_LT(std::abs(m.total_volume_change), 1e-3);
-  // No whole-level factorization: only the polish's local end factorizes, a neighbourhood each.
-  EXPECT_EQ(r.stats.factorizations, r.stats.local_factorizations);
-  EXPECT_EQ(find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs, 0u);
-  EXPECT_EQ(find_self_intersections(r.positions, c.detail.faces).num_pairs, 0u) << c.name;
-  EXPECT_GT(find_self_intersections(reconstruct_vectors(e, fr), c.detail.faces).num_pairs, 0u);
+  expect_a_clean_bend(GetParam(), multigrid_reconstruct_options());
 }
+
+// The paper's schedule (cycle_schedule_reconstruct_options()): every volume scale solves every
+// level once, the finest included, and the bends end as the multigrid preset's do.
+class CycleScheduleBend : public ::testing::TestWithParam<cases::DetailKind> {};
+
+TEST_P(CycleScheduleBend, EveryScaleSolvesTheFinestLevelWithoutFolds) {
+  const ReconstructOptions ro = cycle_schedule_reconstruct_options();
+  EXPECT_NO_THROW(check_reconstruct_options(ro));
+  EXPECT_EQ(ro.multigrid.smoothing_degree, 1);
+  const ReconstructStats st = expect_a_clean_bend(GetParam(), ro);
+  ASSERT_EQ(static_cast<int>(st.finest_cycles_per_scale.size()), ro.volume_scales);
+  for (int sc = 0; sc + 1 < ro.volume_scales; ++sc) EXPECT_EQ(st.finest_cycles_per_scale[sc], 1) << sc;
+  EXPECT_GE(st.finest_cycles_per_scale.back(), 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(PaperCases, CycleScheduleBend,
+                         ::testing::Values(cases::DetailKind::Bumps, cases::DetailKind::Rings,
+                                           cases::DetailKind::Cuboid),
+                         [](const auto& info) { return std::string(cases::to_string(info.param)); });
 
 INSTANTIATE_TEST_SUITE_P(PaperCases, MultigridBend,
                          ::testing::Values(cases::DetailKind::Bumps, cases::DetailKind::Rings,

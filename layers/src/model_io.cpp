@@ -153,7 +153,8 @@ json options_json(const ModelOptions& o) {
               {"polish_damping", r.multigrid.polish_damping},
               {"polish_smoothness", r.multigrid.polish_smoothness},
               {"retry_iterations", r.multigrid.retry_iterations},
-              {"single_precision_cycles", r.multigrid.single_precision_cycles}}}}},
+              {"single_precision_cycles", r.multigrid.single_precision_cycles},
+              {"smoothing_degree", r.multigrid.smoothing_degree}}}}},
           {"projection",
            {{"seed_resolution", o.projection.seed_resolution},
             {"max_iterations", o.projection.max_iterations},
@@ -364,6 +365,10 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
       mo.retry_iterations = static_cast<int>(h.integer(mg, "retry_iterations", wm, 0, 1000000));
     if (mg.contains("single_precision_cycles"))
       mo.single_precision_cycles = h.boolean(mg, "single_precision_cycles", wm);
+    // Not written before 2026-12-02 (forty-second session): such files read the default (2), the
+    // degree they were solved with.
+    if (mg.contains("smoothing_degree"))
+      mo.smoothing_degree = static_cast<int>(h.integer(mg, "smoothing_degree", wm, 1, 8));
   }
   const json& p = h.at(j, "projection", w);
   const std::string wp = "options.projection";

@@ -79,7 +79,8 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"multigrid.polish_tolerance", &m.polish_tolerance},
           {"multigrid.polish_damping", &m.polish_damping},
           {"multigrid.polish_smoothness", &m.polish_smoothness},
-          {"multigrid.single_precision_cycles", &m.single_precision_cycles}};
+          {"multigrid.single_precision_cycles", &m.single_precision_cycles},
+          {"multigrid.smoothing_degree", &m.smoothing_degree}};
 }
 
 // Plain decimal notation only: [+-]digits[.digits][e[+-]digits] (a fraction and exponent only

@@ -2338,6 +2338,7 @@ class VolumeReconstructor::Impl {
     sys.fixed = L.fixed.empty() ? nullptr : &L.fixed;
     sys.eps = (exact ? std::max(mo.polish_damping, w.damping) : mo.damping) * diag;
     sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
+    sys.smoothing_degree = exact ? 0 : mo.smoothing_degree;  // 0: the hierarchy's (2)
     sys.stop = opt_.cancel;
     const internal::VertexStepResult res =
         L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
@@ -2601,6 +2602,16 @@ ReconstructOptions multigrid_reconstruct_options() {
   return o;
 }
 
+ReconstructOptions cycle_schedule_reconstruct_options() {
+  ReconstructOptions o = multigrid_reconstruct_options();
+  o.volume_scales = 20;
+  o.max_cycles = 1;
+  o.finest_intermediate_solves = true;
+  o.intermediate_regularized_levels = 0;
+  o.multigrid.smoothing_degree = 1;
+  return o;
+}
+
 void check_reconstruct_options(const ReconstructOptions& o) {
   // Each option by its name (set_reconstruct_option()'s), so that a --set NAME=VALUE out of
   // range is named in the error.
@@ -2703,6 +2714,7 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(mo.polish_damping > 0, "multigrid.polish_damping", mo.polish_damping, "above 0");
   check(mo.smoothness >= 0, "multigrid.smoothness", mo.smoothness, "at least 0");
   check(mo.polish_smoothness >= 0, "multigrid.polish_smoothness", mo.polish_smoothness, "at least 0");
+  count(mo.smoothing_degree, "multigrid.smoothing_degree", 1, 8);
 }
 
 VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)

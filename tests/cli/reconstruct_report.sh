@@ -172,28 +172,38 @@ if errors:
 print("reconstruct_report: all checks passed")
 PY
 
-# The scan-like triangulation of the same case (--jitter) rebuilt by the multigrid solver: the
-# report names the solver, the result holds the volumes without new pairs and without a
-# factorization of the whole level.
+# The scan-like triangulation of the same case (--jitter) rebuilt by the multigrid solver and by
+# the same in the paper's schedule (cycles: a cycle per volume scale): the report names the
+# solver, the result holds the volumes without new pairs and without a factorization of the whole
+# level.
 "$STRATA" generate --case cuboid --triangles 3000 --jitter 0.4 --out-dir "$TMP/irregular" >/dev/null
+for solver in multigrid cycles; do
 "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
-  --edited-base "$TMP/irregular/edited_base.obj" --solver multigrid -o "$TMP/mg.obj" --report "$TMP/mg.json" -q \
+  --edited-base "$TMP/irregular/edited_base.obj" --solver $solver -o "$TMP/mg.obj" --report "$TMP/mg.json" -q \
   >/dev/null
-python3 - "$TMP/mg.json" <<'PY'
+python3 - "$TMP/mg.json" $solver <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
+solver = sys.argv[2]
 errors = []
-if r.get("solver") != "multigrid": errors.append("solver is %r" % r.get("solver"))
+if r.get("solver") != solver: errors.append("solver is %r" % r.get("solver"))
 if not r["volume_metrics"]["max_relative_error"] <= 1e-3: errors.append("max error %g" % r["volume_metrics"]["max_relative_error"])
 if r["intersections"]["new_pairs"] != 0: errors.append("%d new pairs" % r["intersections"]["new_pairs"])
 it = r["iterations"]
 # A neighbourhood's small factorizations (the polish's local end) are allowed, a whole level's not.
 if it["factorizations"] != it["local_factorizations"]: errors.append("%d whole-level factorizations" % (it["factorizations"] - it["local_factorizations"]))
+# The paper's schedule solves the finest level at every volume scale (20), the multigrid preset at
+# its last of 3 only.
+per_scale = it["finest_cycles_per_scale"]
+want = 20 if solver == "cycles" else 3
+if len(per_scale) != want or sum(1 for c in per_scale if c > 0) != (want if solver == "cycles" else 1):
+    errors.append("finest cycles per scale %r" % per_scale)
 if errors:
-    print("FAIL (multigrid):\n  " + "\n  ".join(errors), file=sys.stderr)
+    print("FAIL (%s):\n  " % solver + "\n  ".join(errors), file=sys.stderr)
     sys.exit(1)
-print("reconstruct_report: multigrid checks passed")
+print("reconstruct_report: %s checks passed" % solver)
 PY
+done
 # auto over a detail of at least 80,000 triangles takes the multigrid preset (the displacement
 # vectors, which need no solver, keep this check cheap; the report names the solver either way).
 "$STRATA" generate --case bumps --triangles 90000 --out-dir "$TMP/large" >/dev/null
@@ -210,7 +220,7 @@ if not (faces >= 80000 and r.get("solver") == "multigrid" and r.get("solver_requ
     sys.exit(1)
 print("reconstruct_report: auto checks passed")
 PY
-expect_exit 2 "^strata: error: --solver: magic not in {auto,legacy,multigrid}" "$TMP/err.txt" \
+expect_exit 2 "^strata: error: --solver: magic not in {auto,legacy,multigrid,cycles}" "$TMP/err.txt" \
   "$STRATA" reconstruct --detail "$TMP/irregular/detail.obj" --base "$TMP/irregular/base.obj" \
   --edited-base "$TMP/irregular/edited_base.obj" --solver magic -o "$TMP/x.obj"
 [ ! -e "$TMP/x.obj" ] || { echo "FAIL: output written for a bad --solver" >&2; exit 1; }

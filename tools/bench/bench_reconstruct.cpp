@@ -11,8 +11,8 @@
 // --jitter J: the scan-like (irregular) triangulation of the cases (CylinderCaseOptions::jitter).
 // --shuffle SEED: the detail's vertices and faces numbered at random (seeded), as a tool that
 // hashes its vertices writes a scan (ReconstructOptions::renumber_for_locality; 0: the grid's order).
-// --solver multigrid: multigrid_reconstruct_options() instead of the defaults (--set still applies
-// after it).
+// --solver multigrid|cycles: multigrid_reconstruct_options() or cycle_schedule_reconstruct_options()
+// instead of the defaults (--set still applies after it).
 // --repeat N: N reconstructions with the same VolumeReconstructor (its hierarchy kept, as an
 // application reconstructing over one encoding does); the times are their median, each run's time
 // is listed, and the runs must give the same positions bit for bit (else the size is an error).
@@ -158,7 +158,7 @@ bool read_whole(const std::string& v, T& out) {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  bool multigrid = false;
+  std::string solver = "legacy";
   std::vector<std::string> sets;  // applied after the --solver preset, whatever the order
   auto value = [&](int& i) -> std::string {
     if (i + 1 >= argc) throw std::runtime_error(std::string(argv[i]) + " needs a value");
@@ -199,8 +199,9 @@ Args parse_args(int argc, char** argv) {
       a.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--solver") {
       const std::string v = value(i);
-      if (v != "legacy" && v != "multigrid") throw std::runtime_error("--solver is legacy or multigrid");
-      multigrid = v == "multigrid";
+      if (v != "legacy" && v != "multigrid" && v != "cycles")
+        throw std::runtime_error("--solver is legacy, multigrid or cycles");
+      solver = v;
     } else if (opt == "--set") {
       sets.push_back(value(i));
     } else if (opt == "--repeat" || opt == "--rounds") {
@@ -222,8 +223,9 @@ Args parse_args(int argc, char** argv) {
       throw std::runtime_error("unknown argument '" + opt + "'");
     }
   }
-  if (multigrid) {
-    a.reconstruct = multigrid_reconstruct_options();
+  if (solver != "legacy") {
+    a.reconstruct =
+        solver == "multigrid" ? multigrid_reconstruct_options() : cycle_schedule_reconstruct_options();
     a.reconstruct.threads = 1;
   }
   if (a.finest_volume_iterations > 0) a.reconstruct.finest_volume_iterations = a.finest_volume_iterations;
@@ -539,13 +541,15 @@ int main(int argc, char** argv) {
   }
   const char* usage =
       "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
-      "[--shuffle SEED] [--solver legacy|multigrid] [--finest-volume-iterations N] [--set OPTION=VALUE] "
+      "[--shuffle SEED] [--solver legacy|multigrid|cycles] [--finest-volume-iterations N] [--set "
+      "OPTION=VALUE] "
       "[--repeat N] [--min-run-seconds S] [--rounds R] [--out FILE.json] [--max-seconds S]\n"
       "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
       "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
       "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
       "  --shuffle SEED: the detail's vertices and faces numbered at random (0: the grid's order)\n"
-      "  --solver: legacy (the default options) or multigrid (multigrid_reconstruct_options())\n"
+      "  --solver: legacy (the default options), multigrid (multigrid_reconstruct_options()) or cycles\n"
+      "    (cycle_schedule_reconstruct_options(): the paper's schedule, a cycle per volume scale)\n"
       "  --set OPTION=VALUE: a ReconstructOptions field (multigrid.* for MultigridStepOptions)\n"
       "  --repeat N: N reconstructions per size with one solver object; times are their median, and\n"
       "    the runs must agree bit for bit\n"
@@ -737,7 +741,8 @@ int main(int argc, char** argv) {
               {"polish_tolerance", ro.multigrid.polish_tolerance},
               {"polish_damping", ro.multigrid.polish_damping},
               {"polish_smoothness", ro.multigrid.polish_smoothness},
-              {"single_precision_cycles", ro.multigrid.single_precision_cycles}}},
+              {"single_precision_cycles", ro.multigrid.single_precision_cycles},
+              {"smoothing_degree", ro.multigrid.smoothing_degree}}},
             {"step_solver", solver_name(ro.step_solver)},
             {"polish_solver", solver_name(ro.polish_solver)}}},
           {"memory_floor", {{"prisms", floor_prisms}, {"peak_rss_bytes", floor_rss}}}, {"results", results},

@@ -420,9 +420,11 @@ cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triang
 
 void add_solver_option(CLI::App* app, SolverChoice& choice, bool with_auto) {
   std::string help =
-      "Volume solver: legacy (conjugate-gradient cycles, a factorized polish) or multigrid (a "
-      "vertex-space multigrid throughout, no factorization; for large meshes such as scans)";
-  std::vector<std::string> solvers{"legacy", "multigrid"};
+      "Volume solver: legacy (conjugate-gradient cycles, a factorized polish), multigrid (a "
+      "vertex-space multigrid throughout, no factorization; for large meshes such as scans) or cycles "
+      "(the multigrid in the paper's schedule: 20 volume scales of one cheap cycle each; slower to "
+      "the answer, fewer seconds per cycle)";
+  std::vector<std::string> solvers{"legacy", "multigrid", "cycles"};
   if (with_auto) {
     help += ", or auto: multigrid for a detail of at least " + std::to_string(kAutoMultigridPrisms) +
             " triangles, legacy below";
@@ -470,9 +472,10 @@ std::string resolve_solver(const SolverChoice& choice, std::size_t prisms) {
 }
 
 ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
-  assert(choice.solver == "legacy" || choice.solver == "multigrid");
-  ReconstructOptions o =
-      choice.solver == "multigrid" ? multigrid_reconstruct_options() : ReconstructOptions{};
+  assert(choice.solver == "legacy" || choice.solver == "multigrid" || choice.solver == "cycles");
+  ReconstructOptions o = choice.solver == "multigrid" ? multigrid_reconstruct_options()
+                         : choice.solver == "cycles"  ? cycle_schedule_reconstruct_options()
+                                                      : ReconstructOptions{};
   o.threads = threads;
   for (const std::string& kv : choice.sets) set_reconstruct_option(o, kv);
   return o;

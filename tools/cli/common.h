@@ -213,7 +213,7 @@ void ensure_directory(const std::string& dir);
 //! resolution) and the given bend angle.
 cases::CylinderCaseOptions paper_case_options(cases::DetailKind kind, int triangles, double bend_degrees);
 
-//! The volume solver a command line chose: `--solver legacy|multigrid` (or auto, where the command
+//! The volume solver a command line chose: `--solver legacy|multigrid|cycles` (or auto, where the command
 //! offers it) and any number of `--set NAME=VALUE` (set_reconstruct_option()), applied in order
 //! after the solver's preset.
 struct SolverChoice {
@@ -232,11 +232,11 @@ constexpr std::size_t kAutoMultigridPrisms = 80000;
 //! A --set whose name or value set_reconstruct_option() refuses is a usage error.
 void add_solver_option(CLI::App* app, SolverChoice& choice, bool with_auto = false);
 //! \p choice's solver for a detail of \p prisms prisms: auto resolved by kAutoMultigridPrisms,
-//! legacy and multigrid as they are.
+//! the others as they are.
 std::string resolve_solver(const SolverChoice& choice, std::size_t prisms);
-//! The reconstruction options \p choice stands for (its solver legacy or multigrid: resolve auto
-//! first): the defaults (legacy: conjugate-gradient
-//! cycles and a factorized polish) or multigrid_reconstruct_options(), with \p threads solver
+//! The reconstruction options \p choice stands for (its solver legacy, multigrid or cycles:
+//! resolve auto first): the defaults (legacy: conjugate-gradient cycles and a factorized polish),
+//! multigrid_reconstruct_options() or cycle_schedule_reconstruct_options(), with \p threads solver
 //! threads (0: all cores), then the --set values (the last word, threads included).
 ReconstructOptions solver_options(const SolverChoice& choice, int threads = 0);
 

@@ -89,6 +89,15 @@ struct MultigridStepOptions {
   //! conjugate gradients around it run in double). The polish's V-cycle stays in double: its
   //! nearly singular systems stalled in single precision (the 100k cuboid: 4 factorizations).
   bool single_precision_cycles = true;
+  //! Degree of the Chebyshev block-Jacobi smoother before and after each coarse correction of
+  //! the cycle steps' V-cycles (1 to 8). A V-cycle applies the fine operator 2 * degree times, so
+  //! degree 1 halves its fine-level work against a weaker smoothing. The polish keeps degree 2.
+  //! Measured (2026-12-02, one thread, the 100k bumps bend at jitter 0.4, single runs, with the
+  //! degree in the polish too): one cycle per level and scale over 16 scales took 1.49 s with
+  //! degree 1 against 1.72 s with 2 and 2.08 s with 3, 0 new pairs each; in
+  //! multigrid_reconstruct_options() degree 1 took 0.54 s against 0.56 s at 100k, but its 1M bend
+  //! folded (one retry, 43.5 s against 7.6 s), so that preset keeps 2.
+  int smoothing_degree = 2;
 };
 
 //! User options of the reconstruction (the paper's k, g, n, m, lambdas and tolerances). The
@@ -438,6 +447,21 @@ struct ReconstructOptions {
 //! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
 //! outcomes are erratic from mesh to mesh (sdk/docs/engine-log.md).
 ReconstructOptions multigrid_reconstruct_options();
+
+//! The multigrid preset in the schedule of the paper's Listing 1 (section 4.3): many volume
+//! scales, each one multigrid cycle over every level, the finest included (one Gauss-Newton step
+//! per level and cycle, finest_intermediate_solves), then the preset's final cycles and polish
+//! at full scale. Its cycles are cheap (MultigridStepOptions::smoothing_degree 1), so it solves
+//! more constraints per second per cycle than multigrid_reconstruct_options(), but its whole
+//! reconstruction takes longer: use it where the cycles' cost matters (a pass per scale, as the
+//! paper measured), the multigrid preset where the time to the answer does. Changed from
+//! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
+//! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1. Measured on one thread
+//! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
+//! 1.97-2.63 s (the multigrid preset 0.64-0.90 s the same hour), 0.76M-1.01M prisms per second
+//! per finest pass, 0 new pairs; rings 2.28 s, cuboid 2.79 s; bumps at 1M 32.8 s, after two fold
+//! repair rounds, 0 new pairs (README, Measured results).
+ReconstructOptions cycle_schedule_reconstruct_options();
 
 //! Checks that every field of \p options is in the solver's range, as VolumeReconstructor does on
 //! construction: for options that arrive apart from a solve (a file's, a --set's).

@@ -239,7 +239,8 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   const std::size_t m = faces.size();
   const std::size_t n = static_cast<std::size_t>(n0_);
   const int nc = static_cast<int>(coarse_.size());
-  assert(sys.gf->size() == 9 * m && r.size() == m && vfo.size() == n + 1 && eps > 0);
+  assert(sys.gf->size() == 9 * m && r.size() == m && vfo.size() == n + 1 && eps > 0 &&
+         sys.smoothing_degree >= 0);
   VertexStepResult result;
   delta.assign(n, Vec3::Zero());
   double rr0 = 0.0;
@@ -458,7 +459,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     auto& res = vec.r;
     auto& d = vec.d;
     auto& t = vec.t;
-    const int degree = opt_.smoothing_degree;
+    const int degree = sys.smoothing_degree > 0 ? sys.smoothing_degree : opt_.smoothing_degree;
     res.resize(k);
     d.resize(k);
     // One pass per degree: residual, search direction and update together (the same operations

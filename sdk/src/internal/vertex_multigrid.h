@@ -53,6 +53,9 @@ struct VertexStepSystem {
   const std::vector<char>* fixed = nullptr;  //!< optional: vertices whose delta is 0
   double eps = 0.0;                          //!< > 0: weight of ||delta||^2 (Levenberg-Marquardt)
   double eps_lap = 0.0;                      //!< >= 0: weight of the smoothness term delta^T L delta
+  //! > 0: the Chebyshev smoother's degree in this solve's V-cycles (0: the hierarchy's
+  //! VertexMultigridOptions::smoothing_degree).
+  int smoothing_degree = 0;
   //! Optional: once it reads true the iterations stop (ReconstructOptions::cancel; the caller
   //! then throws without using the step).
   const std::atomic<bool>* stop = nullptr;
