@@ -458,7 +458,7 @@ ReconstructOptions multigrid_reconstruct_options();
 //! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
 //! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1. Measured on one thread
 //! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
-//! 1.97-2.63 s (the multigrid preset 0.64-0.90 s the same hour), 0.76M-1.01M prisms per second
+//! 1.90-2.63 s (the multigrid preset 0.64-0.90 s the same hours), 0.76M-1.05M prisms per second
 //! per finest pass, 0 new pairs; rings 2.28 s, cuboid 2.79 s; bumps at 1M 32.8 s, after two fold
 //! repair rounds, 0 new pairs (README, Measured results).
 ReconstructOptions cycle_schedule_reconstruct_options();
