@@ -1,6 +1,6 @@
 // reexec_with_huge_page_malloc() (strata/process.h): the program starts again with the glibc
-// tunable added to its environment (the other tunables and the arguments kept), and not again
-// once the tunable is set, whatever its value.
+// tunables added to its environment (the other tunables and the arguments kept), and not again
+// once glibc.malloc.hugetlb is set, whatever its value.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -68,9 +68,20 @@ std::string run_child(const std::string& out, const char* tunables, bool force, 
 TEST(Process, TheProgramStartsAgainWithMallocOnHugePages) {
   strata::test::ScratchDir dir{"strata_process"};
   const std::string out = dir.file("seen.txt");
-  EXPECT_EQ(run_child(out, nullptr, false), "tunables glibc.malloc.hugetlb=1 configured 1");
+  const std::string keep_heap =
+      ":glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=4294967296";
+  EXPECT_EQ(run_child(out, nullptr, false), "tunables glibc.malloc.hugetlb=1" + keep_heap + " configured 1");
   EXPECT_EQ(run_child(out, "glibc.malloc.mmap_max=65536", false),
-            "tunables glibc.malloc.mmap_max=65536:glibc.malloc.hugetlb=1 configured 1");
+            "tunables glibc.malloc.mmap_max=65536:glibc.malloc.hugetlb=1" + keep_heap + " configured 1");
+  // The caller's own thresholds are kept, and not named twice.
+  EXPECT_EQ(
+      run_child(out, "glibc.malloc.trim_threshold=0", false),
+      "tunables glibc.malloc.trim_threshold=0:glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432 "
+      "configured 1");
+  EXPECT_EQ(run_child(out, "glibc.malloc.mmap_threshold=4096", false),
+            "tunables "
+            "glibc.malloc.mmap_threshold=4096:glibc.malloc.hugetlb=1:glibc.malloc.trim_threshold=4294967296 "
+            "configured 1");
   // Set already (0 keeps malloc as it is): no second start, unless forced.
   EXPECT_EQ(run_child(out, "glibc.malloc.hugetlb=0", false), "returned");
   EXPECT_EQ(run_child(out, "glibc.malloc.hugetlb=1", false), "returned");

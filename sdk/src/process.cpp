@@ -11,6 +11,9 @@ namespace strata {
 
 namespace {
 constexpr const char* kTunable = "glibc.malloc.hugetlb=";
+// Added with it unless GLIBC_TUNABLES names them already (process.h says why).
+constexpr const char* kKeepHeap[] = {"glibc.malloc.mmap_threshold=33554432",
+                                     "glibc.malloc.trim_threshold=4294967296"};
 // Set in the environment of the re-executed program: it never re-executes again, whatever it
 // sees (glibc drops tunables in secure-execution mode, which would otherwise loop).
 constexpr const char* kGuard = "STRATA_REEXECUTED";
@@ -34,7 +37,10 @@ void reexec_with_huge_page_malloc(char** argv, bool force) {
   const char* t = std::getenv("GLIBC_TUNABLES");
   const std::optional<std::string> before = t ? std::optional<std::string>(t) : std::nullopt;
   if (!huge_page_malloc_configured()) {
-    const std::string value = (before && !before->empty() ? *before + ":" : std::string()) + kTunable + "1";
+    std::string value = (before && !before->empty() ? *before + ":" : std::string()) + kTunable + "1";
+    for (const std::string tunable : kKeepHeap)
+      if (!before || before->find(tunable.substr(0, tunable.find('=') + 1)) == std::string::npos)
+        value += ":" + tunable;
     if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
   } else if (!force) {
     return;

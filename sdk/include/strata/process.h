@@ -1,5 +1,6 @@
 //! \file process.h
-//! Process set-up for programs built on the SDK: glibc's malloc on transparent huge pages.
+//! Process set-up for programs built on the SDK: glibc's malloc on transparent huge pages, its
+//! heap kept for reuse.
 #pragma once
 
 namespace strata {
@@ -20,7 +21,16 @@ bool huge_page_malloc_configured();
 //! reconstruction, setup 2.88-3.63 s against 3.71-4.10 s; at 10k and 100k the difference was
 //! within the machine's noise (10k: 0.066-0.103 s against 0.076-0.100 s). The solutions' errors,
 //! intersecting pairs and iteration counts are the same (placement changes no arithmetic).
-//! Does nothing (returns) if the tunable is set already (GLIBC_TUNABLES=glibc.malloc.hugetlb=0
+//! With it, unless GLIBC_TUNABLES names them: glibc.malloc.mmap_threshold=33554432 (blocks under
+//! 32 MB, the most glibc takes, come from the heap) and glibc.malloc.trim_threshold=4294967296 (the
+//! heap is not returned to the kernel until 4 GB of it are free): a reconstruction's arrays are
+//! freed when it ends (and some between its phases), and the next one took them back from the
+//! kernel, a page fault and a zeroed page at a time. Measured (2026-12-02, strata_bench, the 1M
+//! bumps bend, one thread): 680 page faults per further reconstruction, 0.7 s of page zeroing in
+//! perf's samples, against 45 and none with them; the second reconstruction of six processes each,
+//! alternating, 7.46 s against 8.02 s on average (each pair 0.79-1.08 times), the peak 779-811
+//! against 798-833 bytes per prism. Arrays of 32 MB or more are still mapped and returned.
+//! Does nothing (returns) if glibc.malloc.hugetlb is set already (GLIBC_TUNABLES=glibc.malloc.hugetlb=0
 //! keeps malloc as it is), unless \p force (the caller changed other variables that are read
 //! only at start, as OMP_NUM_THREADS). Never re-executes a program that it started (the
 //! environment variable STRATA_REEXECUTED says so), a set-user-ID or otherwise secure program
