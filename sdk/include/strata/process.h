@@ -28,8 +28,8 @@ bool huge_page_malloc_configured();
 //! kernel, a page fault and a zeroed page at a time. Measured (2026-12-02, strata_bench, the 1M
 //! bumps bend, one thread): 680 page faults per further reconstruction, 0.7 s of page zeroing in
 //! perf's samples, against 45 and none with them; the second reconstruction of six processes each,
-//! alternating, 7.46 s against 8.02 s on average (each pair 0.79-1.08 times), the peak 779-811
-//! against 798-833 bytes per prism. Arrays of 32 MB or more are still mapped and returned.
+//! alternating, 7.46 s against 8.02 s on average (each pair 0.79-1.08 times), the peak 794-808
+//! against 798-841 bytes per prism (six runs each way). Arrays of 32 MB or more are still mapped and returned.
 //! Does nothing (returns) if glibc.malloc.hugetlb is set already (GLIBC_TUNABLES=glibc.malloc.hugetlb=0
 //! keeps malloc as it is), unless \p force (the caller changed other variables that are read
 //! only at start, as OMP_NUM_THREADS). Never re-executes a program that it started (the
