@@ -216,18 +216,28 @@ TEST(RealScanIllPosed, PrismsOverDegenerateBaseTrianglesDoNotThrowTheDetailAway)
 // triangles only, did not see. Given the rest of the mesh as its intersection context
 // (VolumeReconstructor::set_intersection_context), it counts what the whole mesh shows, and its
 // fold repair removes them.
+// Whether a solve's first pass folds there is a matter of rounding: at smoothing 0.5 it did with
+// OpenBLAS's Haswell kernels (CHOLMOD's, in the polish) and not with its SkylakeX ones, which
+// folded at 0.6 and 0.7 instead (measured 2026-12-02). So the bend is run at four smoothings: every
+// one ends without a new pair in the whole mesh, as counted by the solver, and at least one needed
+// the repair.
 TEST(RealScanContext, TheSolverCountsAndRepairsFoldsIntoTheRestOfTheMesh) {
   const ScanBend b = load(ScanEdit{"camel_hindleg_hip_110", "camel", "camel_hindleg_hip_110.json", 0.5});
-  EditOptions o;
-  o.smoothing_fraction = 0.5;
-  o.fill_region_corners = false;  // with the corners filled, the first solve leaves no fold to repair
-  const EditResult r = RegionEditor(b.mesh, b.region, b.handle, o).apply(b.transform);
-  const auto whole = static_cast<long long>(new_pairs(b.mesh, r.positions));
-  EXPECT_EQ(r.stats.new_intersecting_pairs, whole);
-  EXPECT_EQ(whole, 0);
-  EXPECT_GT(r.stats.fold_repairs, 0);
-  EXPECT_TRUE(r.stats.converged);
-  EXPECT_LE(r.volume.max_relative_error, 1e-3);
+  int repaired = 0;
+  for (double smoothing : {0.5, 0.55, 0.6, 0.7}) {
+    SCOPED_TRACE(smoothing);
+    EditOptions o;
+    o.smoothing_fraction = smoothing;
+    o.fill_region_corners = false;  // with the corners filled, the first solve leaves no fold to repair
+    const EditResult r = RegionEditor(b.mesh, b.region, b.handle, o).apply(b.transform);
+    const auto whole = static_cast<long long>(new_pairs(b.mesh, r.positions));
+    EXPECT_EQ(r.stats.new_intersecting_pairs, whole);
+    EXPECT_EQ(whole, 0);
+    EXPECT_TRUE(r.stats.converged);
+    EXPECT_LE(r.volume.max_relative_error, 1e-3);
+    repaired += r.stats.fold_repairs > 0;
+  }
+  EXPECT_GT(repaired, 0);
 }
 
 // EditOptions::fill_region_corners: the man's knee bent 90 degrees (a script of the twenty-fifth
