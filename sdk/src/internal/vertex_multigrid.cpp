@@ -96,6 +96,22 @@ void pattern_graph(const std::vector<int>& row, const std::vector<int>& col, std
   }
 }
 
+// How far ahead the fine products prefetch their per-face data, in faces (of 8-64, 32-64 were
+// best).
+constexpr std::size_t kPrefetchFaces = 48;
+
+// Prefetches the per-face data (face, J and, with the smoothness term, its edge weights) of face
+// j + kPrefetchFaces, or of the last face. The index is clamped, not tested: GCC 12 dropped the
+// prefetches from the loops when they sat behind a test of it.
+template <bool lap>
+inline void prefetch_face(std::size_t j, std::size_t m, const Face* faces, const float* gf,
+                          const float* flw) {
+  j = j + kPrefetchFaces < m ? j + kPrefetchFaces : m - 1;
+  __builtin_prefetch(gf + 9 * j);
+  __builtin_prefetch(faces + j);
+  if (lap) __builtin_prefetch(flw + 3 * j);
+}
+
 constexpr int kCorners[6][2] = {{0, 1}, {1, 0}, {0, 2}, {2, 0}, {1, 2}, {2, 1}};
 // Face edge e = (f[e], f[e + 1]) -> its two entries of kCorners (both directions).
 constexpr int kEdgeSlots[3][2] = {{0, 1}, {4, 5}, {2, 3}};
@@ -366,9 +382,13 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     auto add_lap = [](V3& y_c, T t, const float* g_c, const V3& l_c) {
       y_c += V3(t * g_c[0], t * g_c[1], t * g_c[2]) + l_c;
     };
+    // The per-face data a few dozen faces ahead is prefetched: at 1M prisms these arrays stream
+    // from memory, and the hardware's prefetcher alone left the pass waiting on them (18.2 against
+    // 10.4 ns a face for the float product at 1M prisms, 21 against 16 for the double one).
     if (!arena || n < 4096) {
       for (std::size_t v = 0; v < n; ++v) y[v] = start(v);
       for (std::size_t j = 0; j < m; ++j) {
+        prefetch_face<lap>(j, m, faces.data(), gf, flw);
         const T t = jdot(j);
         if (jx_out) (*jx_out)[j] = t;
         const Face& f = faces[j];
@@ -394,6 +414,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       std::vector<V3>& el = ws.edge_scratch(T{});
       if constexpr (lap) el.resize(3 * m);
       parallel_for_each(arena, m, [&](std::size_t j) {
+        prefetch_face<lap>(j, m, faces.data(), gf, flw);
         jx[j] = jdot(j);
         if constexpr (lap) {
           const Face& f = faces[j];
