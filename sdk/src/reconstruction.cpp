@@ -145,8 +145,10 @@ void release_step_scratch(GnScratch& g) {
   auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
   release(g.grad, g.gf, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
   internal::VertexMultigrid::Workspace& w = g.mgw;
-  release(w.levels, w.res, w.z, w.p, w.kp, w.rho, w.jp, w.jx32, w.jx64, w.el32, w.el64);
+  release(w.levels, w.jx32, w.jx64, w.el32, w.el64);
   w.fine = {};
+  w.cg32 = {};
+  w.cg64 = {};
 }
 
 // The per-reconstruction working arrays, indexed by original vertex id (or, in the coarse

@@ -285,12 +285,39 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     std::vector<Eigen::Matrix3f>& val = ws.levels[0].val;
     const Coarse& c = coarse_[0];
     val.assign(c.col.size(), Eigen::Matrix3f::Zero());
+    // A face's J^T J term, 3 x 3 blocks of g_a g_b^T, lands in the blocks of its corners'
+    // aggregates: corners in one aggregate are summed first (one outer product for a face inside
+    // an aggregate, four for a face across two, instead of nine), and each off-diagonal block is
+    // the transpose of its mirror. In single precision, as the blocks are kept.
+    using V3f = Eigen::Vector3f;
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = faces[j];
-      const Vec3 g[3] = {g_at(3 * j), g_at(3 * j + 1), g_at(3 * j + 2)};
-      for (int a = 0; a < 3; ++a) val[c.diag[agg0_[f[a]]]] += (g[a] * g[a].transpose()).cast<float>();
-      for (int k = 0; k < 6; ++k)
-        val[face_slot_[j][k]] += (g[kCorners[k][0]] * g[kCorners[k][1]].transpose()).cast<float>();
+      const float* gj = gf + 9 * j;
+      const V3f g[3] = {V3f(gj[0], gj[1], gj[2]), V3f(gj[3], gj[4], gj[5]), V3f(gj[6], gj[7], gj[8])};
+      const int A[3] = {agg0_[f[0]], agg0_[f[1]], agg0_[f[2]]};
+      const std::array<int, 6>& slot = face_slot_[j];  // the blocks of kCorners' corner pairs
+      if (A[0] == A[1] && A[1] == A[2]) {
+        const V3f s = g[0] + g[1] + g[2];
+        val[c.diag[A[0]]] += s * s.transpose();
+      } else if (A[0] == A[1] || A[0] == A[2] || A[1] == A[2]) {
+        // Corners a and b share an aggregate, o is alone; k: the kCorners entry of (a, o).
+        const int o = A[0] == A[1] ? 2 : A[0] == A[2] ? 1 : 0;
+        const int a = o == 0 ? 1 : 0, b = o == 2 ? 1 : 2;
+        const int k = o == 2 ? 2 : o == 1 ? 0 : 1;  // (0,2), (0,1) or (1,0)
+        const V3f s = g[a] + g[b];
+        val[c.diag[A[a]]] += s * s.transpose();
+        val[c.diag[A[o]]] += g[o] * g[o].transpose();
+        const Eigen::Matrix3f x = s * g[o].transpose();
+        val[slot[k]] += x;
+        val[slot[k ^ 1]] += x.transpose();
+      } else {
+        for (int q = 0; q < 3; ++q) val[c.diag[A[q]]] += g[q] * g[q].transpose();
+        for (int k = 0; k < 6; k += 2) {
+          const Eigen::Matrix3f x = g[kCorners[k][0]] * g[kCorners[k][1]].transpose();
+          val[slot[k]] += x;
+          val[slot[k + 1]] += x.transpose();
+        }
+      }
     }
     // The smoothness term's off-diagonal blocks: each face's edges (both directions), then the
     // rest edges; its diagonal with eps.
@@ -563,12 +590,17 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   };
   release_other(ws.fine);
   for (Workspace::Level& L : ws.levels) release_other(L);
+  auto release_cg = [](auto& c) {
+    for (auto* a : {&c.p, &c.kp, &c.delta}) std::decay_t<decltype(*a)>().swap(*a);
+    for (auto* a : {&c.rho, &c.jp}) std::decay_t<decltype(*a)>().swap(*a);
+  };
   if (single_precision_cycle) {
     std::vector<double>().swap(ws.jx64);
-    std::vector<Vec3>().swap(ws.z);  // z_at() reads the V-cycle's float solution instead
+    release_cg(ws.cg64);
   } else {
     std::vector<float>().swap(ws.jx32);
     std::vector<Eigen::Vector3f>().swap(ws.el32);
+    release_cg(ws.cg32);
   }
   if (!(eps_lap > 0) || !arena || n < 4096) {  // no threaded product with the smoothness term
     std::vector<Eigen::Vector3f>().swap(ws.el32);
@@ -578,84 +610,86 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   // at 0, so that delta stays 0 there (CG on the free vertices' block, preconditioned by the
   // free block of the V-cycle).
   const std::vector<char>* fixed = sys.fixed;
-  // The preconditioned residual z = the V-cycle of the conjugate gradients' residual res, 0 on
-  // fixed vertices, read through z_at(): in double the V-cycle writes ws.z; in single precision z
-  // stays the V-cycle's float solution, converted where it is read (the same doubles, without a
-  // vector of them to write and read back), and the caller's pass over res writes the V-cycle's
-  // right-hand side (to_cycle). precondition() returns res . z, summed in vertex order.
-  auto& v32 = ws.fine.f32;
-  auto z_at = [&](std::size_t i) -> Vec3 {
-    if (fixed && (*fixed)[i]) return Vec3::Zero();
-    return single_precision_cycle ? Vec3(v32.x[i].cast<double>()) : ws.z[i];
-  };
-  auto to_cycle = [&](std::size_t i, const Vec3& res_i) {
-    if (single_precision_cycle) v32.b[i] = res_i.cast<float>();
-  };
-  auto precondition = [&](const std::vector<Vec3>& res) {
-    if (single_precision_cycle)
-      vcycle(0, v32.b, v32.x, vcycle);
-    else
-      vcycle(0, res, ws.z, vcycle);
-    double rz = 0.0;
-    for (std::size_t i = 0; i < n; ++i) rz += res[i].dot(z_at(i));
-    return rz;
-  };
-  auto clear_fixed = [&](std::vector<Vec3>& v) {
+  auto clear_fixed = [&](auto& v) {
     if (fixed)
       for (std::size_t i = 0; i < n; ++i)
         if ((*fixed)[i]) v[i].setZero();
   };
-  auto dot = [](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  auto dot = [](const auto& a, const auto& b) {  // summed in double, in vertex order
     double s = 0.0;
-    for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+    for (std::size_t i = 0; i < a.size(); ++i) s += static_cast<double>(a[i].dot(b[i]));
     return s;
   };
 
-  // --- Preconditioned conjugate gradients from delta = 0, tracking rho = r - J delta. A stop
-  // read here spares the first V-cycle too (at 1M prisms a cancel at a step's start waited up to
-  // 0.25 s, for the step's gradients, these operators and that cycle, before the first iteration's
-  // check).
+  // --- Preconditioned conjugate gradients from delta = 0, tracking rho = r - J delta, in the
+  // V-cycle's precision T: the cycle steps' few inexact iterations need a few digits, and in
+  // single precision their vectors are half the memory traffic (at 1M prisms they stream from
+  // memory); the polish's nearly singular systems keep double. The residual is the fine level's
+  // V-cycle right-hand side (b) and the preconditioned residual z its solution (x), 0 on fixed
+  // vertices. A stop read here spares the first V-cycle too (at 1M prisms a cancel at a step's
+  // start waited up to 0.25 s, for the step's gradients, these operators and that cycle, before
+  // the first iteration's check).
   if (sys.stop && sys.stop->load(std::memory_order_relaxed)) return result;
-  ws.rho = r;
-  ws.res.resize(n);
-  parallel_for_each(arena, n, [&](std::size_t v) {
-    Vec3 acc = Vec3::Zero();
-    for (int t = vfo[v]; t < vfo[v + 1]; ++t) acc += r[vf[t] / 3] * g_at(vf[t]);
-    ws.res[v] = acc;
-  });
-  clear_fixed(ws.res);
-  v32.b.resize(single_precision_cycle ? n : 0);
-  for (std::size_t v = 0; v < n; ++v) to_cycle(v, ws.res[v]);
-  double rz = precondition(ws.res);
-  ws.p.resize(n);
-  for (std::size_t v = 0; v < n; ++v) ws.p[v] = z_at(v);
-  const double stop = tolerance * tolerance * rr0;
-  ws.jp.resize(m);
-  for (int it = 0; it < max_iterations; ++it) {
-    if (sys.stop && sys.stop->load(std::memory_order_relaxed)) break;
-    fine_product(ws.p, ws.kp, &ws.jp);
-    clear_fixed(ws.kp);
-    const double pkp = dot(ws.p, ws.kp);
-    if (!(pkp > 0)) break;
-    const double alpha = rz / pkp;
-    for (std::size_t v = 0; v < n; ++v) {
-      delta[v] += alpha * ws.p[v];
-      ws.res[v] -= alpha * ws.kp[v];
-      to_cycle(v, ws.res[v]);  // unused if this iteration is the last
+  auto conjugate_gradients = [&](auto scalar) {
+    using T = decltype(scalar);
+    using V3 = Eigen::Matrix<T, 3, 1>;
+    auto& fv = ws.fine.vectors(T{});
+    auto& cg = ws.cg_vectors(T{});
+    std::vector<V3>&res = fv.b, &z = fv.x, &p = cg.p, &kp = cg.kp;
+    std::vector<T>&rho = cg.rho, &jp = cg.jp;
+    std::vector<V3>* d = &cg.delta;
+    if constexpr (std::is_same_v<T, double>) d = &delta;  // the caller's, without a copy
+    d->assign(n, V3::Zero());
+    rho.resize(m);
+    for (std::size_t j = 0; j < m; ++j) rho[j] = static_cast<T>(r[j]);
+    res.resize(n);
+    parallel_for_each(arena, n, [&](std::size_t v) {
+      Vec3 acc = Vec3::Zero();
+      for (int t = vfo[v]; t < vfo[v + 1]; ++t) acc += r[vf[t] / 3] * g_at(vf[t]);
+      res[v] = acc.cast<T>();
+    });
+    clear_fixed(res);
+    auto precondition = [&] {  // z = the V-cycle of res; returns res . z
+      vcycle(0, res, z, vcycle);
+      clear_fixed(z);
+      return dot(res, z);
+    };
+    double rz = precondition();
+    p = z;
+    const double stop = tolerance * tolerance * rr0;
+    jp.resize(m);
+    for (int it = 0; it < max_iterations; ++it) {
+      if (sys.stop && sys.stop->load(std::memory_order_relaxed)) break;
+      fine_product(p, kp, &jp);
+      clear_fixed(kp);
+      const double pkp = dot(p, kp);
+      if (!(pkp > 0)) break;
+      const double alpha = rz / pkp;
+      const T a = static_cast<T>(alpha);
+      for (std::size_t v = 0; v < n; ++v) {
+        (*d)[v] += a * p[v];
+        res[v] -= a * kp[v];
+      }
+      double rr = 0.0;
+      for (std::size_t j = 0; j < m; ++j) {
+        rho[j] -= a * jp[j];
+        rr += static_cast<double>(rho[j]) * rho[j];
+      }
+      result.iterations = it + 1;
+      result.relative_residual = std::sqrt(rr / rr0);
+      if (rr <= stop) break;
+      const double rz_new = precondition();
+      const T beta = static_cast<T>(rz_new / rz);
+      rz = rz_new;
+      for (std::size_t v = 0; v < n; ++v) p[v] = z[v] + beta * p[v];
     }
-    double rr = 0.0;
-    for (std::size_t j = 0; j < m; ++j) {
-      ws.rho[j] -= alpha * ws.jp[j];
-      rr += ws.rho[j] * ws.rho[j];
-    }
-    result.iterations = it + 1;
-    result.relative_residual = std::sqrt(rr / rr0);
-    if (rr <= stop) break;
-    const double rz_new = precondition(ws.res);
-    const double beta = rz_new / rz;
-    rz = rz_new;
-    for (std::size_t v = 0; v < n; ++v) ws.p[v] = z_at(v) + beta * ws.p[v];
-  }
+    if constexpr (!std::is_same_v<T, double>)
+      for (std::size_t v = 0; v < n; ++v) delta[v] = (*d)[v].template cast<double>();
+  };
+  if (single_precision_cycle)
+    conjugate_gradients(0.0f);
+  else
+    conjugate_gradients(0.0);
   return result;
 }
 

@@ -146,8 +146,17 @@ struct VertexMultigrid::Workspace {
   Level fine;                 // level 0 (matrix-free: no val)
   std::vector<Level> levels;  // levels 1..
   Eigen::LDLT<Eigen::MatrixXd> coarsest;
-  std::vector<Vec3> res, z, p, kp;  // the conjugate gradients' vectors
-  std::vector<double> rho, jp;      // per face: r - J delta, J p
+  // The conjugate gradients' vectors, in the V-cycle's precision (their residual and
+  // preconditioned residual are the fine level's b and x).
+  template <class T>
+  struct CgVectors {
+    std::vector<Eigen::Matrix<T, 3, 1>> p, kp, delta;  // delta: single precision only
+    std::vector<T> rho, jp;                            // per face: r - J delta, J p
+  };
+  CgVectors<float> cg32;
+  CgVectors<double> cg64;
+  CgVectors<float>& cg_vectors(float) { return cg32; }
+  CgVectors<double>& cg_vectors(double) { return cg64; }
   // Per face: J x between the two passes of a threaded V-cycle product, per precision.
   std::vector<float> jx32;
   std::vector<double> jx64;
