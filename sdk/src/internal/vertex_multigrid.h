@@ -89,8 +89,9 @@ class VertexMultigrid {
   //! or after max_iterations. J is taken in single precision (the step needs a few digits; the
   //! volumes it is judged by are double). \p arena: threads of the per-vertex and per-face loops
   //! (null: the calling thread); every sum is taken in one order, so the result does not depend on
-  //! it. \p single_precision_cycle: the V-cycle's vectors in single precision (faster; for the
-  //! inexact steps, not for nearly singular systems, whose solves then stall).
+  //! it. \p single_precision_cycle: the V-cycle's vectors and the conjugate gradients around it in
+  //! single precision, their sums in double (faster; for the inexact steps, not for nearly
+  //! singular systems, whose solves then stall).
   //! \pre the system's arrays match this hierarchy's vertex and face counts; eps > 0.
   VertexStepResult solve(const VertexStepSystem& system, double tolerance, int max_iterations,
                          std::vector<Vec3>& delta, Workspace& ws, tbb::task_arena* arena,
