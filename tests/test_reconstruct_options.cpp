@@ -108,6 +108,38 @@ TEST(ReconstructOptionNames, RejectsUnknownNamesAndMalformedValuesNamingThem) {
   EXPECT_THROW(set_reconstruct_option(o, "tolerance=1=2"), InvalidInput);  // value '1=2'
 }
 
+// named_reconstruct_options(): the tools' --solver names give the presets' functions, field by
+// field where the presets differ; any other name is refused by name.
+TEST(ReconstructOptionNames, PresetsByName) {
+  auto expect_same = [](const ReconstructOptions& a, const ReconstructOptions& b) {
+    EXPECT_EQ(a.step_solver, b.step_solver);
+    EXPECT_EQ(a.polish_solver, b.polish_solver);
+    EXPECT_EQ(a.tangential_regularization, b.tangential_regularization);
+    EXPECT_EQ(a.volume_scales, b.volume_scales);
+    EXPECT_EQ(a.max_cycles, b.max_cycles);
+    EXPECT_EQ(a.finest_intermediate_solves, b.finest_intermediate_solves);
+    EXPECT_EQ(a.intermediate_regularized_levels, b.intermediate_regularized_levels);
+    EXPECT_EQ(a.local_polish_max_fraction, b.local_polish_max_fraction);
+    EXPECT_EQ(a.multigrid.smoothing_degree, b.multigrid.smoothing_degree);
+  };
+  expect_same(named_reconstruct_options("legacy"), ReconstructOptions{});
+  expect_same(named_reconstruct_options("multigrid"), multigrid_reconstruct_options());
+  expect_same(named_reconstruct_options("cycles"), cycle_schedule_reconstruct_options());
+  // The three differ where the test looks, so that it would see a name mapped to the wrong one.
+  EXPECT_NE(ReconstructOptions{}.step_solver, multigrid_reconstruct_options().step_solver);
+  EXPECT_NE(multigrid_reconstruct_options().volume_scales,
+            cycle_schedule_reconstruct_options().volume_scales);
+  for (const std::string name : {"", "Multigrid", "auto", "direct"}) {
+    try {
+      named_reconstruct_options(name);
+      ADD_FAILURE() << "accepted '" << name << "'";
+    } catch (const InvalidInput& ex) {
+      EXPECT_EQ(std::string(ex.what()),
+                "unknown reconstruction preset '" + name + "' (legacy, multigrid or cycles)");
+    }
+  }
+}
+
 // An option out of the solver's range is refused by VolumeReconstructor with its name and value,
 // so that a --set that parses but cannot work says which one it was.
 TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {

@@ -2614,6 +2614,13 @@ ReconstructOptions cycle_schedule_reconstruct_options() {
   return o;
 }
 
+ReconstructOptions named_reconstruct_options(const std::string& name) {
+  if (name == "legacy") return ReconstructOptions{};
+  if (name == "multigrid") return multigrid_reconstruct_options();
+  if (name == "cycles") return cycle_schedule_reconstruct_options();
+  throw InvalidInput("unknown reconstruction preset '" + name + "' (legacy, multigrid or cycles)");
+}
+
 void check_reconstruct_options(const ReconstructOptions& o) {
   // Each option by its name (set_reconstruct_option()'s), so that a --set NAME=VALUE out of
   // range is named in the error.

@@ -198,10 +198,8 @@ Args parse_args(int argc, char** argv) {
     } else if (opt == "--finest-volume-iterations") {
       a.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--solver") {
-      const std::string v = value(i);
-      if (v != "legacy" && v != "multigrid" && v != "cycles")
-        throw std::runtime_error("--solver is legacy, multigrid or cycles");
-      solver = v;
+      solver = value(i);
+      named_reconstruct_options(solver);  // an unknown name is refused here, by name
     } else if (opt == "--set") {
       sets.push_back(value(i));
     } else if (opt == "--repeat" || opt == "--rounds") {
@@ -224,8 +222,7 @@ Args parse_args(int argc, char** argv) {
     }
   }
   if (solver != "legacy") {
-    a.reconstruct =
-        solver == "multigrid" ? multigrid_reconstruct_options() : cycle_schedule_reconstruct_options();
+    a.reconstruct = named_reconstruct_options(solver);
     a.reconstruct.threads = 1;
   }
   if (a.finest_volume_iterations > 0) a.reconstruct.finest_volume_iterations = a.finest_volume_iterations;

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cassert>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -472,10 +471,7 @@ std::string resolve_solver(const SolverChoice& choice, std::size_t prisms) {
 }
 
 ReconstructOptions solver_options(const SolverChoice& choice, int threads) {
-  assert(choice.solver == "legacy" || choice.solver == "multigrid" || choice.solver == "cycles");
-  ReconstructOptions o = choice.solver == "multigrid" ? multigrid_reconstruct_options()
-                         : choice.solver == "cycles"  ? cycle_schedule_reconstruct_options()
-                                                      : ReconstructOptions{};
+  ReconstructOptions o = named_reconstruct_options(choice.solver);
   o.threads = threads;
   for (const std::string& kv : choice.sets) set_reconstruct_option(o, kv);
   return o;

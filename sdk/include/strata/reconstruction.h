@@ -460,8 +460,16 @@ ReconstructOptions multigrid_reconstruct_options();
 //! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
 //! 1.90-2.63 s (the multigrid preset 0.64-0.90 s the same hours), 0.76M-1.05M prisms per second
 //! per finest pass, 0 new pairs; rings 2.28 s, cuboid 2.79 s; bumps at 1M 32.8 s, after two fold
-//! repair rounds, 0 new pairs (README, Measured results).
+//! repair rounds, 0 new pairs. The same day on an Intel Xeon VM, after the multigrid's prefetches
+//! and single-precision cycle steps: bumps 1.67-1.77 s (1.13M-1.20M), rings 1.63 s, cuboid 2.26
+//! s, bumps at 1M 28.8 s after two repair rounds (README, Measured results).
 ReconstructOptions cycle_schedule_reconstruct_options();
+
+//! The preset named \p name, as the strata tools' `--solver` names them: "legacy" (the defaults,
+//! ReconstructOptions{}), "multigrid" (multigrid_reconstruct_options()) or "cycles"
+//! (cycle_schedule_reconstruct_options()). For tools that offer the presets by name.
+//! \throw InvalidInput naming \p name and the three names, for any other name.
+ReconstructOptions named_reconstruct_options(const std::string& name);
 
 //! Checks that every field of \p options is in the solver's range, as VolumeReconstructor does on
 //! construction: for options that arrive apart from a solve (a file's, a --set's).
