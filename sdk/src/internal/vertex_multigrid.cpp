@@ -389,8 +389,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     // it at b = f[e + 1]. edge() is the one expression of a term for both passes, and both take a
     // corner's sum as (edge leaving it) - (edge arriving), so that they sum the same numbers.
     // Without the term the passes are as before it existed.
+    // eps_lap in T: a float product multiplies in float, without two conversions per edge.
+    const T lap_scale = static_cast<T>(eps_lap);
     auto edge = [&](const Face& f, const float* w, int e) {  // eps_lap w (x_a - x_b) of edge e
-      return V3(static_cast<T>(eps_lap * w[e]) * (x[f[e]] - x[f[(e + 1) % 3]]));
+      return V3((lap_scale * static_cast<T>(w[e])) * (x[f[e]] - x[f[(e + 1) % 3]]));
     };
     auto lap_terms = [&](std::size_t j, V3& l0, V3& l1, V3& l2) {
       const Face& f = faces[j];
