@@ -113,12 +113,6 @@ std::string load_average() {
   return a + " " + b + " " + c;
 }
 
-ReconstructOptions one_thread() {
-  ReconstructOptions o;
-  o.threads = 1;  // the measure is single-threaded; --set threads=N to compare
-  return o;
-}
-
 struct Args {
   std::vector<int> sizes{10000, 100000, 1000000};
   cases::DetailKind detail = cases::DetailKind::Bumps;
@@ -131,7 +125,7 @@ struct Args {
   double min_run_seconds = 5.0;      // more runs until their wall times add up to this
   int rounds = 1;                    // the size sequence this many times, interleaved (--rounds)
   bool help = false;
-  ReconstructOptions reconstruct = one_thread();  // defaults, but one solver thread and --set
+  ReconstructOptions reconstruct;  // --solver's preset on one solver thread, then --set
 };
 
 const char* solver_name(VolumeStepSolver s) {
@@ -198,8 +192,7 @@ Args parse_args(int argc, char** argv) {
     } else if (opt == "--finest-volume-iterations") {
       a.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--solver") {
-      solver = value(i);
-      named_reconstruct_options(solver);  // an unknown name is refused here, by name
+      solver = value(i);  // an unknown name is refused below, by name
     } else if (opt == "--set") {
       sets.push_back(value(i));
     } else if (opt == "--repeat" || opt == "--rounds") {
@@ -221,10 +214,8 @@ Args parse_args(int argc, char** argv) {
       throw std::runtime_error("unknown argument '" + opt + "'");
     }
   }
-  if (solver != "legacy") {
-    a.reconstruct = named_reconstruct_options(solver);
-    a.reconstruct.threads = 1;
-  }
+  a.reconstruct = named_reconstruct_options(solver);
+  a.reconstruct.threads = 1;  // the measure is single-threaded; --set threads=N to compare
   if (a.finest_volume_iterations > 0) a.reconstruct.finest_volume_iterations = a.finest_volume_iterations;
   for (const std::string& kv : sets) set_reconstruct_option(a.reconstruct, kv);  // --set NAME=VALUE
   return a;

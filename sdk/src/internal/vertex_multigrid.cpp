@@ -113,6 +113,8 @@ inline void prefetch_face(std::size_t j, std::size_t m, const Face* faces, const
 }
 
 constexpr int kCorners[6][2] = {{0, 1}, {1, 0}, {0, 2}, {2, 0}, {1, 2}, {2, 1}};
+// Corners (p, q), p < q -> their entry of kCorners (q, p is the next one).
+constexpr int kCornerPair[3][3] = {{-1, 0, 2}, {-1, -1, 4}, {-1, -1, -1}};
 // Face edge e = (f[e], f[e + 1]) -> its two entries of kCorners (both directions).
 constexpr int kEdgeSlots[3][2] = {{0, 1}, {4, 5}, {2, 3}};
 
@@ -286,36 +288,35 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     const Coarse& c = coarse_[0];
     val.assign(c.col.size(), Eigen::Matrix3f::Zero());
     // A face's J^T J term, 3 x 3 blocks of g_a g_b^T, lands in the blocks of its corners'
-    // aggregates: corners in one aggregate are summed first (one outer product for a face inside
-    // an aggregate, four for a face across two, instead of nine), and each off-diagonal block is
-    // the transpose of its mirror. In single precision, as the blocks are kept.
+    // aggregates: the gradients of corners in one aggregate are summed first (one outer product
+    // for a face inside an aggregate, four for a face across two, instead of nine), and each
+    // off-diagonal block is the transpose of its mirror. In single precision, as the blocks are
+    // kept.
     using V3f = Eigen::Vector3f;
     for (std::size_t j = 0; j < m; ++j) {
       const Face& f = faces[j];
       const float* gj = gf + 9 * j;
-      const V3f g[3] = {V3f(gj[0], gj[1], gj[2]), V3f(gj[3], gj[4], gj[5]), V3f(gj[6], gj[7], gj[8])};
-      const int A[3] = {agg0_[f[0]], agg0_[f[1]], agg0_[f[2]]};
-      const std::array<int, 6>& slot = face_slot_[j];  // the blocks of kCorners' corner pairs
-      if (A[0] == A[1] && A[1] == A[2]) {
-        const V3f s = g[0] + g[1] + g[2];
-        val[c.diag[A[0]]] += s * s.transpose();
-      } else if (A[0] == A[1] || A[0] == A[2] || A[1] == A[2]) {
-        // Corners a and b share an aggregate, o is alone; k: the kCorners entry of (a, o).
-        const int o = A[0] == A[1] ? 2 : A[0] == A[2] ? 1 : 0;
-        const int a = o == 0 ? 1 : 0, b = o == 2 ? 1 : 2;
-        const int k = o == 2 ? 2 : o == 1 ? 0 : 1;  // (0,2), (0,1) or (1,0)
-        const V3f s = g[a] + g[b];
-        val[c.diag[A[a]]] += s * s.transpose();
-        val[c.diag[A[o]]] += g[o] * g[o].transpose();
-        const Eigen::Matrix3f x = s * g[o].transpose();
-        val[slot[k]] += x;
-        val[slot[k ^ 1]] += x.transpose();
-      } else {
-        for (int q = 0; q < 3; ++q) val[c.diag[A[q]]] += g[q] * g[q].transpose();
-        for (int k = 0; k < 6; k += 2) {
-          const Eigen::Matrix3f x = g[kCorners[k][0]] * g[kCorners[k][1]].transpose();
-          val[slot[k]] += x;
-          val[slot[k + 1]] += x.transpose();
+      // The face's aggregates in corner order: each one's first corner and gradient sum.
+      int first[3], groups = 0;
+      V3f sum[3];
+      for (int q = 0; q < 3; ++q) {
+        const V3f g(gj[3 * q], gj[3 * q + 1], gj[3 * q + 2]);
+        int i = 0;
+        while (i < groups && agg0_[f[first[i]]] != agg0_[f[q]]) ++i;
+        if (i == groups) {
+          first[groups++] = q;
+          sum[i] = g;
+        } else {
+          sum[i] += g;
+        }
+      }
+      for (int a = 0; a < groups; ++a) {
+        val[c.diag[agg0_[f[first[a]]]]] += sum[a] * sum[a].transpose();
+        for (int b = a + 1; b < groups; ++b) {
+          const int k = kCornerPair[first[a]][first[b]];  // even: the pair's mirror is k + 1
+          const Eigen::Matrix3f x = sum[a] * sum[b].transpose();
+          val[face_slot_[j][k]] += x;
+          val[face_slot_[j][k + 1]] += x.transpose();
         }
       }
     }
