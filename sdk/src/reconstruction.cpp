@@ -1941,11 +1941,18 @@ class VolumeReconstructor::Impl {
   // (factorized) steps when `direct`. Returns the steps taken; V holds the final volumes.
   int project(const Level& L, State& s, double h, double tol, int max_steps, StepSolve how,
               ReconstructStats& st, std::vector<double>& V) const {
-    compute_volumes(L, s, V);
+    // A cycle's first step takes its gradients from the pass that gives the volumes deciding
+    // whether it runs (the same numbers compute_volumes() gives): the cycles' steps run at nearly
+    // every call, and this spares them a pass over the prisms.
+    const bool fused = how == StepSolve::Cycle && max_steps > 0;
+    if (fused)
+      gradient_pass(L, s, h, multigrid_step(how), &V);
+    else
+      compute_volumes(L, s, V);
     double err = relative_error(L, h, V, nullptr);
     int steps = 0;
     for (; steps < max_steps && err > tol; ++steps) {
-      gauss_newton_step(L, s, h, how, st, V);
+      gauss_newton_step(L, s, h, how, st, V, /*fresh=*/fused && steps == 0);
       err = relative_error(L, h, V, nullptr);
     }
     st.volume_sweeps += steps;
@@ -2151,34 +2158,33 @@ class VolumeReconstructor::Impl {
     return mx / scale;
   }
 
-  // One Gauss-Newton step towards the volume constraints: the minimum-norm correction
-  // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
-  // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
-  // the projection of the current positions onto the linearized constraint set.
-  void gauss_newton_step(const Level& L, State& s, double h, StepSolve how, ReconstructStats& st,
-                         std::vector<double>& V) const {
-    // Exact steps (the polish, or factorized ones) are undone when they do not help, and adapt
-    // the Levenberg-Marquardt damping; inexact ones are kept, as the cycles' regularization expects.
-    check_cancel();
-    const bool direct = how != StepSolve::Cycle;
-    const bool use_mg = how == StepSolve::Exact
-                            ? opt_.polish_solver == VolumeStepSolver::Multigrid
-                            : how == StepSolve::Cycle && opt_.step_solver == VolumeStepSolver::Multigrid;
+  // Whether a step of kind \p how solves by the vertex multigrid.
+  bool multigrid_step(StepSolve how) const {
+    return how == StepSolve::Exact
+               ? opt_.polish_solver == VolumeStepSolver::Multigrid
+               : how == StepSolve::Cycle && opt_.step_solver == VolumeStepSolver::Multigrid;
+  }
+
+  // A step's pass over the prisms at the current positions: the residual s.gn.r = h V* - V and J,
+  // for the multigrid in single precision (s.gn.gf, its rows' squared norms in s.gn.diag: no
+  // array of the gradients in double, whose writing and two reads were 216 bytes of memory
+  // traffic a prism a step), else in s.gn.grad; zero at pinned corners. \p V: if given, the
+  // volumes too.
+  void gradient_pass(const Level& L, State& s, double h, bool use_mg, std::vector<double>* V) const {
     GnScratch& w = s.gn;
     const std::size_t m = L.faces.size();
-    // The multigrid takes J in single precision straight from here (and the squared norms of its
-    // rows, in w.diag, for its damping's scale): no array of the gradients in double, whose
-    // writing and two reads were 216 bytes of memory traffic a prism a step.
     if (use_mg)
       w.gf.resize(9 * m);
     else
       w.grad.resize(m);
     w.r.resize(m);
     w.diag.resize(m);
+    if (V) V->resize(m);
     for_each(m, [&](std::size_t j) {
       const Face& f = L.faces[j];
       const PrismVolumeGradient g =
           prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+      if (V) (*V)[j] = g.volume;
       w.r[j] = h * L.targets[j] - g.volume;
       if (!use_mg) {
         for (int c = 0; c < 3; ++c) w.grad[j][c] = s.pinned(f[c]) ? Vec3(Vec3::Zero()) : g.grad[c];
@@ -2192,6 +2198,23 @@ class VolumeReconstructor::Impl {
       }
       w.diag[j] = norm2;
     });
+  }
+
+  // One Gauss-Newton step towards the volume constraints: the minimum-norm correction
+  // delta = J^T (J J^T)^{-1} r, with (J J^T) y = r solved by Jacobi-preconditioned conjugate
+  // gradients. Each prism's row of J holds its exact volume gradients (section 3), so this is
+  // the projection of the current positions onto the linearized constraint set.
+  // \p fresh: gradient_pass() has run at the current positions with this h and kind of step.
+  void gauss_newton_step(const Level& L, State& s, double h, StepSolve how, ReconstructStats& st,
+                         std::vector<double>& V, bool fresh = false) const {
+    // Exact steps (the polish, or factorized ones) are undone when they do not help, and adapt
+    // the Levenberg-Marquardt damping; inexact ones are kept, as the cycles' regularization expects.
+    check_cancel();
+    const bool direct = how != StepSolve::Cycle;
+    const bool use_mg = multigrid_step(how);
+    GnScratch& w = s.gn;
+    const std::size_t m = L.faces.size();
+    if (!fresh) gradient_pass(L, s, h, use_mg, nullptr);
     if (!use_mg) vertex_gradients(L, w);
     double rr = 0.0;
     for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
