@@ -121,6 +121,7 @@ TEST(ReconstructOptionNames, PresetsByName) {
     EXPECT_EQ(a.intermediate_regularized_levels, b.intermediate_regularized_levels);
     EXPECT_EQ(a.local_polish_max_fraction, b.local_polish_max_fraction);
     EXPECT_EQ(a.multigrid.smoothing_degree, b.multigrid.smoothing_degree);
+    EXPECT_EQ(a.multigrid.polish_damping, b.multigrid.polish_damping);
   };
   expect_same(named_reconstruct_options("legacy"), ReconstructOptions{});
   expect_same(named_reconstruct_options("multigrid"), multigrid_reconstruct_options());

@@ -2634,6 +2634,7 @@ ReconstructOptions cycle_schedule_reconstruct_options() {
   o.finest_intermediate_solves = true;
   o.intermediate_regularized_levels = 0;
   o.multigrid.smoothing_degree = 1;
+  o.multigrid.polish_damping = 1e-7;  // its polish's solves stalled on the cuboid (see the header)
   return o;
 }
 

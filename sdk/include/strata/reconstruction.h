@@ -456,7 +456,21 @@ ReconstructOptions multigrid_reconstruct_options();
 //! reconstruction takes longer: use it where the cycles' cost matters (a pass per scale, as the
 //! paper measured), the multigrid preset where the time to the answer does. Changed from
 //! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
-//! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1. Measured on one thread
+//! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1, multigrid.polish_damping
+//! 1e-7. The damping: with the multigrid preset's 1e-8 every whole-level polish step's solve on the
+//! scan-like 100k cuboid bend ran its 25 iterations and stalled at 0.04-0.14 of its residual, and
+//! the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8 iterations, two steps
+//! and the local end (0.14-0.27 s), and the 1M bumps bend took 22.9 s against 29.4 s (one fold
+//! repair round against two), the bumps and rings at 100k as before (2026-12-02, AMD EPYC VM).
+//! The multigrid preset keeps 1e-8: with 1e-7 its 1M polish took 3.7 s against 2.2 s. On regular
+//! grids (not scans) the regular 100k rings bend then needed a retry (17.6 s against 5.3 s).
+//! Not for round trips: over an unedited base its clean start returns the detail 2.36 / 1.00 /
+//! 1.80% of the diagonal off (the 20k regular cuboid and scan-like bumps and rings; the
+//! multigrid preset 0.21 / 0.07 / 0.11%, the acceptance 0.5%). Its single cycles regularize no
+//! level but the coarsest and, at full scale, the finest; ending every level's cycle with its
+//! regularization (as Listing 1's cycles do) brought that to 0.12 / 0.05 / 0.23% but folded the
+//! 100k bumps and rings bends (17-21 s with repairs and retries, against 1.4 s).
+//! Measured on one thread
 //! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
 //! 1.90-2.63 s (the multigrid preset 0.64-0.90 s the same hours), 0.76M-1.05M prisms per second
 //! per finest pass, 0 new pairs; rings 2.28 s, cuboid 2.79 s; bumps at 1M 32.8 s, after two fold
