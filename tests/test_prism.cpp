@@ -86,6 +86,16 @@ TEST(Prism, GradientMatchesCentralDifferences) {
   }
 }
 
+// The solver decides a cycle step on the volumes of the pass that also gives its gradients
+// (reconstruction.cpp, project()), where the other steps use prism_volume(): the two must give
+// the same numbers, bit for bit, or the presets' results would depend on which pass ran.
+TEST(Prism, GradientPassGivesTheSameVolumeBits) {
+  for (const Prism& s : random_prisms(3000)) {
+    const double v = volume(s);
+    EXPECT_EQ(v, strata::prism_volume_gradient(s.p[0], s.p[1], s.p[2], s.q[0], s.q[1], s.q[2]).volume);
+  }
+}
+
 TEST(Prism, VolumeIsAffineInOneVertex) {
   // The property the solver's incremental update relies on: V(p + d) = V(p) + grad . d exactly.
   for (const Prism& s : random_prisms(30)) {
