@@ -469,7 +469,10 @@ ReconstructOptions multigrid_reconstruct_options();
 //! multigrid preset 0.21 / 0.07 / 0.11%, the acceptance 0.5%). Its single cycles regularize no
 //! level but the coarsest and, at full scale, the finest; ending every level's cycle with its
 //! regularization (as Listing 1's cycles do) brought that to 0.12 / 0.05 / 0.23% but folded the
-//! 100k bumps and rings bends (17-21 s with repairs and retries, against 1.4 s).
+//! 100k bumps and rings bends (17-21 s with repairs and retries, against 1.4 s); the coarse
+//! levels' only, at the intermediate scales, with 0.4 of the weights: 0.36 / 0.20 / 0.25% and the
+//! 100k bends without a repair, but the 1M bumps bend took 273 s (11 repair rounds and a retry)
+//! against 26 s.
 //! Measured on one thread
 //! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
 //! 1.90-2.63 s (the multigrid preset 0.64-0.90 s the same hours), 0.76M-1.05M prisms per second
