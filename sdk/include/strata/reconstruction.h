@@ -460,7 +460,7 @@ ReconstructOptions multigrid_reconstruct_options();
 //! 1e-7. The damping: with the multigrid preset's 1e-8 every whole-level polish step's solve on the
 //! scan-like 100k cuboid bend ran its 25 iterations and stalled at 0.04-0.14 of its residual, and
 //! the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8 iterations, two steps
-//! and the local end (0.14-0.27 s), and the 1M bumps bend took 22.9 s against 29.4 s (one fold
+//! and the local end (0.16-0.21 s), and the 1M bumps bend took 22.9 s against 29.4 s (one fold
 //! repair round against two), the bumps and rings at 100k as before (2026-12-02, AMD EPYC VM).
 //! The multigrid preset keeps 1e-8: with 1e-7 its 1M polish took 3.7 s against 2.2 s. On regular
 //! grids (not scans) the regular 100k rings bend then needed a retry (17.6 s against 5.3 s).
