@@ -1354,6 +1354,9 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.multigrid.polish_damping = 2e-8;
   o.reconstruct.multigrid.single_precision_cycles = false;
   o.reconstruct.multigrid.smoothing_degree = 3;
+  o.reconstruct.multigrid.tangential_damping = 0.5;
+  o.reconstruct.multigrid.tangential_damping_bend = 0.25;
+  o.reconstruct.multigrid.tangential_damping_margin = 7.0;
   o.reconstruct.local_polish_rings = 3;
   o.reconstruct.local_polish_max_motion = 6e-3;
   o.reconstruct.max_factorized_steps = 17;
@@ -1387,7 +1390,10 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.multigrid.retry_iterations, o.reconstruct.multigrid.retry_iterations);
   EXPECT_GT(back.multigrid.retry_iterations, 0);
   EXPECT_FALSE(back.multigrid.single_precision_cycles);
-  EXPECT_EQ(back.multigrid.smoothing_degree, 3);  // written since 2026-12-02
+  EXPECT_EQ(back.multigrid.smoothing_degree, 3);      // written since 2026-12-02
+  EXPECT_EQ(back.multigrid.tangential_damping, 0.5);  // written since the forty-fifth session
+  EXPECT_EQ(back.multigrid.tangential_damping_bend, 0.25);
+  EXPECT_EQ(back.multigrid.tangential_damping_margin, 7.0);
 
   EXPECT_TRUE(back.fold_repair_local_first);  // the default, written since 2026-11-27
   EXPECT_EQ(back.fold_repair_local_rings, ReconstructOptions{}.fold_repair_local_rings);
@@ -1448,7 +1454,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
       ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
       j["options"]["reconstruct"].erase(key);
     }
-    for (const char* key : {"retry_iterations", "single_precision_cycles", "smoothing_degree"}) {
+    for (const char* key : {"retry_iterations", "single_precision_cycles", "smoothing_degree",
+                            "tangential_damping", "tangential_damping_bend", "tangential_damping_margin"}) {
       ASSERT_TRUE(j["options"]["reconstruct"]["multigrid"].contains(key)) << key;
       j["options"]["reconstruct"]["multigrid"].erase(key);
     }
@@ -1464,7 +1471,10 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     EXPECT_EQ(read.max_constraint_motion, defaults.max_constraint_motion);  // the bound on
     EXPECT_EQ(read.multigrid.retry_iterations, defaults.multigrid.retry_iterations);
     EXPECT_EQ(read.multigrid.single_precision_cycles, defaults.multigrid.single_precision_cycles);
-    EXPECT_EQ(read.multigrid.smoothing_degree, 2);  // the degree such files were solved with
+    EXPECT_EQ(read.multigrid.smoothing_degree, 2);      // the degree such files were solved with
+    EXPECT_EQ(read.multigrid.tangential_damping, 0.0);  // none, as such files were solved
+    EXPECT_EQ(read.multigrid.tangential_damping_bend, defaults.multigrid.tangential_damping_bend);
+    EXPECT_EQ(read.multigrid.tangential_damping_margin, defaults.multigrid.tangential_damping_margin);
   }
   layers::StrataContainer bad = c;
   nlohmann::json m = nlohmann::json::parse(bad.model_json);

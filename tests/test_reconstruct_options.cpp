@@ -122,6 +122,7 @@ TEST(ReconstructOptionNames, PresetsByName) {
     EXPECT_EQ(a.local_polish_max_fraction, b.local_polish_max_fraction);
     EXPECT_EQ(a.multigrid.smoothing_degree, b.multigrid.smoothing_degree);
     EXPECT_EQ(a.multigrid.polish_damping, b.multigrid.polish_damping);
+    EXPECT_EQ(a.multigrid.tangential_damping, b.multigrid.tangential_damping);
   };
   expect_same(named_reconstruct_options("legacy"), ReconstructOptions{});
   expect_same(named_reconstruct_options("multigrid"), multigrid_reconstruct_options());

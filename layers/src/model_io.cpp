@@ -154,7 +154,10 @@ json options_json(const ModelOptions& o) {
               {"polish_smoothness", r.multigrid.polish_smoothness},
               {"retry_iterations", r.multigrid.retry_iterations},
               {"single_precision_cycles", r.multigrid.single_precision_cycles},
-              {"smoothing_degree", r.multigrid.smoothing_degree}}}}},
+              {"smoothing_degree", r.multigrid.smoothing_degree},
+              {"tangential_damping", r.multigrid.tangential_damping},
+              {"tangential_damping_bend", r.multigrid.tangential_damping_bend},
+              {"tangential_damping_margin", r.multigrid.tangential_damping_margin}}}}},
           {"projection",
            {{"seed_resolution", o.projection.seed_resolution},
             {"max_iterations", o.projection.max_iterations},
@@ -369,6 +372,13 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
     // degree they were solved with.
     if (mg.contains("smoothing_degree"))
       mo.smoothing_degree = static_cast<int>(h.integer(mg, "smoothing_degree", wm, 1, 8));
+    // Not written before 2026-12-02 (forty-fifth session): such files read the defaults (no
+    // tangential damping), as they were solved.
+    if (mg.contains("tangential_damping")) mo.tangential_damping = h.number(mg, "tangential_damping", wm);
+    if (mg.contains("tangential_damping_bend"))
+      mo.tangential_damping_bend = h.number(mg, "tangential_damping_bend", wm);
+    if (mg.contains("tangential_damping_margin"))
+      mo.tangential_damping_margin = h.number(mg, "tangential_damping_margin", wm);
   }
   const json& p = h.at(j, "projection", w);
   const std::string wp = "options.projection";

@@ -80,7 +80,10 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"multigrid.polish_damping", &m.polish_damping},
           {"multigrid.polish_smoothness", &m.polish_smoothness},
           {"multigrid.single_precision_cycles", &m.single_precision_cycles},
-          {"multigrid.smoothing_degree", &m.smoothing_degree}};
+          {"multigrid.smoothing_degree", &m.smoothing_degree},
+          {"multigrid.tangential_damping", &m.tangential_damping},
+          {"multigrid.tangential_damping_bend", &m.tangential_damping_bend},
+          {"multigrid.tangential_damping_margin", &m.tangential_damping_margin}};
 }
 
 // Plain decimal notation only: [+-]digits[.digits][e[+-]digits] (a fraction and exponent only

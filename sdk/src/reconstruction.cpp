@@ -14,11 +14,13 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <numeric>
 #include <optional>
+#include <queue>
 #include <sstream>
 #include <type_traits>
 #include <unordered_map>
@@ -136,6 +138,10 @@ struct GnScratch {
   std::vector<Vec3> jt;      // J^T x per level vertex, inside the matrix-free products
   std::vector<Vec3> ldelta;  // the multigrid step per level vertex
   internal::VertexMultigrid::Workspace mgw;
+  // MultigridStepOptions::tangential_damping of the step being solved (relative; 0: none), and per
+  // level vertex its base normal scaled by the square root of the vertex's weight.
+  double tangential_damping = 0.0;
+  std::vector<Eigen::Vector3f> damped_normals;
 };
 
 // Frees \p g's arrays (the small dense factor of the multigrid's coarsest level stays: Eigen's
@@ -143,7 +149,7 @@ struct GnScratch {
 // budgets).
 void release_step_scratch(GnScratch& g) {
   auto release = [](auto&... v) { (std::decay_t<decltype(v)>().swap(v), ...); };
-  release(g.grad, g.gf, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta);
+  release(g.grad, g.gf, g.gv, g.r, g.y, g.z, g.p, g.Ap, g.diag, g.delta, g.jt, g.ldelta, g.damped_normals);
   internal::VertexMultigrid::Workspace& w = g.mgw;
   release(w.levels, w.jx32, w.jx64, w.el32, w.el64);
   w.fine = {};
@@ -190,6 +196,9 @@ struct State {
   // change, so its retries and repair rounds share them.
   mutable std::unique_ptr<internal::ContactTest> contact;
   mutable std::optional<std::vector<char>> near_crossings;
+  // Per vertex, the weight of MultigridStepOptions::tangential_damping: 0 where the edit bends the
+  // base, 1 away from there (empty: none computed, 1 everywhere).
+  std::vector<float> damping_weight;
 };
 
 // p carried along from the frame (from) of vertex i to its frame (to): the displacement keeps
@@ -1809,6 +1818,64 @@ class VolumeReconstructor::Impl {
     res.positions = std::move(s.P);
   }
 
+  // MultigridStepOptions::tangential_damping's weight per vertex into s.damping_weight: 0 at the
+  // vertices where the edited base bends differently from the rest base (the change of the angle
+  // between a vertex's base normal and a neighbour's, over their rest distance, times the larger
+  // displacement length, above tangential_damping_bend), rising to 1 over tangential_damping_margin
+  // mean displacement lengths along the rest detail's edges (smoothstep). Over an unedited base
+  // every weight is 1.
+  void tangential_damping_weights(State& s) const {
+    const MultigridStepOptions& mo = opt_.multigrid;
+    const Level& F = levels_.back();
+    const int n = static_cast<int>(s.N.size());
+    const std::vector<Vec3>& p = enc_.detail_rest;
+    const std::vector<Vec3>& n0 = enc_.base_rest_normals;
+    auto angle = [](const Vec3& a, const Vec3& b) { return std::acos(std::clamp(a.dot(b), -1.0, 1.0)); };
+    std::vector<char> bent(F.verts.size(), 0);
+    for_each(F.verts.size(), [&](std::size_t k) {
+      const int i = F.verts[k];
+      for (int t = F.nb_offsets[k]; t < F.nb_offsets[k + 1]; ++t) {
+        const int j = F.verts[F.nb[t]];
+        const double change = std::abs(angle(s.N[i], s.N[j]) - angle(n0[i], n0[j]));
+        const double len = (p[i] - p[j]).norm();
+        if (change * std::max(std::abs(guarded_f_[i]), std::abs(guarded_f_[j])) >
+            mo.tangential_damping_bend * len) {
+          bent[k] = 1;
+          return;
+        }
+      }
+    });
+    s.damping_weight.assign(n, 1.0f);
+    // Multi-source shortest paths from the bent vertices along the rest detail's edges.
+    std::vector<double> dist(F.verts.size(), std::numeric_limits<double>::infinity());
+    using Item = std::pair<double, int>;  // (distance, level-local vertex)
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+    for (std::size_t k = 0; k < F.verts.size(); ++k)
+      if (bent[k]) {
+        dist[k] = 0.0;
+        queue.push({0.0, static_cast<int>(k)});
+      }
+    if (queue.empty()) return;
+    const double margin = mo.tangential_damping_margin * mean_abs_f_;
+    while (!queue.empty()) {
+      const auto [d, k] = queue.top();
+      queue.pop();
+      if (d > dist[k] || d >= margin) continue;
+      for (int t = F.nb_offsets[k]; t < F.nb_offsets[k + 1]; ++t) {
+        const int l = F.nb[t];
+        const double nd = d + (p[F.verts[k]] - p[F.verts[l]]).norm();
+        if (nd < dist[l]) {
+          dist[l] = nd;
+          queue.push({nd, l});
+        }
+      }
+    }
+    for (std::size_t k = 0; k < F.verts.size(); ++k) {
+      const double x = margin > 0 ? std::min(1.0, dist[k] / margin) : (bent[k] ? 0.0 : 1.0);
+      s.damping_weight[F.verts[k]] = static_cast<float>(x * x * (3 - 2 * x));
+    }
+  }
+
   // m regularization sweeps at full weight (the drags' and the coarse-only passes' finest level).
   void regularize_sweeps(const Level& L, State& s, ReconstructStats& st) const {
     for (int it = 0; it < opt_.regularization_iterations; ++it) regularize(L, s, 1.0);
@@ -1822,6 +1889,9 @@ class VolumeReconstructor::Impl {
     s.P = s.Q;
     s.cycle_volume_iterations = volume_iterations;
     s.clean_start = true;
+    if (opt_.multigrid.tangential_damping > 0 && opt_.step_solver == VolumeStepSolver::Multigrid &&
+        s.damping_weight.empty())
+      tangential_damping_weights(s);
     const int k = std::max(1, opt_.volume_scales);
     s.work_done = s.work_total = 0.0;
     for (int sc = 0; sc < k; ++sc)
@@ -2224,6 +2294,18 @@ class VolumeReconstructor::Impl {
       for (std::size_t j = 0; j < m; ++j) rr += w.r[j] * w.r[j];
     }
     if (use_mg) {
+      // MultigridStepOptions::tangential_damping: a clean start's intermediate scales, 1 - t of it.
+      w.tangential_damping = 0.0;
+      if (how == StepSolve::Cycle && opt_.multigrid.tangential_damping > 0 && s.clean_start &&
+          std::abs(h) < std::abs(s.amplitude)) {
+        w.tangential_damping = opt_.multigrid.tangential_damping * (1.0 - h / s.amplitude);
+        w.damped_normals.resize(L.verts.size());
+        for_each(L.verts.size(), [&](std::size_t k) {
+          const int i = L.verts[k];
+          const double weight = s.damping_weight.empty() ? 1.0 : s.damping_weight[i];
+          w.damped_normals[k] = (std::sqrt(weight) * s.N[i]).cast<float>();
+        });
+      }
       solve_multigrid(L, w, how == StepSolve::Exact, st);
       check_cancel();  // the solve stops early on a cancel; its step is not taken
     } else if (direct) {
@@ -2364,6 +2446,10 @@ class VolumeReconstructor::Impl {
     sys.eps = (exact ? std::max(mo.polish_damping, w.damping) : mo.damping) * diag;
     sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
     sys.smoothing_degree = exact ? 0 : mo.smoothing_degree;  // 0: the hierarchy's (2)
+    if (!exact && w.tangential_damping > 0) {
+      sys.normals = &w.damped_normals;
+      sys.eps_tangential = w.tangential_damping * diag;
+    }
     sys.stop = opt_.cancel;
     const internal::VertexStepResult res =
         L.mg->solve(sys, exact ? mo.polish_tolerance : mo.tolerance,
@@ -2535,6 +2621,7 @@ class VolumeReconstructor::Impl {
     take(s.T, c.T);
     take(s.P0, c.P0);
     take(s.pinned_at, c.pinned_at);
+    take(s.damping_weight, c.damping_weight);
     c.dRho.assign(ids.size(), 0.0);
     c.dT.assign(ids.size(), Vec3::Zero());
     c.f = &compact_f_;
@@ -2634,7 +2721,8 @@ ReconstructOptions cycle_schedule_reconstruct_options() {
   o.finest_intermediate_solves = true;
   o.intermediate_regularized_levels = 0;
   o.multigrid.smoothing_degree = 1;
-  o.multigrid.polish_damping = 1e-7;  // its polish's solves stalled on the cuboid (see the header)
+  o.multigrid.polish_damping = 1e-7;     // its polish's solves stalled on the cuboid (see the header)
+  o.multigrid.tangential_damping = 1.0;  // its round trip (see the header)
   return o;
 }
 
@@ -2748,6 +2836,12 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(mo.smoothness >= 0, "multigrid.smoothness", mo.smoothness, "at least 0");
   check(mo.polish_smoothness >= 0, "multigrid.polish_smoothness", mo.polish_smoothness, "at least 0");
   count(mo.smoothing_degree, "multigrid.smoothing_degree", 1, 8);
+  check(mo.tangential_damping >= 0 && mo.tangential_damping <= 1e6, "multigrid.tangential_damping",
+        mo.tangential_damping, "0-1e6");
+  check(mo.tangential_damping_bend > 0 && mo.tangential_damping_bend <= 1e6,
+        "multigrid.tangential_damping_bend", mo.tangential_damping_bend, "above 0, at most 1e6");
+  check(mo.tangential_damping_margin >= 0 && mo.tangential_damping_margin <= 1e6,
+        "multigrid.tangential_damping_margin", mo.tangential_damping_margin, "0-1e6");
 }
 
 VolumeReconstructor::VolumeReconstructor(DetailEncoding encoding, ReconstructOptions options)

@@ -36,8 +36,28 @@ assert abs(m["whole_process_bytes_per_prism"] - m["peak_rss_bytes"] / r["prisms"
 assert d["targets"]["memory_le_1kb_per_prism"]["values"]["3000"] == m["bytes_per_prism"]
 for k in ("max_error_relative_to_own_target", "rms_error_relative_to_own_target"):
     assert r["accuracy"]["volumes"][k] > 0, r["accuracy"]
+# No --round-trip: no round trip measured, and its target not judged.
+assert r["accuracy"]["round_trip"] is None, r["accuracy"]
+assert d["targets"]["round_trip_within_half_a_percent"]["pass"] is None, d["targets"]
 PY
 grep -q "reconstruct run 3 in" "$TMP/err" || fail "no progress line for the third run"
+
+# --round-trip: one more clean start over the unedited base, its largest vertex distance from the
+# rest detail over the diagonal (the multigrid preset comes back well within 0.5% at this size).
+"$BENCH" --sizes 3000 --jitter 0.4 --solver multigrid --repeat 1 --min-run-seconds 0 --round-trip \
+  --out "$TMP/t.json" >/dev/null 2>"$TMP/err" || fail "strata_bench --round-trip exited non-zero: $(cat "$TMP/err")"
+python3 - "$TMP/t.json" <<'PY' || fail "--round-trip report check"
+import json, sys
+d = json.load(open(sys.argv[1]))
+r = d["results"][0]
+t = r["accuracy"]["round_trip"]
+assert t["converged"] and t["new_pairs"] == 0 and t["within_half_a_percent"], t
+assert 0 < t["max_vertex_distance"] <= 0.005 * t["bbox_diagonal"], t
+assert abs(t["max_vertex_distance_over_diagonal"] * t["bbox_diagonal"] - t["max_vertex_distance"]) <= 1e-12, t
+assert r["seconds"]["round_trip"] > 0, r["seconds"]
+g = d["targets"]["round_trip_within_half_a_percent"]
+assert g["pass"] is True and g["values"]["3000"] == t["max_vertex_distance_over_diagonal"], g
+PY
 
 # One run asked for, but at least 0.3 s of runs: more runs, the median of them all (one run only if
 # it alone took 0.3 s, as the first can under the sanitizers).

@@ -28,6 +28,10 @@
 // machine's speed drifts over minutes (the 100k median moved 0.62-0.85 s between runs of the
 // command), and a 1M child that runs long after its 100k one skews their ratio; interleaved, both
 // sizes sample the same stretch of time.
+// --round-trip: after the bend's runs, one more clean-start reconstruction by the same solver over
+// the unedited base, reported as accuracy.round_trip: the largest distance of a detail vertex from
+// its rest position over the rest detail's bounding-box diagonal (the 0.5% target), its new
+// intersecting pairs and its time. The bend's memory figures are read before it.
 
 #include <poll.h>
 #include <signal.h>
@@ -124,6 +128,7 @@ struct Args {
   int repeat = 1;                    // reconstructions per size (--repeat)
   double min_run_seconds = 5.0;      // more runs until their wall times add up to this
   int rounds = 1;                    // the size sequence this many times, interleaved (--rounds)
+  bool round_trip = false;           // also a clean start over the unedited base (--round-trip)
   bool help = false;
   ReconstructOptions reconstruct;  // --solver's preset on one solver thread, then --set
 };
@@ -189,6 +194,8 @@ Args parse_args(int argc, char** argv) {
       if (!read_whole(v, seed) || seed < 0 || seed > 4294967295LL)
         throw std::runtime_error("--shuffle is a seed from 0 to 4294967295, got '" + v + "'");
       a.shuffle = static_cast<unsigned>(seed);
+    } else if (opt == "--round-trip") {
+      a.round_trip = true;
     } else if (opt == "--finest-volume-iterations") {
       a.finest_volume_iterations = std::stoi(value(i));
     } else if (opt == "--solver") {
@@ -254,6 +261,7 @@ json run_size(const Args& args, int size) {
   if (args.shuffle != 0) c.detail = cases::shuffled_numbering(c.detail, args.shuffle);
   DetailEncoding enc = timed("encode", [&] { return encode_detail(c.detail, c.base); });
   const std::vector<Vec3> edited = std::move(c.edited_base.vertices);
+  const std::vector<Vec3> unedited = args.round_trip ? std::move(c.base.vertices) : std::vector<Vec3>{};
   const int base_vertices = c.base.num_vertices(), base_faces = c.base.num_faces();
   c = {};  // an application keeps only the encoding and the edited base
 
@@ -319,6 +327,23 @@ json run_size(const Args& args, int size) {
 
   const long long prisms = static_cast<long long>(e.detail_faces.size());
   const long long peak = max_rss_bytes();
+  // --round-trip: the same solver over the unedited base, from the clean start.
+  json round_trip = nullptr;
+  if (args.round_trip) {
+    const ReconstructResult t = timed("round_trip", [&] { return rec.reconstruct(unedited); });
+    double off = 0.0;
+    for (std::size_t i = 0; i < t.positions.size(); ++i)
+      off = std::max(off, (t.positions[i] - e.detail_rest[i]).norm());
+    const double diag = bbox_diagonal(e.detail_rest);
+    const auto trip_out = find_self_intersections(t.positions, e.detail_faces, io);
+    round_trip = json{{"max_vertex_distance", off},
+                      {"bbox_diagonal", diag},
+                      {"max_vertex_distance_over_diagonal", off / diag},
+                      {"max_relative_error", t.stats.max_relative_error},
+                      {"converged", t.stats.converged},
+                      {"new_pairs", count_new_intersections(in, trip_out)},
+                      {"within_half_a_percent", off <= 0.005 * diag}};
+  }
   const double solve = sec["solve"].get<double>() > 0 ? sec["solve"].get<double>() : 1e-300;
   const bool err_ok = vm.max_relative_error <= 1e-3, rms_ok = vm.rms_relative_error <= 1e-4;
   // The measure (|V_j - V*_j| / mean |V*_j|, volume_metrics()), and each prism's error
@@ -365,7 +390,8 @@ json run_size(const Args& args, int size) {
                  "max / rms_relative_error: max_j and RMS_j of |V_j - V*_j| / mean_j |V*_j| (the issue's "
                  "metric, volume_metrics()); *_relative_to_own_target: of |V_j - V*_j| / |V*_j|"},
                 {"volumes", metrics(vm, r.positions)},
-                {"vectors", metrics(vv, vec)}}},
+                {"vectors", metrics(vv, vec)},
+                {"round_trip", round_trip}}},
               {"intersections",
                {{"input_pairs", in.num_pairs},
                 {"volumes_pairs", out.num_pairs},
@@ -531,7 +557,7 @@ int main(int argc, char** argv) {
       "usage: strata_bench [--sizes 10000,100000,1000000] [--case bumps|rings|cuboid] [--jitter J] "
       "[--shuffle SEED] [--solver legacy|multigrid|cycles] [--finest-volume-iterations N] [--set "
       "OPTION=VALUE] "
-      "[--repeat N] [--min-run-seconds S] [--rounds R] [--out FILE.json] [--max-seconds S]\n"
+      "[--repeat N] [--min-run-seconds S] [--rounds R] [--round-trip] [--out FILE.json] [--max-seconds S]\n"
       "  Reconstructs the paper's 90-degree bend (section 6) at each size, in a child process per "
       "size,\n  and prints JSON: times, peak memory, accuracy, intersecting pairs and the issue's "
       "targets.\n  --jitter J: scan-like irregular detail triangulation (0: the regular grid)\n"
@@ -544,7 +570,9 @@ int main(int argc, char** argv) {
       "  --min-run-seconds S: more runs past --repeat until their wall times add up to S seconds\n"
       "    (default 5; at most 100 runs): a steadier median for the small sizes\n"
       "  --rounds R: the sizes R times over, interleaved (a child per size and round); each size's\n"
-      "    times are the medians over the runs of all its rounds (default 1)\n";
+      "    times are the medians over the runs of all its rounds (default 1)\n"
+      "  --round-trip: also one clean-start reconstruction over the unedited base (accuracy.round_trip:\n"
+      "    the largest vertex distance from the rest detail over its bounding-box diagonal)\n";
   Args args;
   try {
     args = parse_args(argc, argv);
@@ -617,8 +645,8 @@ int main(int argc, char** argv) {
                     (*r100k)["seconds"]["first_reconstruction"].get<double>();
 
     json per_size_throughput = json::object(), per_size_bytes = json::object(),
-         per_size_whole_bytes = json::object();
-    bool any_done = false, thr_ok = true, mem_ok = true, whole_mem_ok = true, acc_ok = true;
+         per_size_whole_bytes = json::object(), per_size_trip = json::object();
+    bool any_done = false, thr_ok = true, mem_ok = true, whole_mem_ok = true, acc_ok = true, trip_ok = true;
     for (const json& r : results) {
       if (!completed(&r)) continue;
       any_done = true;
@@ -633,8 +661,20 @@ int main(int argc, char** argv) {
       per_size_whole_bytes[key] = whole;
       whole_mem_ok = whole_mem_ok && whole <= 1024.0;
       acc_ok = acc_ok && r["targets"]["all"].get<bool>();
+      const json& trip = r["accuracy"]["round_trip"];
+      if (!trip.is_null()) {
+        per_size_trip[key] = trip["max_vertex_distance_over_diagonal"];
+        trip_ok = trip_ok && trip["within_half_a_percent"].get<bool>();
+      }
     }
     auto verdict = [&](bool ok) { return any_done ? json(ok) : json(nullptr); };
+    const json trip_target = {
+        {"definition",
+         "--round-trip: the largest distance of a detail vertex from its rest position after a "
+         "clean-start reconstruction over the unedited base, over the rest detail's bounding-box "
+         "diagonal, at most 0.005, every completed size (null without --round-trip)"},
+        {"values", per_size_trip},
+        {"pass", args.round_trip ? verdict(trip_ok) : json(nullptr)}};
     json t100k = nullptr, tscale = nullptr, tscale_first = nullptr;
     if (completed(r100k))
       t100k = reconstruct_seconds(r100k) <= 2.0;
@@ -730,7 +770,10 @@ int main(int argc, char** argv) {
               {"polish_damping", ro.multigrid.polish_damping},
               {"polish_smoothness", ro.multigrid.polish_smoothness},
               {"single_precision_cycles", ro.multigrid.single_precision_cycles},
-              {"smoothing_degree", ro.multigrid.smoothing_degree}}},
+              {"smoothing_degree", ro.multigrid.smoothing_degree},
+              {"tangential_damping", ro.multigrid.tangential_damping},
+              {"tangential_damping_bend", ro.multigrid.tangential_damping_bend},
+              {"tangential_damping_margin", ro.multigrid.tangential_damping_margin}}},
             {"step_solver", solver_name(ro.step_solver)},
             {"polish_solver", solver_name(ro.polish_solver)}}},
           {"memory_floor", {{"prisms", floor_prisms}, {"peak_rss_bytes", floor_rss}}}, {"results", results},
@@ -773,8 +816,8 @@ int main(int argc, char** argv) {
                  "peak rss / prisms, the libraries and fixed allocations included, every completed size"},
                 {"values", per_size_whole_bytes},
                 {"pass", verdict(whole_mem_ok)}}},
-          {
-            "accuracy_and_no_new_intersections", verdict(acc_ok)
+              {"accuracy_and_no_new_intersections", verdict(acc_ok)}, {
+            "round_trip_within_half_a_percent", trip_target
           }
         }
       }

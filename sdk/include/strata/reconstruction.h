@@ -98,6 +98,31 @@ struct MultigridStepOptions {
   //! multigrid_reconstruct_options() degree 1 took 0.54 s against 0.56 s at 100k, but its 1M bend
   //! folded (one retry, 43.5 s against 7.6 s), so that preset keeps 2.
   int smoothing_degree = 2;
+  //! Relative weight (as `damping`) of a term eps_t ||(I - n n^T) delta_i||^2 in the cycle steps
+  //! of a clean start's intermediate volume scales, n the base normal at vertex i's base point:
+  //! it makes a step grow the detail along the base's normals rather than slide it over the base.
+  //! At volume scale t it takes (1 - t) of this weight; none at the full scale, in the polish, in
+  //! drags or in warm starts. Vertices where the edit bends the base get none
+  //! (tangential_damping_bend, tangential_damping_margin). Why: the steps are least-squares
+  //! (minimum-norm) steps, which on a sloped detail move vertices along the base too, and with
+  //! one cycle a scale and level (cycle_schedule_reconstruct_options()) no regularization undoes
+  //! that drift: over an unedited base the clean start came back 0.84-14.8% of the diagonal off
+  //! (the three paper cases, regular and scan-like, 10k-100k prisms); with 1 it comes back
+  //! 0.07-0.17% off at 20k. Where the base is bent, growing along its normals is what makes
+  //! displacement vectors fold; applied there too, the 100k bends folded (retries, 17-49 s).
+  //! 0: none (the default; the cycles preset takes 1).
+  double tangential_damping = 0.0;
+  //! A vertex gets no tangential damping where the edited base bends differently from the rest
+  //! base: where, for one of its neighbours, the change of the angle between their base normals
+  //! over their rest distance (a change of curvature), times the larger of their displacement
+  //! lengths, exceeds this. 0 over an unedited base or a rigid motion; about 2 on the inner side of
+  //! the paper's 90-degree bend.
+  double tangential_damping_bend = 0.1;
+  //! The damping's weight rises from 0 at those vertices to full over this many mean displacement
+  //! lengths along the rest detail's edges (smoothstep). With 4 the scan-like 100k bumps and rings
+  //! bends folded where the bend begins and ends (40 and 115 new pairs before any repair), with 12
+  //! they did not.
+  double tangential_damping_margin = 12.0;
 };
 
 //! User options of the reconstruction (the paper's k, g, n, m, lambdas and tolerances). The
@@ -464,15 +489,15 @@ ReconstructOptions multigrid_reconstruct_options();
 //! repair round against two), the bumps and rings at 100k as before (2026-12-02, AMD EPYC VM).
 //! The multigrid preset keeps 1e-8: with 1e-7 its 1M polish took 3.7 s against 2.2 s. On regular
 //! grids (not scans) the regular 100k rings bend then needed a retry (17.6 s against 5.3 s).
-//! Not for round trips: over an unedited base its clean start returns the detail 2.36 / 1.00 /
-//! 1.80% of the diagonal off (the 20k regular cuboid and scan-like bumps and rings; the
-//! multigrid preset 0.21 / 0.07 / 0.11%, the acceptance 0.5%). Its single cycles regularize no
-//! level but the coarsest and, at full scale, the finest; ending every level's cycle with its
-//! regularization (as Listing 1's cycles do) brought that to 0.12 / 0.05 / 0.23% but folded the
-//! 100k bumps and rings bends (17-21 s with repairs and retries, against 1.4 s); the coarse
-//! levels' only, at the intermediate scales, with 0.4 of the weights: 0.36 / 0.20 / 0.25% and the
-//! 100k bends without a repair, but the 1M bumps bend took 273 s (11 repair rounds and a retry)
-//! against 26 s.
+//! Its intermediate scales' cycle steps damp the vertices' motion along the base
+//! (MultigridStepOptions::tangential_damping 1), except where the edit bends the base: its single
+//! cycles regularize no level but the coarsest and, at full scale, the finest, and without the
+//! damping the steps slid the detail over the base, so that over an unedited base the clean start
+//! came back 0.84-14.8% of the diagonal off (the three cases, regular and scan-like, 10k-100k
+//! prisms); with it 0.03-0.25% (the acceptance 0.5%; strata_bench --round-trip, forty-fifth session).
+//! Regularizing the levels instead (every level's cycle ending with its sweeps, or the coarse
+//! levels' only, or more finest sweeps at full scale) brought the round trip within 0.5% only
+//! with folds in the 100k bends (retries, 17-21 s) or the 1M bumps bend (273 s; engine log).
 //! Measured on one thread
 //! (2026-12-02, AMD EPYC VM, the 90-degree bends at jitter 0.4, medians of three): bumps at 100k
 //! 1.90-2.63 s (the multigrid preset 0.64-0.90 s the same hours), 0.76M-1.05M prisms per second

@@ -254,11 +254,18 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   const std::vector<int>& vf = *sys.vf;
   const std::vector<double>& r = *sys.r;
   const double eps = sys.eps, eps_lap = sys.eps_lap;
+  const double eps_t = sys.normals ? sys.eps_tangential : 0.0;
+  const Eigen::Vector3f* nrm = sys.normals ? sys.normals->data() : nullptr;
+  // The term's 3 x 3 block at vertex v, eps_t (|u|^2 I - u u^T).
+  auto tangential_block = [&](std::size_t v) {
+    const Vec3 u = nrm[v].cast<double>();
+    return Mat3(eps_t * (u.squaredNorm() * Mat3::Identity() - u * u.transpose()));
+  };
   const std::size_t m = faces.size();
   const std::size_t n = static_cast<std::size_t>(n0_);
   const int nc = static_cast<int>(coarse_.size());
   assert(sys.gf->size() == 9 * m && r.size() == m && vfo.size() == n + 1 && eps > 0 &&
-         sys.smoothing_degree >= 0);
+         sys.smoothing_degree >= 0 && (!sys.normals || sys.normals->size() == n) && eps_t >= 0);
   VertexStepResult result;
   delta.assign(n, Vec3::Zero());
   double rr0 = 0.0;
@@ -276,6 +283,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   ws.fine.dinv.resize(n);
   parallel_for_each(arena, n, [&](std::size_t v) {
     Mat3 d = (eps + eps_lap * lap_diag_[v]) * Mat3::Identity();
+    if (eps_t > 0) d.noalias() += tangential_block(v);
     for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
       const Vec3 g = g_at(vf[t]);
       d.noalias() += g * g.transpose();
@@ -333,6 +341,7 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       for (int t = rest_offsets_[v]; t < rest_offsets_[v + 1]; ++t)
         val[rest_slot_[t]].diagonal().array() -= static_cast<float>(eps_lap * rest_w_[t]);
       val[c.diag[agg0_[v]]].diagonal().array() += static_cast<float>(eps + eps_lap * lap_diag_[v]);
+      if (eps_t > 0) val[c.diag[agg0_[v]]] += tangential_block(v).cast<float>();
     }
   }
   for (int l = 0; l + 1 < nc; ++l) {
@@ -374,6 +383,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
     y.resize(n);
     auto start = [&](std::size_t v) {
       V3 acc = static_cast<T>(eps) * x[v];
+      if (eps_t > 0) {
+        const V3 nv = nrm[v].cast<T>();
+        acc += static_cast<T>(eps_t) * (nv.squaredNorm() * x[v] - nv * nv.dot(x[v]));
+      }
       if constexpr (lap)
         for (int t = rest_offsets_[v]; t < rest_offsets_[v + 1]; ++t)
           acc += static_cast<T>(eps_lap * rest_w_[t]) * (x[v] - x[rest_nb_[t]]);

@@ -53,6 +53,13 @@ struct VertexStepSystem {
   const std::vector<char>* fixed = nullptr;  //!< optional: vertices whose delta is 0
   double eps = 0.0;                          //!< > 0: weight of ||delta||^2 (Levenberg-Marquardt)
   double eps_lap = 0.0;                      //!< >= 0: weight of the smoothness term delta^T L delta
+  //! Optional, with eps_tangential > 0: per vertex a normal u = sqrt(w) n (n a unit normal, w >= 0
+  //! the vertex's weight); the term eps_tangential delta_v^T (|u|^2 I - u u^T) delta_v =
+  //! eps_tangential w ||(I - n n^T) delta_v||^2 penalizes the tangential part of each step
+  //! (ReconstructOptions' MultigridStepOptions::tangential_damping).
+  //! (Single precision: read in every product, where the damping needs a few digits.)
+  const std::vector<Eigen::Vector3f>* normals = nullptr;
+  double eps_tangential = 0.0;
   //! > 0: the Chebyshev smoother's degree in this solve's V-cycles (0: the hierarchy's
   //! VertexMultigridOptions::smoothing_degree).
   int smoothing_degree = 0;
