@@ -521,7 +521,7 @@ TEST(MultigridPreset, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
 // The paper's schedule: one cycle a scale and level regularizes no intermediate level, and the
 // least-squares volume steps slid the detail over the base; the tangential damping of its
 // intermediate scales (MultigridStepOptions::tangential_damping 1) keeps the steps along the base's
-// normals. Measured (forty-fifth session): 0.169 / 0.121 / 0.069% here; without the damping
+// normals. Measured (forty-fifth session): 0.087 / 0.121 / 0.069% here; without the damping
 // 2.36 / 1.00 / 1.80%.
 TEST(CycleSchedule, UneditedRoundTripWithinHalfAPercentOfTheDiagonal) {
   const ReconstructOptions ro = cycle_schedule_reconstruct_options();

@@ -482,7 +482,7 @@ ReconstructOptions multigrid_reconstruct_options();
 //! paper measured), the multigrid preset where the time to the answer does. Changed from
 //! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
 //! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1, multigrid.polish_damping
-//! 1e-7. The damping: with the multigrid preset's 1e-8 every whole-level polish step's solve on the
+//! 1e-7, multigrid.tangential_damping 1. The polish damping: with the multigrid preset's 1e-8 every whole-level polish step's solve on the
 //! scan-like 100k cuboid bend ran its 25 iterations and stalled at 0.04-0.14 of its residual, and
 //! the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8 iterations, two steps
 //! and the local end (0.16-0.21 s), and the 1M bumps bend took 22.9 s against 29.4 s (one fold
@@ -494,7 +494,10 @@ ReconstructOptions multigrid_reconstruct_options();
 //! cycles regularize no level but the coarsest and, at full scale, the finest, and without the
 //! damping the steps slid the detail over the base, so that over an unedited base the clean start
 //! came back 0.84-14.8% of the diagonal off (the three cases, regular and scan-like, 10k-100k
-//! prisms); with it 0.03-0.25% (the acceptance 0.5%; strata_bench --round-trip, forty-fifth session).
+//! prisms); with it 0.033-0.248% over the same 24 cases (the acceptance 0.5%; `strata_bench
+//! --round-trip`, forty-fifth session), the bends still ending with 0 new pairs (the scan-like
+//! ones without a retry, three regular ones after two; the 1M bumps after three repair rounds),
+//! at about 0.1-0.15 s more on the 100k bends.
 //! Regularizing the levels instead (every level's cycle ending with its sweeps, or the coarse
 //! levels' only, or more finest sweeps at full scale) brought the round trip within 0.5% only
 //! with folds in the 100k bends (retries, 17-21 s) or the 1M bumps bend (273 s; engine log).
