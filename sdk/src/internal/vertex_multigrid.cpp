@@ -284,10 +284,22 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
   parallel_for_each(arena, n, [&](std::size_t v) {
     Mat3 d = (eps + eps_lap * lap_diag_[v]) * Mat3::Identity();
     if (eps_t > 0) d.noalias() += tangential_block(v);
+    // The block is symmetric: its six upper entries are summed, in the order and with the
+    // roundings of the full outer products (g_i g_j is g_j g_i), and mirrored. A third fewer
+    // products than Eigen's 3 x 3 outer product, with its column broadcasts, in what was 5-6% of
+    // the cycles preset's solve.
+    double a00 = d(0, 0), a01 = d(0, 1), a02 = d(0, 2), a11 = d(1, 1), a12 = d(1, 2), a22 = d(2, 2);
     for (int t = vfo[v]; t < vfo[v + 1]; ++t) {
-      const Vec3 g = g_at(vf[t]);
-      d.noalias() += g * g.transpose();
+      const float* g = gf + 3 * static_cast<std::size_t>(vf[t]);
+      const double x = g[0], y = g[1], z = g[2];
+      a00 += x * x;
+      a01 += x * y;
+      a02 += x * z;
+      a11 += y * y;
+      a12 += y * z;
+      a22 += z * z;
     }
+    d << a00, a01, a02, a01, a11, a12, a02, a12, a22;
     ws.fine.dinv[v] = d.inverse().cast<float>();
   });
   ws.levels.resize(nc);
@@ -701,7 +713,10 @@ VertexStepResult VertexMultigrid::solve(const VertexStepSystem& sys, double tole
       }
       result.iterations = it + 1;
       result.relative_residual = std::sqrt(rr / rr0);
-      if (rr <= stop) break;
+      // After the last iteration no direction is needed: its V-cycle (two of an iteration's three
+      // fine products) would be thrown away. The cycle steps run 6 iterations, so this was 2 of
+      // every 20 products.
+      if (rr <= stop || it + 1 == max_iterations) break;
       const double rz_new = precondition();
       const T beta = static_cast<T>(rz_new / rz);
       rz = rz_new;
