@@ -29,6 +29,7 @@
 #include "internal/hierarchy.h"
 #include "internal/option_error.h"
 #include "internal/parallel.h"
+#include "internal/prism_pair.h"
 #include "internal/renumber.h"
 #include "internal/serial_openmp.h"
 #include "internal/topology.h"
@@ -2181,11 +2182,27 @@ class VolumeReconstructor::Impl {
   }
 
   void compute_volumes(const Level& L, const State& s, std::vector<double>& V) const {
-    V.resize(L.faces.size());
-    for_each(L.faces.size(), [&](std::size_t j) {
-      const Face& f = L.faces[j];
-      V[j] = prism_volume(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
+    const std::size_t m = L.faces.size();
+    V.resize(m);
+    for_each((m + 1) / 2, [&](std::size_t k) {  // in pairs, as gradient_pass()
+      const std::size_t j0 = 2 * k, j1 = std::min(j0 + 1, m - 1);
+      double v[2];
+      internal::prism_volume_pair(prism_pair(L, s, j0, j1), v);
+      V[j0] = v[0];
+      V[j1] = v[1];
     });
+  }
+
+  // The corners of prisms \p j0 and \p j1 at the current positions.
+  static internal::PrismPair prism_pair(const Level& L, const State& s, std::size_t j0, std::size_t j1) {
+    internal::PrismPair c;
+    const std::size_t j[2] = {j0, j1};
+    for (int k = 0; k < 2; ++k)
+      for (int a = 0; a < 3; ++a) {
+        c.p[k][a] = &s.P[L.faces[j[k]][a]];
+        c.q[k][a] = &s.Q[L.faces[j[k]][a]];
+      }
+    return c;
   }
 
   // (J^T x) at level-local vertex k: its faces' gradients at its corners weighted by x, summed in
@@ -2250,10 +2267,8 @@ class VolumeReconstructor::Impl {
     w.r.resize(m);
     w.diag.resize(m);
     if (V) V->resize(m);
-    for_each(m, [&](std::size_t j) {
+    const auto store = [&](std::size_t j, const PrismVolumeGradient& g) {
       const Face& f = L.faces[j];
-      const PrismVolumeGradient g =
-          prism_volume_gradient(s.P[f[0]], s.P[f[1]], s.P[f[2]], s.Q[f[0]], s.Q[f[1]], s.Q[f[2]]);
       if (V) (*V)[j] = g.volume;
       w.r[j] = h * L.targets[j] - g.volume;
       if (!use_mg) {
@@ -2267,6 +2282,15 @@ class VolumeReconstructor::Impl {
         for (int k = 0; k < 3; ++k) w.gf[9 * j + 3 * c + k] = static_cast<float>(gc[k]);
       }
       w.diag[j] = norm2;
+    };
+    // Prisms in pairs, bit-identical to one at a time (internal/prism_pair.h); an odd count's
+    // last pair is the last prism twice.
+    for_each((m + 1) / 2, [&](std::size_t k) {
+      const std::size_t j0 = 2 * k, j1 = std::min(j0 + 1, m - 1);
+      PrismVolumeGradient g[2];
+      internal::prism_volume_gradient_pair(prism_pair(L, s, j0, j1), g);
+      store(j0, g[0]);
+      if (j1 != j0) store(j1, g[1]);
     });
   }
 
