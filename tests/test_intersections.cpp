@@ -10,6 +10,7 @@
 #include <random>
 #include <utility>
 
+#include "internal/intersection_update.h"
 #include "strata/exceptions.h"
 #include "strata/intersections.h"
 #include "test_meshes.h"
@@ -658,6 +659,64 @@ TEST(IntersectNew, CountsPairsCreatedByAnEdit) {
   ASSERT_EQ(moved.pairs, (std::vector<Pair>{{0, 2}, {2, 3}}));
   EXPECT_EQ(count_new_intersections(before, moved), 2u);
   EXPECT_EQ(count_new_intersections(moved, before), 1u);
+}
+
+// internal::update_self_intersections(): after local edits (a patch of vertices pushed through
+// the other sphere, or pulled back), the pairs of a search only around the moved faces equal a
+// whole search's, edit after edit, each update starting from the last; and it searches less.
+TEST(IntersectUpdate, LocalEditsGiveTheWholeSearchsPairs) {
+  const TriMesh a = icosphere(4);
+  TriMesh m = concatenate(a, translated(a, Vec3(1.3, 0.2, 0.1)));
+  IntersectionOptions o;
+  o.collect_pairs = true;
+  o.parallel = false;
+  IntersectionResult last = find_self_intersections(m.vertices, m.faces, o);
+  ASSERT_GT(last.num_pairs, 0u);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(m.vertices.size()) - 1);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int local_searches = 0;
+  for (int edit = 0; edit < 24; ++edit) {
+    // The vertices within a radius of a random one, moved by a smooth bump (the bigger edits
+    // move over a quarter of the faces: the whole search then runs).
+    const Vec3 centre = m.vertices[pick(rng)];
+    const double radius = edit % 6 == 5 ? 1.2 : 0.15 + 0.05 * (edit % 4);
+    const Vec3 push(0.4 * u(rng), 0.4 * u(rng), 0.4 * u(rng));
+    std::vector<char> moved(m.vertices.size(), 0);
+    for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+      const double d = (m.vertices[v] - centre).norm() / radius;
+      if (d < 1) m.vertices[v] += (1 - d * d) * push, moved[v] = 1;
+    }
+    std::vector<int> changed;
+    for (int f = 0; f < m.num_faces(); ++f)
+      if (moved[m.faces[f][0]] || moved[m.faces[f][1]] || moved[m.faces[f][2]]) changed.push_back(f);
+    const IntersectionResult whole = find_self_intersections(m.vertices, m.faces, o);
+    const IntersectionResult update =
+        strata::internal::update_self_intersections(m.vertices, m.faces, last, changed, o);
+    SCOPED_TRACE("edit " + std::to_string(edit) + ", " + std::to_string(changed.size()) + " faces moved");
+    ASSERT_EQ(update.pairs, whole.pairs);
+    EXPECT_EQ(update.num_pairs, whole.num_pairs);
+    EXPECT_EQ(update.faces, whole.faces);
+    EXPECT_FALSE(update.truncated);
+    EXPECT_EQ(count_new_intersections(last, update), count_new_intersections(last, whole));
+    if (4 * changed.size() <= static_cast<std::size_t>(m.num_faces()) && update.num_tests < whole.num_tests)
+      ++local_searches;
+    last = update;
+  }
+  EXPECT_GE(local_searches, 12);
+  // Nothing moved: the pairs as they were, without a search.
+  const IntersectionResult same =
+      strata::internal::update_self_intersections(m.vertices, m.faces, last, {}, o);
+  EXPECT_EQ(same.pairs, last.pairs);
+  EXPECT_EQ(same.num_tests, 0u);
+  // A result of another face list is not taken: the whole search runs.
+  TriMesh fewer = m;
+  fewer.faces.pop_back();
+  const IntersectionResult other =
+      strata::internal::update_self_intersections(fewer.vertices, fewer.faces, last, {}, o);
+  EXPECT_EQ(other.pairs, find_self_intersections(fewer.vertices, fewer.faces, o).pairs);
+  EXPECT_THROW(strata::internal::update_self_intersections(m.vertices, m.faces, last, {m.num_faces()}, o),
+               InvalidInput);
 }
 
 TEST(IntersectNew, RejectsIncomparableResults) {

@@ -8,15 +8,19 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <climits>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
 #include <string>
+#include <unordered_set>
 
+#include "internal/intersection_update.h"
 #include "strata/exceptions.h"
 
 namespace strata {
@@ -729,5 +733,126 @@ bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>
   if (t.is_degenerate() || u.is_degenerate()) return false;
   return CGAL::do_intersect(t, u);
 }
+
+namespace internal {
+namespace {
+
+// A face's box in double, exactly its corners' extremes.
+Eigen::AlignedBox3d face_box(const std::vector<Vec3>& vertices, const Face& f) {
+  Eigen::AlignedBox3d b(vertices[f[0]]);
+  b.extend(vertices[f[1]]);
+  b.extend(vertices[f[2]]);
+  return b;
+}
+
+// The cells of a uniform grid that boxes cover. Two closed boxes that overlap share a point, and
+// so a cell: the cells are a conservative test, never a missed pair.
+class CellSet {
+ public:
+  explicit CellSet(double cell) : cell_(cell) {}
+  // Calls f(key) for each cell of \p b; false (without calls) if they are more than \p limit.
+  template <class F>
+  bool for_cells(const Eigen::AlignedBox3d& b, double limit, const F& f) const {
+    std::int64_t lo[3], hi[3];
+    double count = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = coord(b.min()[a]);
+      hi[a] = coord(b.max()[a]);
+      count *= static_cast<double>(hi[a] - lo[a]) + 1.0;
+    }
+    if (count > limit) return false;
+    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) f(key(x, y, z));
+    return true;
+  }
+  void insert(std::uint64_t k) { cells_.insert(k); }
+  bool contains(std::uint64_t k) const { return cells_.count(k) > 0; }
+
+ private:
+  std::int64_t coord(double x) const {
+    return static_cast<std::int64_t>(std::clamp(std::floor(x / cell_), -1e15, 1e15));
+  }
+  // Distinct cells may share a key (21 bits an axis): that only adds candidates.
+  static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
+    const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffff; };
+    return u(x) | (u(y) << 21) | (u(z) << 42);
+  }
+  double cell_;
+  std::unordered_set<std::uint64_t> cells_;
+};
+
+}  // namespace
+
+IntersectionResult update_self_intersections(const std::vector<Vec3>& vertices,
+                                             const std::vector<Face>& faces, const IntersectionResult& before,
+                                             const std::vector<int>& changed,
+                                             const IntersectionOptions& options) {
+  assert(options.collect_pairs);
+  validate(vertices, faces, "update_self_intersections");
+  const std::size_t n = faces.size();
+  const auto whole = [&] { return find_self_intersections(vertices, faces, options); };
+  if (before.truncated || !lists_all_pairs(before) || before.num_faces != n ||
+      before.connectivity_hash != fingerprint(faces))
+    return whole();
+  std::vector<char> moved(n, 0);
+  std::vector<int> list;  // the changed faces, each once
+  for (int f : changed) {
+    if (f < 0 || static_cast<std::size_t>(f) >= n)
+      throw InvalidInput("update_self_intersections: changed face " + std::to_string(f) +
+                         " out of range [0, " + std::to_string(n) + ")");
+    if (!moved[f]) moved[f] = 1, list.push_back(f);
+  }
+  if (4 * list.size() > n) return whole();
+  IntersectionResult result;
+  result.num_faces = n;
+  result.connectivity_hash = before.connectivity_hash;
+  if (!list.empty()) {
+    // Cells as large as the largest changed box, so that each of those covers at most 8.
+    Eigen::AlignedBox3d all;
+    double cell = 0.0;
+    for (int f : list) {
+      const Eigen::AlignedBox3d b = face_box(vertices, faces[f]);
+      all.extend(b);
+      cell = std::max(cell, b.sizes().maxCoeff());
+    }
+    if (!(cell > 0) || !std::isfinite(cell)) cell = std::max(all.sizes().maxCoeff(), 1.0);
+    CellSet cells(cell);
+    for (int f : list)
+      cells.for_cells(face_box(vertices, faces[f]), 8.0, [&](std::uint64_t k) { cells.insert(k); });
+    // The faces near a changed one: theirs included, as the search must see pairs among them.
+    std::vector<Face> near;
+    std::vector<int> global;
+    for (std::size_t f = 0; f < n; ++f) {
+      const Eigen::AlignedBox3d b = face_box(vertices, faces[f]);
+      bool in = moved[f] != 0;
+      if (!in && all.intersects(b)) {
+        bool hit = false;
+        const bool few = cells.for_cells(b, 64.0, [&](std::uint64_t k) { hit = hit || cells.contains(k); });
+        in = hit || !few;  // a box over many cells (a long face) is taken without looking
+      }
+      if (in) near.push_back(faces[f]), global.push_back(static_cast<int>(f));
+    }
+    if (2 * near.size() > n) return whole();
+    const IntersectionResult local = search_pairs(vertices, near, nullptr, options);
+    if (local.truncated) return whole();
+    result.num_tests = local.num_tests;
+    for (const Pair& p : local.pairs) {
+      const int a = global[p.first], b = global[p.second];
+      if (moved[a] || moved[b]) result.pairs.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  for (const Pair& p : before.pairs)
+    if (!moved[p.first] && !moved[p.second]) result.pairs.push_back(p);
+  std::sort(result.pairs.begin(), result.pairs.end());
+  if (options.max_pairs > 0 && result.pairs.size() > options.max_pairs) return whole();
+  result.num_pairs = result.pairs.size();
+  for (const Pair& p : result.pairs) result.faces.insert(result.faces.end(), {p.first, p.second});
+  std::sort(result.faces.begin(), result.faces.end());
+  result.faces.erase(std::unique(result.faces.begin(), result.faces.end()), result.faces.end());
+  return result;
+}
+
+}  // namespace internal
 
 }  // namespace strata
