@@ -326,6 +326,33 @@ TEST(IntersectSphere, OverlappingCopiesMatchBruteForce) {
   }
 }
 
+// A fan around one vertex (a CAD cylinder's cap) with triangles through it and through its hub:
+// the search skips the subtrees whose triangles all share a vertex, and finds what brute force
+// finds, the pairs at the hub included.
+TEST(IntersectFan, AFanAroundOneVertexMatchesBruteForce) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int k = 1200;
+  TriMesh m;
+  m.vertices.push_back(Vec3(0, 0, 0));
+  for (int i = 0; i < k; ++i) {
+    const double a = 2 * M_PI * i / k;
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), 0.02 * u(rng)));
+    m.faces.push_back({0, 1 + i, 1 + (i + 1) % k});
+  }
+  for (int t = 0; t < 12; ++t) {  // vertical triangles across the fan, some through the hub
+    const Vec3 c = t % 3 == 0 ? Vec3::Zero() : Vec3(0.6 * u(rng), 0.6 * u(rng), 0.0);
+    const Vec3 d(u(rng), u(rng), 0.0);
+    const int b = static_cast<int>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(),
+                      {c - 0.2 * d + Vec3(0, 0, -0.3), c + 0.2 * d + Vec3(0, 0, -0.3), c + Vec3(0, 0, 0.4)});
+    m.faces.push_back({b, b + 1, b + 2});
+  }
+  const std::vector<Pair> expected = brute_force_pairs(m);
+  ASSERT_GT(expected.size(), 12u);
+  for (bool parallel : {false, true}) EXPECT_EQ(find(m, parallel).pairs, expected);
+}
+
 // One stray face far from a scan (a scanner's outlier) keeps the others' search as tight as
 // without it: the float boxes are relative to the faces' median. Relative to the box centre,
 // midway to the stray face, every box of the sphere below was a float step (0.06) wide and the

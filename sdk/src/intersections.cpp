@@ -233,24 +233,59 @@ class BvhBuilder {
 
 // Bottom-up boxes: children come after their parent in the depth-first layout, so one backward
 // sweep sees every child before its parent.
+// The vertices that every triangle of a subtree has (at most 3, ascending, -1 after them).
+using Shared = std::array<int, 3>;
+constexpr Shared kNoneShared = {-1, -1, -1};
+
+// The vertices in both \p a and \p b.
+inline Shared shared_by(const Shared& a, const std::array<int, 3>& b) {
+  Shared out = kNoneShared;
+  int k = 0;
+  for (int v : a)
+    if (v >= 0 && (v == b[0] || v == b[1] || v == b[2])) out[k++] = v;
+  return out;
+}
+
+// Whether \p a and \p b list a vertex in common: then every pair of a triangle under one and a
+// triangle under the other shares it, and none of them counts.
+inline bool meet(const Shared& a, const Shared& b) {
+  if (a[0] < 0 || b[0] < 0) return false;
+  for (int v : a)
+    if (v >= 0 && (v == b[0] || v == b[1] || v == b[2])) return true;
+  return false;
+}
+
+// Boxes and shared vertices, bottom up (children come after their parent).
 template <class S>
-void fit_boxes(std::vector<Node<S>>& nodes, const std::vector<Prim<S>>& prims) {
+void fit_boxes(std::vector<Node<S>>& nodes, std::vector<Shared>& shared, const std::vector<Prim<S>>& prims) {
+  shared.assign(nodes.size(), kNoneShared);
   for (std::size_t n = nodes.size(); n-- > 0;) {
     Node<S>& nd = nodes[n];
     if (nd.count > 0) {
       nd.box = prims[nd.index].box;
-      for (int i = nd.index + 1; i < nd.index + nd.count; ++i) nd.box = merge(nd.box, prims[i].box);
+      Shared common = prims[nd.index].v;
+      std::sort(common.begin(), common.end());
+      for (int i = nd.index + 1; i < nd.index + nd.count; ++i) {
+        nd.box = merge(nd.box, prims[i].box);
+        common = shared_by(common, prims[i].v);
+      }
+      shared[n] = common;
     } else {
       nd.box = merge(nodes[n + 1].box, nodes[nd.index].box);
+      shared[n] = shared_by(shared[n + 1], shared[nd.index]);
     }
   }
 }
 
-// A bounding-volume hierarchy over one face list: nodes in depth-first layout, prims in leaf order.
+// A bounding-volume hierarchy over one face list: nodes in depth-first layout, prims in leaf order,
+// and per node the vertices all its triangles share. A fan of k triangles around one vertex (a
+// CAD cylinder's cap) has every box through that vertex: without them the search visited all k^2
+// pairs (0.6 s for a 10,000-face fan) where none can count.
 template <class S>
 struct Tree {
   std::vector<Node<S>> nodes;
   std::vector<Prim<S>> prims;
+  std::vector<Shared> shared;
 };
 
 // Traverses one tree against itself (each unordered pair of leaves whose boxes overlap is visited
@@ -313,6 +348,7 @@ class IntersectionSearch {
   void self(int n, std::size_t m) {
     if (stopped()) return;
     const Node<S>& nd = a_.nodes[n];
+    if (a_.shared[n][0] >= 0) return;  // every pair in it shares a vertex
     if (nd.count > 0) {
       std::size_t tests = 0;
       for (int i = nd.index, end = nd.index + nd.count; i < end; ++i)
@@ -336,7 +372,7 @@ class IntersectionSearch {
     if (stopped()) return;
     const Node<S>& na = a_.nodes[a];
     const Node<S>& nb = b_.nodes[b];
-    if (!overlap(na.box, nb.box)) return;
+    if (!overlap(na.box, nb.box) || meet(a_.shared[a], b_.shared[b])) return;
     if (na.count > 0 && nb.count > 0) {
       std::size_t tests = 0;
       for (int i = na.index, ie = na.index + na.count; i < ie; ++i) {
@@ -557,7 +593,7 @@ Tree<S> build_tree(const std::vector<Vec3>& vertices, const std::vector<Face>& f
   check_cancel();
   tree.prims = make_prims(vertices, faces, items, origin);
   std::vector<Item<S>>().swap(items);  // keep the peak memory down on big meshes
-  fit_boxes(tree.nodes, tree.prims);
+  fit_boxes(tree.nodes, tree.shared, tree.prims);
   return tree;
 }
 
