@@ -853,9 +853,11 @@ IntersectionResult update_self_intersections(const std::vector<Vec3>& vertices,
       cell = std::max(cell, b.sizes().maxCoeff());
     }
     if (!(cell > 0) || !std::isfinite(cell)) cell = std::max(all.sizes().maxCoeff(), 1.0);
+    // A box as wide as a cell covers 2 a side, 3 where the division rounds up at its far side.
     CellSet cells(cell);
     for (int f : list)
-      cells.for_cells(face_box(vertices, faces[f]), 8.0, [&](std::uint64_t k) { cells.insert(k); });
+      if (!cells.for_cells(face_box(vertices, faces[f]), 27.0, [&](std::uint64_t k) { cells.insert(k); }))
+        return whole();
     // The faces near a changed one: theirs included, as the search must see pairs among them.
     std::vector<Face> near;
     std::vector<int> global;
