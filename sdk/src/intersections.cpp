@@ -20,6 +20,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "internal/cell_grid.h"
 #include "internal/intersection_update.h"
 #include "strata/exceptions.h"
 
@@ -231,8 +232,6 @@ class BvhBuilder {
   std::map<std::size_t, std::size_t> memo_;
 };
 
-// Bottom-up boxes: children come after their parent in the depth-first layout, so one backward
-// sweep sees every child before its parent.
 // The vertices that every triangle of a subtree has (at most 3, ascending, -1 after them).
 using Shared = std::array<int, 3>;
 constexpr Shared kNoneShared = {-1, -1, -1};
@@ -255,7 +254,8 @@ inline bool meet(const Shared& a, const Shared& b) {
   return false;
 }
 
-// Boxes and shared vertices, bottom up (children come after their parent).
+// Bottom-up boxes and shared vertices: children come after their parent in the depth-first
+// layout, so one backward sweep sees every child before its parent.
 template <class S>
 void fit_boxes(std::vector<Node<S>>& nodes, std::vector<Shared>& shared, const std::vector<Prim<S>>& prims) {
   shared.assign(nodes.size(), kNoneShared);
@@ -781,40 +781,23 @@ Eigen::AlignedBox3d face_box(const std::vector<Vec3>& vertices, const Face& f) {
   return b;
 }
 
-// The cells of a uniform grid that boxes cover. Two closed boxes that overlap share a point, and
-// so a cell: the cells are a conservative test, never a missed pair.
+// The cells of a uniform grid that boxes cover (internal::CellGrid): a conservative test, never
+// a missed pair.
 class CellSet {
  public:
-  explicit CellSet(double cell) : cell_(cell) {}
+  explicit CellSet(double cell) { grid_.cell = cell; }
   // Calls f(key) for each cell of \p b; false (without calls) if they are more than \p limit.
   template <class F>
   bool for_cells(const Eigen::AlignedBox3d& b, double limit, const F& f) const {
-    std::int64_t lo[3], hi[3];
-    double count = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = coord(b.min()[a]);
-      hi[a] = coord(b.max()[a]);
-      count *= static_cast<double>(hi[a] - lo[a]) + 1.0;
-    }
-    if (count > limit) return false;
-    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) f(key(x, y, z));
+    if (grid_.span(b) > limit) return false;
+    grid_.for_each_cell(b, f);
     return true;
   }
   void insert(std::uint64_t k) { cells_.insert(k); }
   bool contains(std::uint64_t k) const { return cells_.count(k) > 0; }
 
  private:
-  std::int64_t coord(double x) const {
-    return static_cast<std::int64_t>(std::clamp(std::floor(x / cell_), -1e15, 1e15));
-  }
-  // Distinct cells may share a key (21 bits an axis): that only adds candidates.
-  static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
-    const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffff; };
-    return u(x) | (u(y) << 21) | (u(z) << 42);
-  }
-  double cell_;
+  CellGrid grid_;
   std::unordered_set<std::uint64_t> cells_;
 };
 

@@ -25,6 +25,7 @@
 #include <type_traits>
 #include <unordered_map>
 
+#include "internal/cell_grid.h"
 #include "internal/contact.h"
 #include "internal/hierarchy.h"
 #include "internal/intersection_update.h"
@@ -1328,35 +1329,18 @@ class VolumeReconstructor::Impl {
   }
 
   // A uniform grid of points: each cell lists the points in it.
-  struct PointGrid {
+  struct PointGrid : internal::CellGrid {
     static constexpr double kMaxCells = 4096;
-    double cell = 1.0;
     std::unordered_map<std::uint64_t, std::vector<int>> cells;
-    // Cell coordinates, clamped so that any finite point (one far away, a tiny cell) converts.
-    std::int64_t coord(double x) const {
-      return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -1e15, 1e15));
-    }
-    static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
-      const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffff; };
-      return u(x) | (u(y) << 21) | (u(z) << 42);
-    }
-    // The cells a box covers, as a double (a huge box's count overflows no integer).
-    double span(const Eigen::AlignedBox3d& b) const {
-      double c = 1.0;
-      for (int a = 0; a < 3; ++a) c *= static_cast<double>(coord(b.max()[a]) - coord(b.min()[a])) + 1.0;
-      return c;
-    }
-    void insert(const Vec3& p, int id) { cells[key(coord(p.x()), coord(p.y()), coord(p.z()))].push_back(id); }
+    void insert(const Vec3& p, int id) { cells[key(p)].push_back(id); }
     // f(ids) for the lists of the cells \p b covers (which may hold points outside \p b: cell
     // coordinates wrap). \pre span(b) is small (the cells are enumerated).
     template <class F>
     void visit(const Eigen::AlignedBox3d& b, F&& f) const {
-      for (std::int64_t x = coord(b.min().x()); x <= coord(b.max().x()); ++x)
-        for (std::int64_t y = coord(b.min().y()); y <= coord(b.max().y()); ++y)
-          for (std::int64_t z = coord(b.min().z()); z <= coord(b.max().z()); ++z) {
-            const auto it = cells.find(key(x, y, z));
-            if (it != cells.end()) f(it->second);
-          }
+      for_each_cell(b, [&](std::uint64_t k) {
+        const auto it = cells.find(k);
+        if (it != cells.end()) f(it->second);
+      });
     }
   };
 
