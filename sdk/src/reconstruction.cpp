@@ -86,9 +86,9 @@ struct Level {
   std::vector<Eigen::Vector2d> rest_lap_detail, rest_lap_base;
   std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
   std::vector<int> inserted, ring_offsets, ring_vertices;
-  // The order prolongate() visits `inserted` in (indices into it): by wave (a vertex after the
-  // inserted vertices of its ring), then by id, so that its reads and writes go through the arrays
-  // in order rather than in the decimation's order, which is by edge length.
+  // The order prolongate() visits `inserted` in (indices into it): by id, each vertex after the
+  // inserted vertices of its ring (prolongation_orders()), so that its reads and writes go through
+  // the arrays nearly in order rather than in the decimation's order, which is by edge length.
   std::vector<int> prolong_order;
   // The direct solver of J J^T (prisms sharing a vertex): its lower triangle with the pattern
   // fixed, the diagonal's slots in its value array, and the Cholesky factorization whose symbolic
