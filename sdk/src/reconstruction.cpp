@@ -103,7 +103,34 @@ struct Level {
   // and the level-local vertices it must not move (the pinned ones; empty if none).
   std::unique_ptr<internal::VertexMultigrid> mg;
   std::vector<char> fixed;
+  // J J^T is too dense to factorize (dense_pattern()): nothing is factorized on this level, its
+  // exact steps go by the vertex multigrid and its cycle steps by conjugate gradients.
+  bool dense = false;
 };
+
+// A level's J J^T has a dense block over the prisms around each vertex: a hub of valence k (a CAD
+// cylinder's cap, a fan) makes k^2 / 2 entries and k^3 / 3 flops of factorization. A 10,000-face
+// fan took 20.9 s and 2.0 GB with the default options (7.7 s of symbolic analysis, a 12.9 s
+// factorization); the vertex-space multigrid, sparse there, solved it in 0.3 s and 29 MB.
+// Vertices in more than kDenseValence prisms count, and the pattern is dense when their blocks
+// hold more than kDenseEntries entries (a single hub of about 2,900 prisms).
+constexpr int kDenseValence = 64;
+constexpr double kDenseEntries = 4194304.0;
+
+// Whether the lower triangle of J J^T's blocks around the vertices \p verts (ids into the CSR
+// vertex -> prism-corner lists \p vf_offsets) is dense as above; all vertices if \p verts is null.
+inline bool dense_pattern(const std::vector<int>& vf_offsets, const std::vector<int>* verts) {
+  double entries = 0.0;
+  auto add = [&](int v) {
+    const double k = vf_offsets[v + 1] - vf_offsets[v];
+    if (k > kDenseValence) entries += 0.5 * k * (k + 1.0);
+  };
+  if (verts)
+    for (int v : *verts) add(v);
+  else
+    for (std::size_t v = 0; v + 1 < vf_offsets.size(); ++v) add(static_cast<int>(v));
+  return entries > kDenseEntries;
+}
 
 // Relative diagonal shift of the exact steps' system J J^T + eps I (eps = damping * max diagonal):
 // at least enough to factorize the singular clean start, at most a short gradient-like step.
@@ -342,6 +369,9 @@ class VolumeReconstructor::Impl {
       make_level(h.levels[l], l == nl - 1, levels_[l]);
       report("setup", kDecimation + (1.0 - kDecimation) * done / prisms);
     }
+    // A dense finest level (dense_pattern()) is polished by the vertex multigrid, whatever the
+    // options say.
+    polish_by_multigrid_ = opt_.polish_solver == VolumeStepSolver::Multigrid || levels_.back().dense;
     compact_coarse_levels();
     prolongation_orders();
     if (enc_.over_limit_surface()) {
@@ -884,10 +914,11 @@ class VolumeReconstructor::Impl {
       }
     }
     // J J^T's pattern and symbolic factorization only where exact steps are taken: the finest
-    // level (the polish), and the levels the options solve directly.
-    if ((finest && opt_.polish_solver == VolumeStepSolver::Direct) ||
-        opt_.step_solver == VolumeStepSolver::Direct ||
-        static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms)
+    // level (the polish), and the levels the options solve directly; not where it is dense.
+    L.dense = dense_pattern(L.vf_offsets, nullptr);
+    if (!L.dense && ((finest && opt_.polish_solver == VolumeStepSolver::Direct) ||
+                     opt_.step_solver == VolumeStepSolver::Direct ||
+                     static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms))
       build_jj_pattern(lf, adj, L);
     if (finest) {
       // The encoding's own weights (the finest level's vertex ids are the original ones).
@@ -910,7 +941,7 @@ class VolumeReconstructor::Impl {
     }
     if (opt_.tangential_regularization == TangentialRegularization::RestLaplacian) rest_laplacians(L);
     if (opt_.step_solver == VolumeStepSolver::Multigrid ||
-        (finest && opt_.polish_solver == VolumeStepSolver::Multigrid)) {
+        (finest && (opt_.polish_solver == VolumeStepSolver::Multigrid || L.dense))) {
       L.mg = std::make_unique<internal::VertexMultigrid>(nv, lf, L.nb_offsets, L.nb, L.weights);
       if (!enc_.pinned.empty()) {
         L.fixed.assign(nv, 0);
@@ -1736,8 +1767,8 @@ class VolumeReconstructor::Impl {
   // Exact Gauss-Newton steps on the prisms of \p set (local_set()), only its moving vertices
   // moving, until these prisms meet the tolerance, at most \p max_steps of them. Other prisms do
   // not change. Returns whether the tolerance was reached; if not, the positions are as the last
-  // step left them. \p damping: the Levenberg-Marquardt shift to start from, and on return the
-  // one the next step would take.
+  // step left them (as on entry if the system is dense, dense_pattern(): none is taken). \p damping: the
+  // Levenberg-Marquardt shift to start from, and on return the one the next step would take.
   bool local_polish(const LocalSet& set, State& s, double a, double tol, ReconstructStats& st, int max_steps,
                     double& damping) const {
     const Level& F = levels_.back();
@@ -1746,6 +1777,7 @@ class VolumeReconstructor::Impl {
     const std::vector<int>& faces = set.faces;
     const std::vector<int>& local = set.local;
     const int k = static_cast<int>(faces.size());
+    if (dense_pattern(F.vf_offsets, &free)) return false;  // a hub: not factorized, nothing moved
     const double scale = std::abs(a) * F.mean_abs_target;
     std::vector<std::array<Vec3, 3>> g(k);
     Eigen::VectorXd r(k);
@@ -1855,6 +1887,7 @@ class VolumeReconstructor::Impl {
     for (const Level& L : levels_) {
       st.level_vertices.push_back(static_cast<int>(L.verts.size()));
       st.level_faces.push_back(static_cast<int>(L.faces.size()));
+      st.dense_levels += L.dense;
     }
   }
 
@@ -2122,7 +2155,7 @@ class VolumeReconstructor::Impl {
     } else {
       st.final_sweeps += project(L, s, s.amplitude, tol, opt_.max_final_steps, StepSolve::Exact, st, V);
     }
-    if (opt_.polish_solver != VolumeStepSolver::Multigrid ||
+    if (opt_.polish_solver != VolumeStepSolver::Multigrid || L.dense ||  // a dense level: no factorization
         relative_error(L, s.amplitude, V, nullptr) <= tol)
       return;
     // A multigrid polish that stalls (its linear solves leave what the hierarchy does not
@@ -2167,8 +2200,9 @@ class VolumeReconstructor::Impl {
     for (int round = 0; round < opt_.max_final_steps; ++round) {
       grow_rings(off, opt_.local_polish_rings, in, subset, next);
       const LocalSet set = local_set(subset);
-      // Every round's system is bounded, not only the first: the off prisms need not shrink.
-      if (set.faces.size() > max_prisms) {
+      // Every round's system is bounded, not only the first: the off prisms need not shrink. A
+      // hub among its vertices makes it dense (dense_pattern()) as a level's.
+      if (set.faces.size() > max_prisms || dense_pattern(F.vf_offsets, &subset)) {
         if (round == 0) return false;  // not tried: nothing moved
         break;
       }
@@ -2211,8 +2245,8 @@ class VolumeReconstructor::Impl {
 
   // Cycle steps: factorized on levels the options solve directly, else as step_solver says.
   StepSolve cycle_solve(const Level& L) const {
-    return opt_.step_solver == VolumeStepSolver::Direct ||
-                   static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms
+    return !L.dense && (opt_.step_solver == VolumeStepSolver::Direct ||
+                        static_cast<int>(L.faces.size()) <= opt_.direct_max_prisms)
                ? StepSolve::Factorized
                : StepSolve::Cycle;
   }
@@ -2298,10 +2332,11 @@ class VolumeReconstructor::Impl {
     return mx / scale;
   }
 
-  // Whether a step of kind \p how solves by the vertex multigrid.
+  // Whether a step of kind \p how solves by the vertex multigrid. (Exact steps are the finest
+  // level's: polish_by_multigrid_.)
   bool multigrid_step(StepSolve how) const {
     return how == StepSolve::Exact
-               ? opt_.polish_solver == VolumeStepSolver::Multigrid
+               ? polish_by_multigrid_
                : how == StepSolve::Cycle && opt_.step_solver == VolumeStepSolver::Multigrid;
   }
 
@@ -2729,6 +2764,7 @@ class VolumeReconstructor::Impl {
   mutable std::unique_ptr<DetailEncoding> original_;
   mutable std::once_flag original_once_;
   ReconstructOptions opt_;
+  bool polish_by_multigrid_ = false;  // the exact steps' solver (multigrid_step())
   std::vector<double> guarded_f_;
   double mean_abs_f_ = 0.0;
   std::vector<Level> levels_;

@@ -7,6 +7,7 @@ nlohmann::json stats_json(const ReconstructStats& s) {
                         {"level_vertices", s.level_vertices},
                         {"level_faces", s.level_faces},
                         {"renumbered", s.renumbered},
+                        {"dense_levels", s.dense_levels},
                         {"cycles", s.cycles},
                         {"finest_cycles_per_scale", s.finest_cycles_per_scale},
                         {"volume_sweeps", s.volume_sweeps},

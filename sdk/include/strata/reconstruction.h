@@ -482,18 +482,17 @@ ReconstructOptions multigrid_reconstruct_options();
 //! paper measured), the multigrid preset where the time to the answer does. Changed from
 //! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
 //! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1, multigrid.polish_damping
-//! 1e-7, multigrid.tangential_damping 1. The polish damping: with the multigrid preset's 1e-8 every whole-level polish step's solve on the
-//! scan-like 100k cuboid bend ran its 25 iterations and stalled at 0.04-0.14 of its residual, and
-//! the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8 iterations, two steps
-//! and the local end (0.16-0.21 s), and the 1M bumps bend took 22.9 s against 29.4 s (one fold
-//! repair round against two), the bumps and rings at 100k as before (2026-12-02, AMD EPYC VM).
-//! The multigrid preset keeps 1e-8: with 1e-7 its 1M polish took 3.7 s against 2.2 s. On regular
-//! grids (not scans) the regular 100k rings bend then needed a retry (17.6 s against 5.3 s).
-//! Its intermediate scales' cycle steps damp the vertices' motion along the base
-//! (MultigridStepOptions::tangential_damping 1), except where the edit bends the base: its single
-//! cycles regularize no level but the coarsest and, at full scale, the finest, and without the
-//! damping the steps slid the detail over the base, so that over an unedited base the clean start
-//! came back 0.84-14.8% of the diagonal off (the three cases, regular and scan-like, 10k-100k
+//! 1e-7, multigrid.tangential_damping 1. The polish damping: with the multigrid preset's 1e-8 every
+//! whole-level polish step's solve on the scan-like 100k cuboid bend ran its 25 iterations and stalled at
+//! 0.04-0.14 of its residual, and the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8
+//! iterations, two steps and the local end (0.16-0.21 s), and the 1M bumps bend took 22.9 s against 29.4 s
+//! (one fold repair round against two), the bumps and rings at 100k as before (2026-12-02, AMD EPYC VM). The
+//! multigrid preset keeps 1e-8: with 1e-7 its 1M polish took 3.7 s against 2.2 s. On regular grids (not
+//! scans) the regular 100k rings bend then needed a retry (17.6 s against 5.3 s). Its intermediate scales'
+//! cycle steps damp the vertices' motion along the base (MultigridStepOptions::tangential_damping 1), except
+//! where the edit bends the base: its single cycles regularize no level but the coarsest and, at full scale,
+//! the finest, and without the damping the steps slid the detail over the base, so that over an unedited base
+//! the clean start came back 0.84-14.8% of the diagonal off (the three cases, regular and scan-like, 10k-100k
 //! prisms); with it 0.033-0.248% over the same 24 cases (the acceptance 0.5%; `strata_bench
 //! --round-trip`, forty-fifth session), the bends still ending with 0 new pairs (the scan-like
 //! ones without a retry, three regular ones after two; the 1M bumps after three repair rounds),
@@ -549,6 +548,10 @@ struct ReconstructStats {
   std::vector<int> level_faces;     //!< prism count per level, coarsest first
   //! Whether the solver renumbered the detail (ReconstructOptions::renumber_for_locality).
   bool renumbered = false;
+  //! Levels whose prisms' J J^T is too dense to factorize (a vertex in thousands of prisms: a fan,
+  //! a CAD cylinder's cap): nothing is factorized there, their exact steps go by the vertex-space
+  //! multigrid whatever polish_solver says, and no local end or factorized finish runs on them.
+  int dense_levels = 0;
   int volume_sweeps = 0;          //!< Gauss-Newton volume steps over all levels and scales
   int regularization_sweeps = 0;  //!< regularization sweeps over all levels and scales
   int cycles = 0;                 //!< cycles (volume steps + regularization) over all levels and scales
