@@ -1201,8 +1201,8 @@ TEST(Reconstruction, AHubMakesNoDenseFactorization) {
         0u);
   }
   // A polish to 1e-6 with local ends allowed over the whole level: the off prisms all touch the
-  // hub, so a local end's system would be as dense; none is factorized (11.8 s and 916 MB without
-  // the local guard, `strata reconstruct --solver multigrid` on the same fan).
+  // hub, so a local end's system would be as dense; none is factorized (without the local guards
+  // this case took 16.8 s, one local and one whole-level factorization).
   ReconstructOptions tight = multigrid_reconstruct_options();
   tight.tolerance = 1e-6;
   tight.local_polish_max_fraction = 1.0;
