@@ -28,11 +28,6 @@ struct __attribute__((packed)) Entry {
 };
 static_assert(sizeof(Entry) == 12, "Entry is packed");
 
-// a pops before b: shorter first, equally long edges in scramble() order.
-inline bool first(const Entry& a, const Entry& b) {
-  return a.length2 < b.length2 || (a.length2 == b.length2 && scramble(a.edge) < scramble(b.edge));
-}
-
 // The collapse queue: a min-queue of entries in first() order, as buckets of squared lengths
 // (16 per octave), each a 4-ary heap. The pops come in the same order as from one heap of all
 // the entries, since first() is a total order and the buckets split it into ranges; but the
@@ -43,6 +38,18 @@ class EdgeQueue {
   EdgeQueue() : buckets_(kBuckets) {}
 
   bool empty() const { return size_ == 0; }
+
+  //! The edges' ids as the input numbered them, by current id (Decimator::compact() renumbers
+  //! the edges; ties go by the input's ids so that the order is the same). Empty: the same ids.
+  void set_input_ids(std::vector<int> ids) { input_id_ = std::move(ids); }
+  const std::vector<int>& input_ids() const { return input_id_; }
+
+  // a pops before b: shorter first, equally long edges in scramble() order of their input ids.
+  bool first(const Entry& a, const Entry& b) const {
+    if (a.length2 != b.length2) return a.length2 < b.length2;
+    return input_id_.empty() ? scramble(a.edge) < scramble(b.edge)
+                             : scramble(input_id_[a.edge]) < scramble(input_id_[b.edge]);
+  }
   std::size_t size() const { return size_; }
 
   // Adds the entries at once, each bucket made a heap after.
@@ -83,17 +90,22 @@ class EdgeQueue {
     return {h.data(), std::min<std::size_t>(h.size(), 5)};
   }
 
-  // Drops the entries for which stale(entry) holds.
-  template <class F>
-  void prune(F&& stale) {
+  // Drops the entries for which stale(entry) holds and renames the others' edges by rename(edge).
+  template <class F, class R>
+  void prune(F&& stale, R&& rename) {
     size_ = 0;
     for (std::vector<Entry>& h : buckets_) {
       if (h.empty()) continue;
       h.erase(std::remove_if(h.begin(), h.end(), stale), h.end());
+      for (Entry& e : h) e.edge = rename(e.edge);
       heap_make(h);
       size_ += h.size();
     }
     low_ = 0;
+  }
+  template <class F>
+  void prune(F&& stale) {
+    prune(stale, [](int e) { return e; });
   }
 
  private:
@@ -109,7 +121,7 @@ class EdgeQueue {
 
   // A 4-ary heap: half the depth of a binary one, and a node's children are adjacent, so a sift
   // takes about half the cache misses.
-  static void sift_up(std::vector<Entry>& h, std::size_t i) {
+  void sift_up(std::vector<Entry>& h, std::size_t i) const {
     const Entry e = h[i];
     while (i > 0) {
       const std::size_t parent = (i - 1) / 4;
@@ -119,7 +131,7 @@ class EdgeQueue {
     }
     h[i] = e;
   }
-  static void sift_down(std::vector<Entry>& h, std::size_t i) {
+  void sift_down(std::vector<Entry>& h, std::size_t i) const {
     const std::size_t n = h.size();
     const Entry e = h[i];
     for (;;) {
@@ -134,7 +146,7 @@ class EdgeQueue {
     }
     h[i] = e;
   }
-  static void heap_make(std::vector<Entry>& h) {
+  void heap_make(std::vector<Entry>& h) const {
     for (std::size_t i = h.size() / 4 + 1; i-- > 0;)
       if (i < h.size()) sift_down(h, i);
   }
@@ -142,6 +154,7 @@ class EdgeQueue {
   std::vector<std::vector<Entry>> buckets_;
   std::size_t size_ = 0;
   std::size_t low_ = 0;  // no entry lies in a bucket below this one
+  std::vector<int> input_id_;
 };
 
 // Working state of build_hierarchy(): a half-edge mesh on flat arrays and the collapse queue.
@@ -161,11 +174,17 @@ class EdgeQueue {
 // coarse level joins two fans.
 class Decimator {
  public:
-  Decimator(const std::vector<Vec3>& x, const std::vector<Face>& faces) : x_(x) {
-    const int n = n_ = static_cast<int>(x.size());
+  Decimator(const std::vector<Vec3>& x, const std::vector<Face>& faces) {
+    const int n = n_ = inputs_ = static_cast<int>(x.size());
     live_ = n;
     build(faces, n);
-    tag_.assign(n, 0);
+    const int nv = static_cast<int>(out_.size());
+    vin_.resize(nv);
+    for (int v = 0; v < nv; ++v) vin_[v] = v < n ? v : copy_of_[v - n];
+    ident_ = vin_;
+    pos_.resize(nv);
+    for (int v = 0; v < nv; ++v) pos_[v] = x[vin_[v]];
+    tag_.assign(nv, 0);
     // One entry per edge, both directions tried when it comes up (they have one length), and the
     // heaps made at once: pushing the 3M halfedges of a 1M-prism mesh one by one took much of the setup.
     const int ne = static_cast<int>(to_.size() / 2);
@@ -209,8 +228,8 @@ class Decimator {
         if (!collapse_ok(h)) continue;
       }
       const int v0 = to_[h ^ 1], v1 = to_[h];
-      removed.push_back(input(v0));
-      for_ring(v0, [&](int w) { rings.push_back(input(w)); });
+      removed.push_back(vin_[v0]);
+      for_ring(v0, [&](int w) { rings.push_back(vin_[w]); });
       ring_offsets.push_back(static_cast<int>(rings.size()));
       collapse(h);
       --live_;
@@ -224,18 +243,86 @@ class Decimator {
     for (std::size_t f = 0; f < face_halfedge_.size(); ++f) {
       const int h = face_halfedge_[f];
       if (h < 0) continue;  // deleted
-      out.push_back(Face{input(to_[h]), input(to_[next_[h]]), input(to_[next_[next_[h]]])});
+      out.push_back(Face{vin_[to_[h]], vin_[to_[next_[h]]], vin_[to_[next_[next_[h]]]]});
     }
     return out;
   }
 
   // Input vertices not collapsed (a split vertex's copies are never collapsed; its first copy
-  // keeps its id).
+  // keeps its id), ascending.
   std::vector<int> vertices() const {
     std::vector<int> out;
-    for (std::size_t v = 0; v < x_.size(); ++v)
-      if (!vertex_deleted_[v]) out.push_back(static_cast<int>(v));
+    for (int v = 0; v < inputs_; ++v)
+      if (!vertex_deleted_[v]) out.push_back(vin_[v]);
     return out;
+  }
+
+  // Renumbers the live vertices, edges and faces densely, each in its order, and drops the
+  // deleted ones and the queue's stale entries. The collapses that follow are the same (the
+  // queue's order and every circulation are kept), but the coarse levels' decimation no longer
+  // reads state spread over the input's arrays: at 1M prisms the collapses of the second level
+  // on took twice as long each as the first level's, for a quarter of the vertices.
+  void compact() {
+    const int nv = static_cast<int>(out_.size()), ne = static_cast<int>(to_.size() / 2),
+              nf = static_cast<int>(face_halfedge_.size());
+    std::vector<int> vnew(nv, -1), enew(ne, -1), fnew(nf, -1);
+    int kv = 0, kin = 0;
+    for (int v = 0; v < nv; ++v)
+      if (!vertex_deleted_[v]) {
+        vnew[v] = kv++;
+        kin += v < inputs_;
+        for_outgoing(v, [&](int g) { enew[g >> 1] = 0; });
+      }
+    int ke = 0, kf = 0;
+    for (int e = 0; e < ne; ++e)
+      if (enew[e] == 0) enew[e] = ke++;
+    for (int f = 0; f < nf; ++f)
+      if (face_halfedge_[f] >= 0) fnew[f] = kf++;
+    auto he = [&](int h) { return 2 * enew[h >> 1] + (h & 1); };
+    std::vector<int> to(2 * static_cast<std::size_t>(ke)), next(to.size()), prev(to.size()), face(to.size());
+    std::vector<double> queued(ke);
+    std::vector<int> input_id(ke);
+    const std::vector<int> old_input_id = queue_.input_ids();
+    for (int e = 0; e < ne; ++e) {
+      if (enew[e] < 0) continue;
+      for (int h = 2 * e; h <= 2 * e + 1; ++h) {
+        const int g = he(h);
+        to[g] = vnew[to_[h]];
+        next[g] = he(next_[h]);
+        prev[g] = he(prev_[h]);
+        face[g] = face_[h] < 0 ? -1 : fnew[face_[h]];
+      }
+      queued[enew[e]] = queued_[e];
+      input_id[enew[e]] = old_input_id.empty() ? e : old_input_id[e];
+    }
+    std::vector<int> face_halfedge(kf);
+    for (int f = 0; f < nf; ++f)
+      if (fnew[f] >= 0) face_halfedge[fnew[f]] = he(face_halfedge_[f]);
+    std::vector<int> out(kv), vin(kv), ident(kv);
+    std::vector<char> locked(kv);
+    std::vector<Vec3> pos(kv);
+    for (int v = 0; v < nv; ++v) {
+      const int w = vnew[v];
+      if (w < 0) continue;
+      out[w] = out_[v] < 0 ? -1 : he(out_[v]);
+      vin[w] = vin_[v];
+      ident[w] = vnew[ident_[v]];  // a split vertex's first copy is never collapsed
+      locked[w] = locked_[v];
+      pos[w] = pos_[v];
+    }
+    queue_.set_input_ids(std::move(input_id));  // before the heaps are remade by the new ids
+    queue_.prune([&](const Entry& e) { return queued_[e.edge] != e.length2; },
+                 [&](int e) { return enew[e]; });
+    pruned_size_ = queue_.size();
+    to_ = std::move(to), next_ = std::move(next), prev_ = std::move(prev), face_ = std::move(face);
+    queued_ = std::move(queued);
+    face_halfedge_ = std::move(face_halfedge);
+    out_ = std::move(out), vin_ = std::move(vin), ident_ = std::move(ident);
+    locked_ = std::move(locked), pos_ = std::move(pos);
+    vertex_deleted_.assign(kv, 0);
+    tag_.assign(kv, 0);
+    stamp_ = 0;
+    inputs_ = kin;
   }
 
  private:
@@ -255,7 +342,7 @@ class Decimator {
     }
     for (int h = 2 * up[0].edge; h <= 2 * up[0].edge + 1; ++h) {
       __builtin_prefetch(&out_[to_[h]]);
-      __builtin_prefetch(&x_[input(to_[h])]);
+      __builtin_prefetch(&pos_[to_[h]]);
     }
   }
 
@@ -397,10 +484,7 @@ class Decimator {
 
   bool boundary_vertex(int v) const { return face_[out_[v]] < 0; }
 
-  // A vertex's input vertex: itself, or the vertex a fan's copy was split from.
-  int input(int v) const { return v < n_ ? v : copy_of_[v - n_]; }
-
-  double length2(int h) const { return (x_[input(to_[h ^ 1])] - x_[input(to_[h])]).squaredNorm(); }
+  double length2(int h) const { return (pos_[to_[h ^ 1]] - pos_[to_[h]]).squaredNorm(); }
 
   // An edge is queued again unless its entry in the heap is still current (the same length):
   // a duplicate would only be popped and checked twice.
@@ -421,21 +505,21 @@ class Decimator {
     // Neither side's triangle may have its other two edges on the boundary.
     if (face_[h] >= 0) {
       const int h1 = next_[h], h2 = next_[h1];
-      vl = input(to_[h1]);
+      vl = ident_[to_[h1]];
       if (face_[h1 ^ 1] < 0 && face_[h2 ^ 1] < 0) return false;
     }
     if (face_[o] >= 0) {
       const int h1 = next_[o], h2 = next_[h1];
-      vr = input(to_[h1]);
+      vr = ident_[to_[h1]];
       if (face_[h1 ^ 1] < 0 && face_[h2 ^ 1] < 0) return false;
     }
     if (vl == vr) return false;
     // The link condition: the rings of v0 and v1 share vl and vr only.
     ++stamp_;
-    for_ring(v1, [&](int w) { tag_[input(w)] = stamp_; });
+    for_ring(v1, [&](int w) { tag_[ident_[w]] = stamp_; });
     bool shared = false;
     for_ring(v0, [&](int w) {
-      const int u = input(w);
+      const int u = ident_[w];
       shared = shared || (tag_[u] == stamp_ && u != vl && u != vr);
     });
     if (shared) return false;
@@ -444,16 +528,16 @@ class Decimator {
     // pinch the surface.)
     if (boundary_vertex(v0) && face_[h] >= 0 && face_[o] >= 0) return false;
     // Faces that survive around v0 must not flip or degenerate when v0 moves onto v1.
-    const Vec3& target = x_[input(v1)];
-    const Vec3& origin = x_[input(v0)];
+    const Vec3& target = pos_[v1];
+    const Vec3& origin = pos_[v0];
     bool flips = false;
     // Each face around v0 is (v0, a, b) for an outgoing halfedge v0 -> a and its next a -> b.
     for_outgoing(v0, [&](int g) {
       if (flips || face_[g] < 0) return;  // no face on this side
       const int a = to_[g], b = to_[next_[g]];
       if (a == v1 || b == v1) return;  // one of the two faces the collapse removes
-      const Vec3& pa = x_[input(a)];
-      const Vec3& pb = x_[input(b)];
+      const Vec3& pa = pos_[a];
+      const Vec3& pb = pos_[b];
       const Vec3 n0 = triangle_area_normal(origin, pa, pb), n1 = triangle_area_normal(target, pa, pb);
       const double l0 = n0.norm(), l1 = n1.norm();
       flips = !(l1 > 1e-3 * l0) || n0.dot(n1) < 0.5 * l0 * l1;
@@ -508,17 +592,20 @@ class Decimator {
     });
   }
 
-  const std::vector<Vec3>& x_;
   // Per half-edge: its end vertex, the next and previous half-edges of its face or boundary
   // loop, its face (-1 on the boundary).
   std::vector<int> to_, next_, prev_, face_;
   std::vector<int> face_halfedge_;  // per kept face: a half-edge (-1: deleted); its corners start at its end
   std::vector<int> out_;            // per vertex: an outgoing half-edge (-1: isolated or deleted)
-  int n_ = 0;                       // input vertices; vertices n_.. are fans' copies
-  std::vector<int> copy_of_;        // per copy (vertex n_ + k): the input vertex it was split from
-  std::vector<char> locked_;        // per vertex: split (never collapsed)
+  int n_ = 0;                 // input vertices
+  int inputs_ = 0;            // vertices 0..inputs_ - 1 are input vertices, the others fans' copies
+  std::vector<int> copy_of_;  // built: per copy (vertex n_ + k), the input vertex it was split from
+  std::vector<int> vin_;      // per vertex: its input vertex (a copy's: the one it was split from)
+  std::vector<int> ident_;    // per vertex: the vertex of its input vertex (itself unless a copy)
+  std::vector<Vec3> pos_;     // per vertex: its input vertex's position
+  std::vector<char> locked_;  // per vertex: split (never collapsed)
   std::vector<char> vertex_deleted_;
-  std::vector<int> tag_;  // per input vertex: the link condition's stamp
+  std::vector<int> tag_;  // per vertex: the link condition's stamp (on ident_ vertices)
   int stamp_ = 0;
   EdgeQueue queue_;
   std::vector<double> queued_;   // per edge: the length2 of its current entry, -1 if none (or deleted)
@@ -562,6 +649,7 @@ Hierarchy build_hierarchy(const std::vector<Vec3>& x, const std::vector<Face>& f
       coarse.vertices = dec.vertices();
       coarse.faces = dec.faces();
       fine_to_coarse.push_back(std::move(coarse));
+      dec.compact();
     }
   }
   h.levels.assign(std::make_move_iterator(fine_to_coarse.rbegin()),
