@@ -179,11 +179,9 @@ class Decimator {
     live_ = n;
     build(faces, n);
     const int nv = static_cast<int>(out_.size());
-    vin_.resize(nv);
-    for (int v = 0; v < nv; ++v) vin_[v] = v < n ? v : copy_of_[v - n];
-    ident_ = vin_;
+    ident_ = copy_of_;
     pos_.resize(nv);
-    for (int v = 0; v < nv; ++v) pos_[v] = x[vin_[v]];
+    for (int v = 0; v < nv; ++v) pos_[v] = x[input(v)];
     tag_.assign(nv, 0);
     // One entry per edge, both directions tried when it comes up (they have one length), and the
     // heaps made at once: pushing the 3M halfedges of a 1M-prism mesh one by one took much of the setup.
@@ -228,8 +226,8 @@ class Decimator {
         if (!collapse_ok(h)) continue;
       }
       const int v0 = to_[h ^ 1], v1 = to_[h];
-      removed.push_back(vin_[v0]);
-      for_ring(v0, [&](int w) { rings.push_back(vin_[w]); });
+      removed.push_back(input(v0));
+      for_ring(v0, [&](int w) { rings.push_back(input(w)); });
       ring_offsets.push_back(static_cast<int>(rings.size()));
       collapse(h);
       --live_;
@@ -243,7 +241,7 @@ class Decimator {
     for (std::size_t f = 0; f < face_halfedge_.size(); ++f) {
       const int h = face_halfedge_[f];
       if (h < 0) continue;  // deleted
-      out.push_back(Face{vin_[to_[h]], vin_[to_[next_[h]]], vin_[to_[next_[next_[h]]]]});
+      out.push_back(Face{input(to_[h]), input(to_[next_[h]]), input(to_[next_[next_[h]]])});
     }
     return out;
   }
@@ -253,7 +251,7 @@ class Decimator {
   std::vector<int> vertices() const {
     std::vector<int> out;
     for (int v = 0; v < inputs_; ++v)
-      if (!vertex_deleted_[v]) out.push_back(vin_[v]);
+      if (!vertex_deleted_[v]) out.push_back(input(v));
     return out;
   }
 
@@ -298,15 +296,15 @@ class Decimator {
     std::vector<int> face_halfedge(kf);
     for (int f = 0; f < nf; ++f)
       if (fnew[f] >= 0) face_halfedge[fnew[f]] = he(face_halfedge_[f]);
-    std::vector<int> out(kv), vin(kv), ident(kv);
+    std::vector<int> out(kv), vin(kv), copy_ident(kv - kin);
     std::vector<char> locked(kv);
     std::vector<Vec3> pos(kv);
     for (int v = 0; v < nv; ++v) {
       const int w = vnew[v];
       if (w < 0) continue;
       out[w] = out_[v] < 0 ? -1 : he(out_[v]);
-      vin[w] = vin_[v];
-      ident[w] = vnew[ident_[v]];  // a split vertex's first copy is never collapsed
+      vin[w] = input(v);
+      if (w >= kin) copy_ident[w - kin] = vnew[ident(v)];  // a split vertex's first copy is never collapsed
       locked[w] = locked_[v];
       pos[w] = pos_[v];
     }
@@ -317,7 +315,7 @@ class Decimator {
     to_ = std::move(to), next_ = std::move(next), prev_ = std::move(prev), face_ = std::move(face);
     queued_ = std::move(queued);
     face_halfedge_ = std::move(face_halfedge);
-    out_ = std::move(out), vin_ = std::move(vin), ident_ = std::move(ident);
+    out_ = std::move(out), vin_ = std::move(vin), ident_ = std::move(copy_ident);
     locked_ = std::move(locked), pos_ = std::move(pos);
     vertex_deleted_.assign(kv, 0);
     tag_.assign(kv, 0);
@@ -484,6 +482,11 @@ class Decimator {
 
   bool boundary_vertex(int v) const { return face_[out_[v]] < 0; }
 
+  // A vertex's input vertex: itself before compact(), or a fan's copy's original.
+  int input(int v) const { return !vin_.empty() ? vin_[v] : v < n_ ? v : copy_of_[v - n_]; }
+  // The vertex that stands for v's input vertex in the link condition: v, or a copy's original.
+  int ident(int v) const { return v < inputs_ ? v : ident_[v - inputs_]; }
+
   double length2(int h) const { return (pos_[to_[h ^ 1]] - pos_[to_[h]]).squaredNorm(); }
 
   // An edge is queued again unless its entry in the heap is still current (the same length):
@@ -505,21 +508,21 @@ class Decimator {
     // Neither side's triangle may have its other two edges on the boundary.
     if (face_[h] >= 0) {
       const int h1 = next_[h], h2 = next_[h1];
-      vl = ident_[to_[h1]];
+      vl = ident(to_[h1]);
       if (face_[h1 ^ 1] < 0 && face_[h2 ^ 1] < 0) return false;
     }
     if (face_[o] >= 0) {
       const int h1 = next_[o], h2 = next_[h1];
-      vr = ident_[to_[h1]];
+      vr = ident(to_[h1]);
       if (face_[h1 ^ 1] < 0 && face_[h2 ^ 1] < 0) return false;
     }
     if (vl == vr) return false;
     // The link condition: the rings of v0 and v1 share vl and vr only.
     ++stamp_;
-    for_ring(v1, [&](int w) { tag_[ident_[w]] = stamp_; });
+    for_ring(v1, [&](int w) { tag_[ident(w)] = stamp_; });
     bool shared = false;
     for_ring(v0, [&](int w) {
-      const int u = ident_[w];
+      const int u = ident(w);
       shared = shared || (tag_[u] == stamp_ && u != vl && u != vr);
     });
     if (shared) return false;
@@ -600,8 +603,8 @@ class Decimator {
   int n_ = 0;                 // input vertices
   int inputs_ = 0;            // vertices 0..inputs_ - 1 are input vertices, the others fans' copies
   std::vector<int> copy_of_;  // built: per copy (vertex n_ + k), the input vertex it was split from
-  std::vector<int> vin_;      // per vertex: its input vertex (a copy's: the one it was split from)
-  std::vector<int> ident_;    // per vertex: the vertex of its input vertex (itself unless a copy)
+  std::vector<int> vin_;      // once compacted, per vertex: its input vertex (a copy's: the one it was split from)
+  std::vector<int> ident_;    // per copy (vertex inputs_ + k): the vertex it was split from
   std::vector<Vec3> pos_;     // per vertex: its input vertex's position
   std::vector<char> locked_;  // per vertex: split (never collapsed)
   std::vector<char> vertex_deleted_;
