@@ -164,7 +164,8 @@ class EdgeQueue {
 // keeps the edges of the vertex it keeps: the numbering, the collapse rules and the order of every
 // circulation are OpenMesh's (TriConnectivity), which this replaced for speed (the 1M-prism setup
 // spent about 4 s in OpenMesh's handle checks and property arrays); the tests check that both give
-// the same hierarchy.
+// the same hierarchy. After each level, compact() renumbers what is left densely, in the same
+// order (ties in the queue still go by the input's edge ids), which changes no collapse.
 //
 // Input that a half-edge mesh cannot hold is handled here rather than rejected: a face with a
 // repeated corner, or one that uses a directed edge an earlier face uses (a non-manifold edge or
@@ -600,13 +601,13 @@ class Decimator {
   std::vector<int> to_, next_, prev_, face_;
   std::vector<int> face_halfedge_;  // per kept face: a half-edge (-1: deleted); its corners start at its end
   std::vector<int> out_;            // per vertex: an outgoing half-edge (-1: isolated or deleted)
-  int n_ = 0;                 // input vertices
-  int inputs_ = 0;            // vertices 0..inputs_ - 1 are input vertices, the others fans' copies
-  std::vector<int> copy_of_;  // built: per copy (vertex n_ + k), the input vertex it was split from
-  std::vector<int> vin_;      // once compacted, per vertex: its input vertex (a copy's: the one it was split from)
-  std::vector<int> ident_;    // per copy (vertex inputs_ + k): the vertex it was split from
-  std::vector<Vec3> pos_;     // per vertex: its input vertex's position
-  std::vector<char> locked_;  // per vertex: split (never collapsed)
+  int n_ = 0;                       // input vertices
+  int inputs_ = 0;                  // vertices 0..inputs_ - 1 are input vertices, the others fans' copies
+  std::vector<int> copy_of_;        // built: per copy (vertex n_ + k), the input vertex it was split from
+  std::vector<int> vin_;            // after compact(), per vertex: its input vertex (see input())
+  std::vector<int> ident_;          // per copy (vertex inputs_ + k): the vertex it was split from
+  std::vector<Vec3> pos_;           // per vertex: its input vertex's position
+  std::vector<char> locked_;        // per vertex: split (never collapsed)
   std::vector<char> vertex_deleted_;
   std::vector<int> tag_;  // per vertex: the link condition's stamp (on ident_ vertices)
   int stamp_ = 0;
