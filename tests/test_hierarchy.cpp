@@ -256,6 +256,31 @@ TEST(Hierarchy, ANonManifoldVertexIsKeptAndNoFaceIsLost) {
   EXPECT_LT(h.levels.front().vertices.size(), m.vertices.size() / 8) << "both tubes decimated";
 }
 
+// One vertex where two fans meet, made from two vertices a few edges apart on one ring of a
+// regular tube: the decimation brings the two fans' rings together, and the link condition must
+// take the vertex's two copies for one input vertex, or a coarse level gets an edge of three
+// faces. (When the decimation's compaction renumbered the copies, a copy standing for itself did
+// exactly that at the coarsest level, both apart 3 and 5; the other tests passed.)
+TEST(Hierarchy, TheFansOfASplitVertexStayApartOnEveryLevel) {
+  for (int apart : {3, 5}) {
+    SCOPED_TRACE("apart " + std::to_string(apart));
+    TriMesh m = tube(0.0, 5000);
+    int per_ring = 1;
+    while (m.vertices[per_ring].z() == m.vertices[0].z()) ++per_ring;
+    const int rings = static_cast<int>(m.vertices.size()) / per_ring;
+    const int v = rings / 2 * per_ring + 5, w = v + apart, last = static_cast<int>(m.vertices.size()) - 1;
+    ASSERT_LT(w, (rings / 2 + 1) * per_ring);
+    // w's faces go to v, and the last vertex takes w's place, so that every vertex is used.
+    for (Face& f : m.faces)
+      for (int& c : f) c = c == w ? v : c == last ? w : c;
+    m.vertices[w] = m.vertices[last];
+    m.vertices.pop_back();
+    internal::HierarchyOptions o;
+    o.coarsest_vertices = 50;
+    check_hierarchy(m, o);
+  }
+}
+
 // Faces a half-edge mesh cannot hold (a repeated corner; a directed edge used twice, as a third
 // face on an edge or a face turned over makes) are left out of the coarse levels, without a crash;
 // the rest decimates to manifold levels.
