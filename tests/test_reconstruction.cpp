@@ -502,6 +502,38 @@ TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
   EXPECT_EQ(f.solve(none).stats.new_intersecting_pairs, -1);
 }
 
+// A detail that crosses itself at rest (a small triangle of its own pierces one of its faces),
+// rebuilt over its unedited base (a bend moves that triangle's corners apart from the face): the
+// pairs it has at rest are not new in the result. The solver tests the result's
+// pairs at the rest positions one by one, not by a whole search of the rest detail; its count
+// must be count_new_intersections() against whole searches of both.
+TEST(Reconstruction, PairsThatCrossAtRestAreNotNew) {
+  cases::CylinderCase c = make_case(cases::DetailKind::Bumps, 3000);
+  std::vector<Vec3>& x = c.detail.vertices;
+  int j = 0;
+  auto centroid = [&](int k) {
+    const Face& f = c.detail.faces[k];
+    return Vec3((x[f[0]] + x[f[1]] + x[f[2]]) / 3.0);
+  };
+  for (int k = 0; k < static_cast<int>(c.detail.faces.size()); ++k)
+    if (std::abs(centroid(k).z() - 2.9) < std::abs(centroid(j).z() - 2.9)) j = k;
+  const Face f = c.detail.faces[j];
+  const Vec3 m = centroid(j), along = x[f[1]] - x[f[0]];
+  const Vec3 n = along.cross(x[f[2]] - x[f[0]]).normalized();
+  const double h = 0.6 * along.norm();
+  const int v = static_cast<int>(x.size());
+  x.insert(x.end(), {m + h * n, m - h * n, m + h * along.normalized()});
+  c.detail.faces.push_back(Face{v, v + 1, v + 2});
+  const IntersectionResult rest = find_self_intersections(x, c.detail.faces, collecting());
+  ASSERT_GT(rest.num_pairs, 0u);
+  const DetailEncoding e = encode_detail(c.detail, c.base);
+  const ReconstructResult r = VolumeReconstructor(e).reconstruct(c.base.vertices);
+  const IntersectionResult now = find_self_intersections(r.positions, c.detail.faces, collecting());
+  ASSERT_GT(now.num_pairs, 0u) << "the piercing triangle still crosses";
+  EXPECT_EQ(r.stats.new_intersecting_pairs, static_cast<long long>(count_new_intersections(rest, now)));
+  EXPECT_LT(r.stats.new_intersecting_pairs, static_cast<long long>(now.num_pairs));
+}
+
 // The solver's threads split independent per-prism and per-vertex work only (J^T x gathered per
 // vertex in face order, reductions serial): the result is bit for bit the same for any count.
 TEST(Reconstruction, ThreadCountDoesNotChangeTheResult) {
