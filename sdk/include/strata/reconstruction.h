@@ -153,11 +153,13 @@ struct ReconstructOptions {
   //! in a layered model (strata_bench_layers; max error 2.2), which 5 steps solve.
   int retry_volume_iterations = 5;
   //! Count the new intersecting pairs of a converged clean-start solve (exactly, on the solver's
-  //! `threads`; at 100k prisms 0.05 s per count on one, the rest detail counted once) and retry
-  //! if there are any. The searches stay within bounded_intersection_options(): a rest detail
+  //! `threads`; at 100k prisms 0.05 s per count on one; each pair of the result is tested at the
+  //! rest positions, with the same exact predicate, rather than the rest detail searched) and
+  //! retry if there are any. The searches stay within bounded_intersection_options(): a result
   //! whose search is cut short (its triangles mostly cross each other, or long thin triangles'
-  //! boxes mostly overlap) is not checked (ReconstructStats::new_intersecting_pairs -1), and a
-  //! result whose search is cut short counts as its max_pairs (10 million) new pairs.
+  //! boxes mostly overlap) counts as its max_pairs (10 million) new pairs, unless the rest
+  //! detail's search is cut short too, which leaves it and every later result of the solver
+  //! unchecked (ReconstructStats::new_intersecting_pairs -1).
   //! See retry_volume_iterations.
   bool retry_on_new_intersections = true;
   //! New intersecting pairs that the edited base explains are not the solver's folds: they
@@ -603,8 +605,9 @@ struct ReconstructStats {
   int fold_repair_polishes = 0;
   //! Intersecting pairs of the result's detail triangles that the rest detail does not have, as
   //! counted by the solver (retry_on_new_intersections: clean-start solves and exact solves from a
-  //! drag's state, converged or not); -1 if not counted (also when the rest detail's search was
-  //! cut short), 10 million if the result's search was (see retry_on_new_intersections).
+  //! drag's state, converged or not); -1 if not counted (also when the result's and the rest
+  //! detail's searches were cut short), 10 million if only the result's search was (see
+  //! retry_on_new_intersections).
   long long new_intersecting_pairs = -1;
   //! Of new_intersecting_pairs, those that are a contact made by the edit, and of the others those
   //! next to a crossing of the edited base itself (ReconstructOptions::contact_ratio,
