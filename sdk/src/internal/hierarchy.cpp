@@ -281,7 +281,7 @@ class Decimator {
     std::vector<int> to(2 * static_cast<std::size_t>(ke)), next(to.size()), prev(to.size()), face(to.size());
     std::vector<double> queued(ke);
     std::vector<int> input_id(ke);
-    const std::vector<int> old_input_id = queue_.input_ids();
+    const std::vector<int>& old_input_id = queue_.input_ids();  // replaced only after the loop
     for (int e = 0; e < ne; ++e) {
       if (enew[e] < 0) continue;
       for (int h = 2 * e; h <= 2 * e + 1; ++h) {
