@@ -365,7 +365,9 @@ json run_size(const Args& args, int size) {
                 {"rms_relative_error", m.rms_relative_error},
                 {"max_error_relative_to_own_target", mx},
                 {"rms_error_relative_to_own_target", counted ? std::sqrt(sq / counted) : 0.0},
-                {"total_volume_change", m.total_volume_change}};
+                {"total_volume_change", m.total_volume_change},
+                {"dihedral_change_degrees", strata::tools::dihedral_change_json(
+                                                dihedral_change(e.detail_faces, e.detail_rest, positions))}};
   };
   return json{{"size", size},
               {"repeat", args.repeat},

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common.h"
+#include "stats_json.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
 
@@ -154,6 +155,7 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
     methods[to_string(method)] = {
         {"output", path},
         {"volume_metrics", volume_metrics_json(outcome.volume)},
+        {"dihedral_change_degrees", tools::dihedral_change_json(outcome.shape)},
         {"intersections", intersections_json(input.result.num_pairs, outcome, input.seconds)},
         {"iterations", iterations_json(outcome.stats)},
         {"timing_seconds", timing_json(outcome.times)},

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common.h"
+#include "stats_json.h"
 #include "strata/exceptions.h"
 #include "strata/mesh_io.h"
 
@@ -27,6 +28,7 @@ void print_summary(std::ostream& os, const json& r) {
   const json& in = r["inputs"];
   const json& enc = r["encoding"];
   const json& vm = r["volume_metrics"];
+  const json& dc = r["dihedral_change_degrees"];
   const json& is = r["intersections"];
   const json& t = r["timing_seconds"];
   auto mesh_line = [](const json& m) {
@@ -42,6 +44,9 @@ void print_summary(std::ostream& os, const json& r) {
      << "prism volumes  max error " << sci(vm["max_relative_error"].get<double>()) << ", RMS "
      << sci(vm["rms_relative_error"].get<double>()) << " (relative to the mean prism volume)\n"
      << "total volume   change " << sci(vm["total_volume_change"].get<double>()) << " (relative)\n"
+     << "shape          dihedral angles changed by median " << fixed(dc["median"].get<double>()) << ", 90% "
+     << fixed(dc["p90"].get<double>()) << ", 99% " << fixed(dc["p99"].get<double>()) << ", max "
+     << fixed(dc["max"].get<double>()) << " degrees (against the input detail)\n"
      << "intersections  " << is["input_pairs"].get<std::size_t>() << " pairs in the input, "
      << is["output_pairs"].get<std::size_t>() << " in the output, " << is["new_pairs"].get<std::size_t>()
      << " new" << cut_short_note(is["cut_short"].get<bool>()) << "\n";
@@ -117,6 +122,7 @@ int run_reconstruct(const ReconstructCmdOptions& o) {
               {"output", mesh_json(result, o.output)},
               {"encoding", encoding_json(encoding.report)},
               {"volume_metrics", volume_metrics_json(outcome.volume)},
+              {"dihedral_change_degrees", tools::dihedral_change_json(outcome.shape)},
               {"intersections", intersections_json(input.result.num_pairs, outcome, input.seconds)},
               {"iterations", iterations_json(outcome.stats)},
               {"timing_seconds", timing_json(times)},

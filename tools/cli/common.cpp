@@ -594,6 +594,7 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
   log.phase(std::string(to_string(method)) + ": measuring prism volumes and self-intersections");
   Stopwatch mw;
   out.volume = volume_metrics(encoding, frames, out.positions);
+  out.shape = dihedral_change(encoding.detail_faces, encoding.detail_rest, out.positions);
   const TimedIntersections after = find_intersections(out.positions, encoding.detail_faces,
                                                       std::string("the ") + to_string(method) + " result");
   out.output_pairs = after.result.num_pairs;

@@ -295,6 +295,7 @@ struct MethodOutcome {
   Method method = Method::Volumes;
   std::vector<Vec3> positions;
   VolumeMetrics volume;
+  DihedralChange shape;  //!< the result's bends against the input detail's (dihedral_change())
   std::size_t output_pairs = 0;
   std::size_t new_pairs = 0;              //!< a lower bound if counts_cut_short
   bool counts_cut_short = false;          //!< the input's or the output's search hit its limits
@@ -322,6 +323,7 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
 json mesh_json(const TriMesh& mesh, const std::string& name);
 json encoding_json(const EncodeReport& report);
 json volume_metrics_json(const VolumeMetrics& metrics);
+
 //! {"input_pairs", "output_pairs", "new_pairs", "cut_short", "input_seconds", "output_seconds"};
 //! with "cut_short" true the counts are lower bounds.
 json intersections_json(std::size_t input_pairs, const MethodOutcome& outcome, double input_seconds);

@@ -39,4 +39,9 @@ nlohmann::json solve_phases_json(const ReconstructStats& s) {
       {"levels", s.seconds_levels}, {"polish", s.seconds_polish}, {"folds", s.seconds_folds}};
 }
 
+nlohmann::json dihedral_change_json(const DihedralChange& d) {
+  return nlohmann::json{{"edges", d.edges},     {"mean", d.mean_degrees}, {"median", d.median_degrees},
+                        {"p90", d.p90_degrees}, {"p99", d.p99_degrees},   {"max", d.max_degrees}};
+}
+
 }  // namespace strata::tools

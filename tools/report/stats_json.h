@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "strata/metrics.h"
 #include "strata/reconstruction.h"
 
 namespace strata::tools {
@@ -13,5 +14,8 @@ nlohmann::json stats_json(const ReconstructStats& stats);
 
 //! The solve's phases in seconds: `levels` (coarsest first), `polish`, `folds`.
 nlohmann::json solve_phases_json(const ReconstructStats& stats);
+
+//! A dihedral_change() result: `edges`, and `mean`, `median`, `p90`, `p99`, `max` in degrees.
+nlohmann::json dihedral_change_json(const DihedralChange& d);
 
 }  // namespace strata::tools
