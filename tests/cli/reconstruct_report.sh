@@ -135,6 +135,13 @@ for method in ("volumes", "vectors"):
     for key in ("max_relative_error", "rms_relative_error", "total_volume_change"):
         v = need(r, "volume_metrics." + key)
         check(isinstance(v, (int, float)) and math.isfinite(v), f"{method}: volume_metrics.{key} = {v!r}")
+    # The result's smoothness against the detail: percentiles in order, every interior edge measured.
+    dc = [need(r, "dihedral_change_degrees." + k) for k in ("median", "p90", "p99", "max")]
+    check(all(isinstance(v, (int, float)) and 0 <= v <= 180 for v in dc) and dc == sorted(dc),
+          f"{method}: dihedral_change_degrees {dc!r}")
+    edges = need(r, "dihedral_change_degrees.edges")
+    check(isinstance(edges, int) and 0 < edges <= 3 * need(r, "output.faces") // 2,
+          f"{method}: dihedral_change_degrees.edges = {edges!r}")
     for key in ("input_pairs", "output_pairs", "new_pairs"):
         v = need(r, "intersections." + key)
         check(isinstance(v, int) and v >= 0, f"{method}: intersections.{key} = {v!r}")
