@@ -19,6 +19,7 @@ namespace {
 
 struct Outcome {
   VolumeMetrics volumes, vectors;
+  DihedralChange volumes_shape;  // the result's bends against the rest detail's
   std::size_t volumes_pairs = 0, vectors_pairs = 0, input_pairs = 0;
   ReconstructStats stats;
 };
@@ -35,6 +36,7 @@ Outcome run_bend(const cases::CylinderCase& c) {
   o.stats = r.stats;
   o.volumes = volume_metrics(e, fr, r.positions);
   o.vectors = volume_metrics(e, fr, vec);
+  o.volumes_shape = dihedral_change(c.detail.faces, c.detail.vertices, r.positions);
   o.input_pairs = find_self_intersections(c.detail.vertices, c.detail.faces).num_pairs;
   o.volumes_pairs = find_self_intersections(r.positions, c.detail.faces).num_pairs;
   o.vectors_pairs = find_self_intersections(vec, c.detail.faces).num_pairs;
@@ -110,6 +112,10 @@ TEST_P(PaperBend, VolumesAvoidTheFoldsThatVectorsMake) {
   EXPECT_LE(std::abs(o.volumes.total_volume_change), 1e-3);
   // Vectors do not keep the volumes: the bend changes them by far more than the tolerance.
   EXPECT_GT(o.vectors.max_relative_error, 0.1);
+  // The default options keep the detail smooth: measured (2026-12-03) 99th percentiles of the
+  // dihedral angles' change of 46 (bumps) and 82 degrees (cuboid, whose sharp corners bend); the
+  // multigrid preset's polish leaves 102 and 155 (README, Known limits of the engine).
+  EXPECT_LE(o.volumes_shape.p99_degrees, GetParam() == cases::DetailKind::Cuboid ? 110.0 : 65.0) << c.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Fig6, PaperBend,
