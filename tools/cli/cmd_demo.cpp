@@ -80,6 +80,7 @@ struct Row {
   std::string method;
   double max_error = 0, rms_error = 0, volume_change = 0;
   std::size_t new_pairs = 0;
+  double p99_bend_change = 0;  //!< dihedral_change()'s 99th percentile, degrees
   double seconds = 0;
   std::string error;  //!< non-empty: the case failed
 };
@@ -166,6 +167,7 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
                     outcome.volume.rms_relative_error,
                     outcome.volume.total_volume_change,
                     outcome.new_pairs,
+                    outcome.shape.p99_degrees,
                     outcome.times.reconstruction(),
                     {}});
   }
@@ -188,8 +190,8 @@ json run_case(const CaseSource& src, const DemoCmdOptions& o, const Log& log, st
 
 void print_table(std::ostream& os, const std::vector<Row>& rows) {
   char line[256];
-  std::snprintf(line, sizeof line, "%-14s %-8s %13s %13s %13s %10s %9s", "case", "method", "max rel err",
-                "RMS rel err", "volume change", "new pairs", "time [s]");
+  std::snprintf(line, sizeof line, "%-14s %-8s %13s %13s %13s %10s %11s %9s", "case", "method", "max rel err",
+                "RMS rel err", "volume change", "new pairs", "p99 bend", "time [s]");
   os << line << "\n" << std::string(std::string(line).size(), '-') << "\n";
   for (const Row& r : rows) {
     if (!r.error.empty()) {
@@ -197,8 +199,9 @@ void print_table(std::ostream& os, const std::vector<Row>& rows) {
       os << line << "FAILED: " << r.error << "\n";
       continue;
     }
-    std::snprintf(line, sizeof line, "%-14s %-8s %13.3e %13.3e %+13.3e %10zu %9.3f", r.case_name.c_str(),
-                  r.method.c_str(), r.max_error, r.rms_error, r.volume_change, r.new_pairs, r.seconds);
+    std::snprintf(line, sizeof line, "%-14s %-8s %13.3e %13.3e %+13.3e %10zu %11.1f %9.3f",
+                  r.case_name.c_str(), r.method.c_str(), r.max_error, r.rms_error, r.volume_change,
+                  r.new_pairs, r.p99_bend_change, r.seconds);
     os << line << "\n";
   }
 }
@@ -252,7 +255,7 @@ int run_demo(const DemoCmdOptions& o) {
     } catch (const std::exception& e) {
       ++failures;
       std::cerr << "strata: error: case " << src.name << ": " << e.what() << std::endl;
-      rows.push_back({src.name, "", 0, 0, 0, 0, 0, e.what()});
+      rows.push_back({src.name, "", 0, 0, 0, 0, 0, 0, e.what()});
       cases_json.push_back({{"name", src.name}, {"source", src.origin()}, {"error", e.what()}});
     }
   }
@@ -266,6 +269,7 @@ int run_demo(const DemoCmdOptions& o) {
                          {"rms_relative_error", r.rms_error},
                          {"total_volume_change", r.volume_change},
                          {"new_intersecting_pairs", r.new_pairs},
+                         {"p99_dihedral_change_degrees", r.p99_bend_change},
                          {"reconstruction_seconds", r.seconds}});
   const json report{{"command", "demo"},        {"out_dir", o.out_dir},
                     {"triangles", o.triangles}, {"bend_degrees", 90.0},
@@ -275,13 +279,16 @@ int run_demo(const DemoCmdOptions& o) {
 
   std::cout << "\n";
   print_table(std::cout, rows);
-  std::cout << "\nmax/RMS rel err: |V - V*| of the prisms relative to the mean |V*|; volume change: relative "
-               "change "
-               "of the total\nvolume between base and detail; new pairs: intersecting non-adjacent triangles "
-               "absent "
-               "from the input\ndetail; time: reconstruction only (setup + frames + solve).\n"
-            << "meshes: " << o.out_dir << "/<case>_{volumes,vectors,edited_base,detail,base}.obj\n"
-            << "report: " << report_path << std::endl;
+  std::cout
+      << "\nmax/RMS rel err: |V - V*| of the prisms relative to the mean |V*|; volume change: relative "
+         "change "
+         "of the total\nvolume between base and detail; new pairs: intersecting non-adjacent triangles "
+         "absent "
+         "from the input\ndetail; p99 bend: 99th percentile of the change of the angles between "
+         "neighbouring triangles\n(degrees, dihedral_change()); time: reconstruction only (setup + frames + "
+         "solve).\n"
+      << "meshes: " << o.out_dir << "/<case>_{volumes,vectors,edited_base,detail,base}.obj\n"
+      << "report: " << report_path << std::endl;
   if (failures > 0) {
     std::cerr << "strata: error: " << failures << " of " << sources.size() << " demo cases failed"
               << std::endl;
