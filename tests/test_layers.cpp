@@ -1357,6 +1357,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   o.reconstruct.multigrid.tangential_damping = 0.5;
   o.reconstruct.multigrid.tangential_damping_bend = 0.25;
   o.reconstruct.multigrid.tangential_damping_margin = 7.0;
+  o.reconstruct.multigrid.polish_smoothness = 1e-3;
+  o.reconstruct.multigrid.polish_smoothness_decay = 0.25;
   o.reconstruct.local_polish_rings = 3;
   o.reconstruct.local_polish_max_motion = 6e-3;
   o.reconstruct.max_factorized_steps = 17;
@@ -1394,6 +1396,8 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
   EXPECT_EQ(back.multigrid.tangential_damping, 0.5);  // written since the forty-fifth session
   EXPECT_EQ(back.multigrid.tangential_damping_bend, 0.25);
   EXPECT_EQ(back.multigrid.tangential_damping_margin, 7.0);
+  EXPECT_EQ(back.multigrid.polish_smoothness, 1e-3);
+  EXPECT_EQ(back.multigrid.polish_smoothness_decay, 0.25);  // written since the fiftieth session
 
   EXPECT_TRUE(back.fold_repair_local_first);  // the default, written since 2026-11-27
   EXPECT_EQ(back.fold_repair_local_rings, ReconstructOptions{}.fold_repair_local_rings);
@@ -1454,8 +1458,9 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
       ASSERT_TRUE(j["options"]["reconstruct"].contains(key)) << key;
       j["options"]["reconstruct"].erase(key);
     }
-    for (const char* key : {"retry_iterations", "single_precision_cycles", "smoothing_degree",
-                            "tangential_damping", "tangential_damping_bend", "tangential_damping_margin"}) {
+    for (const char* key :
+         {"retry_iterations", "single_precision_cycles", "smoothing_degree", "tangential_damping",
+          "tangential_damping_bend", "tangential_damping_margin", "polish_smoothness_decay"}) {
       ASSERT_TRUE(j["options"]["reconstruct"]["multigrid"].contains(key)) << key;
       j["options"]["reconstruct"]["multigrid"].erase(key);
     }
@@ -1475,6 +1480,7 @@ TEST(LayersFile, SolverOptionsRoundTrip) {
     EXPECT_EQ(read.multigrid.tangential_damping, 0.0);  // none, as such files were solved
     EXPECT_EQ(read.multigrid.tangential_damping_bend, defaults.multigrid.tangential_damping_bend);
     EXPECT_EQ(read.multigrid.tangential_damping_margin, defaults.multigrid.tangential_damping_margin);
+    EXPECT_EQ(read.multigrid.polish_smoothness_decay, 1.0);  // the same smoothness every step, as then
   }
   layers::StrataContainer bad = c;
   nlohmann::json m = nlohmann::json::parse(bad.model_json);

@@ -181,6 +181,12 @@ TEST(ReconstructOptionNames, TheSolverNamesAnOptionOutOfRange) {
             "reconstruction option local_polish_max_fraction = 1.5 is out of range (0 to 1)");
   EXPECT_EQ(refusal("multigrid.retry_iterations", "-1"),
             "reconstruction option multigrid.retry_iterations = -1 is out of range (0-100000)");
+  EXPECT_EQ(
+      refusal("multigrid.polish_smoothness_decay", "0"),
+      "reconstruction option multigrid.polish_smoothness_decay = 0 is out of range (above 0, at most 1)");
+  EXPECT_EQ(
+      refusal("multigrid.polish_smoothness_decay", "1.5"),
+      "reconstruction option multigrid.polish_smoothness_decay = 1.5 is out of range (above 0, at most 1)");
   EXPECT_EQ(refusal("multigrid.smoothing_degree", "9"),
             "reconstruction option multigrid.smoothing_degree = 9 is out of range (1-8)");
   EXPECT_EQ(refusal("coarsest_max_cycles", "-1"),

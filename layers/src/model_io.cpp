@@ -152,6 +152,7 @@ json options_json(const ModelOptions& o) {
               {"polish_tolerance", r.multigrid.polish_tolerance},
               {"polish_damping", r.multigrid.polish_damping},
               {"polish_smoothness", r.multigrid.polish_smoothness},
+              {"polish_smoothness_decay", r.multigrid.polish_smoothness_decay},
               {"retry_iterations", r.multigrid.retry_iterations},
               {"single_precision_cycles", r.multigrid.single_precision_cycles},
               {"smoothing_degree", r.multigrid.smoothing_degree},
@@ -363,6 +364,9 @@ ModelOptions read_options(const HeaderReader& h, const json& j) {
     mo.polish_tolerance = h.number(mg, "polish_tolerance", wm);
     mo.polish_damping = h.number(mg, "polish_damping", wm);
     mo.polish_smoothness = h.number(mg, "polish_smoothness", wm);
+    // Not written before 2026-12-03 (fiftieth session): the same smoothness at every step, as then.
+    if (mg.contains("polish_smoothness_decay"))
+      mo.polish_smoothness_decay = h.number(mg, "polish_smoothness_decay", wm);
     // Not written before 2026-11-27 (ninth session): such files read the defaults, as they did.
     if (mg.contains("retry_iterations"))
       mo.retry_iterations = static_cast<int>(h.integer(mg, "retry_iterations", wm, 0, 1000000));

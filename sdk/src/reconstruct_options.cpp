@@ -79,6 +79,7 @@ std::vector<Named> fields(ReconstructOptions& o) {
           {"multigrid.polish_tolerance", &m.polish_tolerance},
           {"multigrid.polish_damping", &m.polish_damping},
           {"multigrid.polish_smoothness", &m.polish_smoothness},
+          {"multigrid.polish_smoothness_decay", &m.polish_smoothness_decay},
           {"multigrid.single_precision_cycles", &m.single_precision_cycles},
           {"multigrid.smoothing_degree", &m.smoothing_degree},
           {"multigrid.tangential_damping", &m.tangential_damping},

@@ -160,6 +160,7 @@ struct GnScratch {
   int cg_max_iterations = 0;     // 0: the options'; a drag step's own budget otherwise
   int mg_iterations = 0;         // multigrid cycle steps' iterations; 0: MultigridStepOptions::iterations
   double motion = 0.0;           // the last exact step's largest vertex move (0: undone, or inexact)
+  int polish_steps = 0;          // the polish's multigrid steps so far (polish_smoothness_decay)
   std::vector<std::array<Vec3, 3>> grad;  // the steps solved without the multigrid
   std::vector<float> gf;                  // the multigrid's: J in single precision, 9 per face
   std::vector<Vec3> gv;                   // grad in the level's vertex order (Level::vf), for J^T x
@@ -2144,6 +2145,7 @@ class VolumeReconstructor::Impl {
   // repair's whole-level polish may not, since its wide correction is what unfolds.
   void polish(const Level& L, State& s, double tol, ReconstructStats& st, std::vector<double>& V,
               bool local_end = true) const {
+    s.gn.polish_steps = 0;  // MultigridStepOptions::polish_smoothness_decay counts from here
     if (local_end && opt_.local_polish_max_fraction > 0 && &L == &levels_.back()) {
       // Whole-level steps until few prisms are off, then only their neighbourhoods move. A local
       // system has at least the off prisms, so more of them than the limit go on whole-level.
@@ -2572,7 +2574,9 @@ class VolumeReconstructor::Impl {
     sys.r = &w.r;
     sys.fixed = L.fixed.empty() ? nullptr : &L.fixed;
     sys.eps = (exact ? std::max(mo.polish_damping, w.damping) : mo.damping) * diag;
-    sys.eps_lap = (exact ? mo.polish_smoothness : mo.smoothness) * diag;
+    sys.eps_lap = (exact ? mo.polish_smoothness * std::pow(mo.polish_smoothness_decay, w.polish_steps++)
+                         : mo.smoothness) *
+                  diag;
     sys.smoothing_degree = exact ? 0 : mo.smoothing_degree;  // 0: the hierarchy's (2)
     if (!exact && w.tangential_damping > 0) {
       sys.normals = &w.damped_normals;
@@ -2964,6 +2968,8 @@ void check_reconstruct_options(const ReconstructOptions& o) {
   check(mo.polish_damping > 0, "multigrid.polish_damping", mo.polish_damping, "above 0");
   check(mo.smoothness >= 0, "multigrid.smoothness", mo.smoothness, "at least 0");
   check(mo.polish_smoothness >= 0, "multigrid.polish_smoothness", mo.polish_smoothness, "at least 0");
+  check(mo.polish_smoothness_decay > 0 && mo.polish_smoothness_decay <= 1,
+        "multigrid.polish_smoothness_decay", mo.polish_smoothness_decay, "above 0, at most 1");
   count(mo.smoothing_degree, "multigrid.smoothing_degree", 1, 8);
   check(mo.tangential_damping >= 0 && mo.tangential_damping <= 1e6, "multigrid.tangential_damping",
         mo.tangential_damping, "0-1e6");

@@ -771,6 +771,7 @@ int main(int argc, char** argv) {
               {"polish_tolerance", ro.multigrid.polish_tolerance},
               {"polish_damping", ro.multigrid.polish_damping},
               {"polish_smoothness", ro.multigrid.polish_smoothness},
+              {"polish_smoothness_decay", ro.multigrid.polish_smoothness_decay},
               {"single_precision_cycles", ro.multigrid.single_precision_cycles},
               {"smoothing_degree", ro.multigrid.smoothing_degree},
               {"tangential_damping", ro.multigrid.tangential_damping},
