@@ -1,7 +1,6 @@
 #include "strata/metrics.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -75,7 +74,7 @@ std::vector<Vec3> unit_normals(const std::vector<Face>& faces, const std::vector
   std::vector<Vec3> n(faces.size());
   for (std::size_t j = 0; j < faces.size(); ++j) {
     const Face& f = faces[j];
-    const Vec3 c = (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]);
+    const Vec3 c = triangle_area_normal(p[f[0]], p[f[1]], p[f[2]]);
     const double len = c.norm();
     n[j] = len > 0 && std::isfinite(len) ? Vec3(c / len) : Vec3(Vec3::Zero());
   }
@@ -101,7 +100,8 @@ DihedralChange dihedral_change(const std::vector<Face>& faces, const std::vector
       if (!reference[v].allFinite() || !positions[v].allFinite())
         throw InvalidInput("dihedral_change: point " + std::to_string(v) + " is not finite");
   const std::vector<Vec3> n0 = unit_normals(faces, reference), n1 = unit_normals(faces, positions);
-  // Each face's edges keyed by their two vertices, sorted, so that an edge's faces are adjacent.
+  // Each face's edges keyed by their two vertices, sorted, so that an edge's faces are adjacent
+  // (internal::face_neighbors() would not tell an edge of three faces from one of two).
   struct Side {
     std::uint64_t key;
     int face;

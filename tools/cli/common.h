@@ -323,7 +323,6 @@ MethodOutcome run_method(Method method, const ReconstructionInputs& in, const Re
 json mesh_json(const TriMesh& mesh, const std::string& name);
 json encoding_json(const EncodeReport& report);
 json volume_metrics_json(const VolumeMetrics& metrics);
-
 //! {"input_pairs", "output_pairs", "new_pairs", "cut_short", "input_seconds", "output_seconds"};
 //! with "cut_short" true the counts are lower bounds.
 json intersections_json(std::size_t input_pairs, const MethodOutcome& outcome, double input_seconds);

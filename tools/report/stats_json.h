@@ -1,5 +1,6 @@
-// The solver's statistics as JSON, one mapping for the tools' reports (the CLI's `iterations`
-// and `solve_phases_seconds`, and the benchmark programs' per-run and per-band stats).
+// The solver's statistics and the result's smoothness as JSON, one mapping for the tools' reports
+// (the CLI's `iterations`, `solve_phases_seconds` and `dihedral_change_degrees`, and the benchmark
+// programs' per-run and per-band stats).
 #pragma once
 
 #include <nlohmann/json.hpp>
