@@ -85,11 +85,12 @@ struct Level {
   // at the vertex (first tangent, normal x tangent); zero on boundary vertices.
   std::vector<Eigen::Vector2d> rest_lap_detail, rest_lap_base;
   std::vector<char> boundary;  // level-local: the vertex lies on a boundary edge
+  // The vertices this level adds to the coarser one, each with its removal ring (ring_vertices
+  // from ring_offsets[k] to ring_offsets[k + 1]), in the order prolongate() visits them: by id,
+  // each vertex after the inserted vertices of its ring (prolongation_orders()), so that its reads
+  // and writes go through the arrays nearly in order rather than in the decimation's order, which
+  // is by edge length.
   std::vector<int> inserted, ring_offsets, ring_vertices;
-  // The order prolongate() visits `inserted` in (indices into it): by id, each vertex after the
-  // inserted vertices of its ring (prolongation_orders()), so that its reads and writes go through
-  // the arrays nearly in order rather than in the decimation's order, which is by edge length.
-  std::vector<int> prolong_order;
   // The direct solver of J J^T (prisms sharing a vertex): its lower triangle with the pattern
   // fixed, the diagonal's slots in its value array, and the Cholesky factorization whose symbolic
   // analysis is done once per level. The values are written straight into the matrix from the
@@ -825,12 +826,12 @@ class VolumeReconstructor::Impl {
     }
   }
 
-  // Level::prolong_order for every level. Each inserted vertex takes the mean of its ring, whose
-  // inserted vertices come earlier in the removal order: any order that keeps those before it
-  // computes the same numbers. This one goes up the vertex ids, each vertex after its ring's
-  // inserted ones (depth first), so that the pass reads the arrays nearly in order: at 1M prisms
-  // the finest level's pass took 45 ms in waves of ascending ids (28 of them), 25 ms in this order.
-  // A ring that reads a vertex inserted later (none in the hierarchies build_hierarchy() makes)
+  // Every level's inserted vertices and rings put in prolongate()'s order (Level::inserted). Each
+  // inserted vertex takes the mean of its ring, whose inserted vertices come earlier in the removal
+  // order: any order that keeps those before it computes the same numbers. This one goes up the vertex ids,
+  // each vertex after its ring's inserted ones (depth first), so that the pass reads the arrays nearly in
+  // order: at 1M prisms the finest level's pass took 45 ms in waves of ascending ids (28 of them), 25 ms in
+  // this order. A ring that reads a vertex inserted later (none in the hierarchies build_hierarchy() makes)
   // keeps the removal order, so that nothing changes there either.
   void prolongation_orders() {
     std::vector<int> pos(enc_.num_detail_vertices(), -1);
@@ -841,16 +842,16 @@ class VolumeReconstructor::Impl {
       for (int k = 0; k < k_count && in_order; ++k)
         for (int r = L.ring_offsets[k]; r < L.ring_offsets[k + 1]; ++r)
           if (pos[L.ring_vertices[r]] >= k) in_order = false;  // itself, or not yet inserted: a stale read
-      L.prolong_order.resize(k_count);
-      std::iota(L.prolong_order.begin(), L.prolong_order.end(), 0);
+      std::vector<int> order(k_count);
+      std::iota(order.begin(), order.end(), 0);
       if (in_order) {
-        std::vector<int> by_id = L.prolong_order;
+        std::vector<int> by_id = order;
         std::sort(by_id.begin(), by_id.end(), [&](int a, int b) { return L.inserted[a] < L.inserted[b]; });
         // Depth first over "reads": a ring's inserted vertices come earlier in the removal order,
         // so the graph has no cycle and the stack is one path of it.
         std::vector<char> done(k_count, 0);
         std::vector<std::pair<int, int>> stack;  // (vertex, its next ring entry)
-        L.prolong_order.clear();
+        order.clear();
         for (int k0 : by_id) {
           if (done[k0]) continue;
           stack.emplace_back(k0, L.ring_offsets[k0]);
@@ -861,14 +862,29 @@ class VolumeReconstructor::Impl {
               if (q >= 0 && !done[q]) stack.emplace_back(q, L.ring_offsets[q]);
             } else {
               done[k] = 1;
-              L.prolong_order.push_back(k);
+              order.push_back(k);
               stack.pop_back();
             }
           }
         }
-        assert(static_cast<int>(L.prolong_order.size()) == k_count);
+        assert(static_cast<int>(order.size()) == k_count);
       }
       for (int i : L.inserted) pos[i] = -1;
+      // The inserted vertices and their rings stored in that order: the pass then reads them
+      // sequentially, where through an index array it read each ring at its place in the removal
+      // order (a cache miss per vertex at 1M prisms).
+      std::vector<int> inserted(k_count), offsets(k_count + 1, 0), ring;
+      ring.reserve(L.ring_vertices.size());
+      for (int n = 0; n < k_count; ++n) {
+        const int k = order[n];
+        inserted[n] = L.inserted[k];
+        ring.insert(ring.end(), L.ring_vertices.begin() + L.ring_offsets[k],
+                    L.ring_vertices.begin() + L.ring_offsets[k + 1]);
+        offsets[n + 1] = static_cast<int>(ring.size());
+      }
+      L.inserted = std::move(inserted);
+      L.ring_offsets = std::move(offsets);
+      L.ring_vertices = std::move(ring);
     }
   }
 
@@ -2696,7 +2712,7 @@ class VolumeReconstructor::Impl {
   }
 
   // Carries the coarse level's change since the pass started to the vertices the finer level
-  // adds, each after the inserted vertices of its removal ring (Level::prolong_order): each takes
+  // adds, each after the inserted vertices of its removal ring (Level::inserted's order): each takes
   // the mean change of that ring, as a change of d/f along its own normal and of the tangential
   // displacement in its own tangent plane.
   // \p coarse_verts: the coarse level's vertices, in \p s's ids (as \p fine's).
@@ -2708,7 +2724,7 @@ class VolumeReconstructor::Impl {
       s.dRho[i] = dn / guarded_f[i];
       s.dT[i] = d - dn * s.N[i];
     }
-    for (const int k : fine.prolong_order) {
+    for (std::size_t k = 0; k < fine.inserted.size(); ++k) {
       const int i = fine.inserted[k];
       if (s.pinned(i)) {
         // Placed, not solved: unchanged since the pass started (the rings of later inserted
