@@ -2860,6 +2860,8 @@ ReconstructOptions multigrid_reconstruct_options() {
   o.tolerance = 5e-4;
   o.local_polish_max_fraction = 0.25;
   o.multigrid.retry_iterations = 20;
+  o.multigrid.polish_smoothness = 1e-3;
+  o.multigrid.polish_smoothness_decay = 1e-2;
   return o;
 }
 
@@ -2870,6 +2872,8 @@ ReconstructOptions cycle_schedule_reconstruct_options() {
   o.finest_intermediate_solves = true;
   o.intermediate_regularized_levels = 0;
   o.multigrid.smoothing_degree = 1;
+  o.multigrid.polish_smoothness = 0.0;
+  o.multigrid.polish_smoothness_decay = 1.0;
   o.multigrid.polish_damping = 1e-7;     // its polish's solves stalled on the cuboid (see the header)
   o.multigrid.tangential_damping = 1.0;  // its round trip (see the header)
   return o;

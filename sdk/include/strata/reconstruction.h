@@ -93,7 +93,8 @@ struct MultigridStepOptions {
   //! 100k scan-like bumps bend with the cycles preset (90th / 99th percentile of
   //! dihedral_change(), solve time; single runs, 0 new pairs): without 51.9 / 140.3 degrees, 1.3
   //! s; polish_smoothness 1e-3 with decay 0.1: 14.9 / 67.5, 1.7 s; 1e-2 with 0.3: 12.2 / 52.3,
-  //! 2.5 s. Not in the presets.
+  //! 2.5 s. The multigrid preset takes 1e-3 with 1e-2 (see multigrid_reconstruct_options()); the
+  //! cycles preset none (its 1M polish took 7.0 s against 2.0 s with them, 2026-12-03).
   double polish_smoothness_decay = 1.0;
   //! The V-cycle's vectors in single precision during the cycles (its operators always are; the
   //! conjugate gradients around it run in double). The polish's V-cycle stays in double: its
@@ -483,6 +484,15 @@ struct ReconstructOptions {
 //! hierarchy of 2026-11-27, tenth session, the cuboid's within 0.10-0.48% at 20k-200k. On regular
 //! triangulations its polish stalls and factorized steps finish it (see Multigrid). Its fold
 //! outcomes are erratic from mesh to mesh (sdk/docs/engine-log.md).
+//! Since 2026-12-03 its polish has a smoothness term that fades step by step
+//! (MultigridStepOptions::polish_smoothness 1e-3, polish_smoothness_decay 1e-2): without it the
+//! polish's steps crumpled a bent detail at the scale of its triangles. Measured on the 100k bends
+//! at jitter 0.4 (`strata reconstruct --solver multigrid --set threads=1`, single runs, 0 new
+//! pairs each; 90th / 99th percentile of dihedral_change() in degrees, solve seconds), before ->
+//! after: bumps 41.1 / 136.0, 0.51 s -> 15.1 / 79.8, 0.84 s; rings 23.6 / 115.7, 0.64 s -> 9.9 /
+//! 44.9, 0.83 s; cuboid 51.0 / 140.7, 0.67 s -> 20.0 / 87.0, 0.83 s (`legacy`'s bumps 8.2 / 38.5 in
+//! 4.6-6.7 s); the 1M bumps 54.7 / 148.8, 5.4-7.3 s -> 17.2 / 91.0, 11.1 s. On the regular grids
+//! (jitter 0) little changes: rings 58.1 -> 41.9, 3.8 -> 4.1 s; cuboid 124.3 -> 119.5, 5.3 -> 7.7 s.
 ReconstructOptions multigrid_reconstruct_options();
 
 //! The multigrid preset in the schedule of the paper's Listing 1 (section 4.3): many volume
@@ -494,7 +504,12 @@ ReconstructOptions multigrid_reconstruct_options();
 //! paper measured), the multigrid preset where the time to the answer does. Changed from
 //! multigrid_reconstruct_options(): volume_scales 20, max_cycles 1, finest_intermediate_solves
 //! true, intermediate_regularized_levels 0, multigrid.smoothing_degree 1, multigrid.polish_damping
-//! 1e-7, multigrid.tangential_damping 1. The polish damping: with the multigrid preset's 1e-8 every
+//! 1e-7, multigrid.tangential_damping 1, and no polish smoothness (multigrid.polish_smoothness 0,
+//! its decay 1): with the multigrid preset's, its 100k bumps bend came out smoother (90th
+//! percentile of dihedral_change() 18.4 against 51.9 degrees) but its 1M polish took 7.0 s
+//! against 2.0 s, its reconstructions 19.7-20.3 s against 1.56-1.60 s at 100k (12.7 times;
+//! strata_bench, 2026-12-03). Its result over a bend is crumpled
+//! (README, Known limits of the engine). The polish damping: with the multigrid preset's 1e-8 every
 //! whole-level polish step's solve on the scan-like 100k cuboid bend ran its 25 iterations and stalled at
 //! 0.04-0.14 of its residual, and the polish took five such steps (0.67-0.81 s); with 1e-7 they stop at 8
 //! iterations, two steps and the local end (0.16-0.21 s), and the 1M bumps bend took 22.9 s against 29.4 s
