@@ -547,6 +547,42 @@ TEST(Reconstruction, AFadingPolishSmoothnessLeavesTheBendSmoother) {
   EXPECT_GT(constant.factorizations, constant.local_factorizations);
 }
 
+// The multigrid preset's polish smoothness (MultigridStepOptions::polish_smoothness, fading by
+// polish_smoothness_decay): on the three scan-like 20k bends its result is far less crumpled
+// than with the polish before it, still converged and without new pairs (measured, 90th / 99th
+// percentile of the dihedral angles' change in degrees, without -> with: bumps 30.0 / 114.0 ->
+// 18.3 / 69.3, rings 19.3 / 96.9 -> 12.5 / 48.2, cuboid 42.2 / 126.7 -> 20.5 / 75.8; at 8k the
+// bumps and rings gain less, 25.5 -> 20.7 and 20.9 -> 16.7 at the 90th).
+TEST(MultigridPreset, ItsPolishSmoothnessLeavesTheBendsSmoother) {
+  for (const cases::DetailKind kind :
+       {cases::DetailKind::Bumps, cases::DetailKind::Rings, cases::DetailKind::Cuboid}) {
+    SCOPED_TRACE(static_cast<int>(kind));
+    cases::CylinderCaseOptions co;
+    co.detail = kind;
+    co.target_detail_triangles = 20000;
+    co.jitter = 0.4;
+    const cases::CylinderCase c = cases::make_cylinder_case(co);
+    const DetailEncoding e = encode_detail(c.detail, c.base);
+    const IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, collecting());
+    auto solve = [&](const ReconstructOptions& o) {
+      const ReconstructResult r = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+      EXPECT_TRUE(r.stats.converged);
+      EXPECT_EQ(
+          count_new_intersections(rest, find_self_intersections(r.positions, c.detail.faces, collecting())),
+          0u);
+      return dihedral_change(c.detail.faces, c.detail.vertices, r.positions);
+    };
+    ReconstructOptions o = multigrid_reconstruct_options();
+    o.threads = 1;
+    ASSERT_GT(o.multigrid.polish_smoothness, 0.0);
+    ASSERT_LT(o.multigrid.polish_smoothness_decay, 1.0);
+    const DihedralChange smooth = solve(o);
+    const DihedralChange before = solve(test::without_polish_smoothness(o));
+    EXPECT_LT(smooth.p90_degrees, 0.7 * before.p90_degrees);
+    EXPECT_LT(smooth.p99_degrees, 0.8 * before.p99_degrees);
+  }
+}
+
 // A detail that crosses itself at rest (a small triangle of its own pierces one of its faces),
 // rebuilt over its unedited base (a bend moves that triangle's corners apart from the face): the
 // pairs it has at rest are not new in the result. The solver tests the result's
