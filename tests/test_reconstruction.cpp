@@ -509,6 +509,36 @@ TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
   EXPECT_EQ(f.solve(none).stats.new_intersecting_pairs, -1);
 }
 
+// A scan-like 90-degree bend (jitter 0.4) of \p kind at about \p triangles prisms, solved with
+// given options: each solve must converge without new pairs; it returns the bends' change against
+// the rest detail (dihedral_change()) and keeps the solve's statistics in `stats`.
+struct SmoothnessBend {
+  SmoothnessBend(cases::DetailKind kind, int triangles)
+      : c(make(kind, triangles)), e(encode_detail(c.detail, c.base)) {
+    rest = find_self_intersections(c.detail.vertices, c.detail.faces, collecting());
+  }
+  static cases::CylinderCase make(cases::DetailKind kind, int triangles) {
+    cases::CylinderCaseOptions co;
+    co.detail = kind;
+    co.target_detail_triangles = triangles;
+    co.jitter = 0.4;
+    return cases::make_cylinder_case(co);
+  }
+  DihedralChange solve(const ReconstructOptions& o) {
+    const ReconstructResult r = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
+    EXPECT_TRUE(r.stats.converged);
+    EXPECT_EQ(
+        count_new_intersections(rest, find_self_intersections(r.positions, c.detail.faces, collecting())),
+        0u);
+    stats = r.stats;
+    return dihedral_change(c.detail.faces, c.detail.vertices, r.positions);
+  }
+  cases::CylinderCase c;
+  DetailEncoding e;
+  IntersectionResult rest;
+  ReconstructStats stats;
+};
+
 // MultigridStepOptions::polish_smoothness_decay: a polish smoothness that fades step by step
 // leaves the scan-like bend far less crumpled than the preset's polish, still converged and
 // without new pairs (measured: 90th / 99th percentiles of the dihedral angles' change 33.8 / 105.3
@@ -516,30 +546,16 @@ TEST(Reconstruction, UnconvergedResultIsCheckedAndRepairedToo) {
 // every step stalled into factorized whole-level steps (15 polish steps, 2 whole-level
 // factorizations, against 4 and none).
 TEST(Reconstruction, AFadingPolishSmoothnessLeavesTheBendSmoother) {
-  cases::CylinderCaseOptions co;
-  co.target_detail_triangles = 8000;
-  co.jitter = 0.4;
-  const cases::CylinderCase c = cases::make_cylinder_case(co);
-  const DetailEncoding e = encode_detail(c.detail, c.base);
-  const IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, collecting());
-  ReconstructStats st;
-  auto solve = [&](const ReconstructOptions& o) {
-    const ReconstructResult r = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
-    EXPECT_TRUE(r.stats.converged);
-    EXPECT_EQ(
-        count_new_intersections(rest, find_self_intersections(r.positions, c.detail.faces, collecting())),
-        0u);
-    st = r.stats;
-    return dihedral_change(c.detail.faces, c.detail.vertices, r.positions);
-  };
+  SmoothnessBend b(cases::DetailKind::Bumps, 8000);
   ReconstructOptions o = cycle_schedule_reconstruct_options();
   o.threads = 1;
-  const DihedralChange plain = solve(o);
+  const DihedralChange plain = b.solve(o);
   o.multigrid.polish_smoothness = 1e-3;
-  solve(o);
-  const ReconstructStats constant = st;
+  b.solve(o);
+  const ReconstructStats constant = b.stats;
   o.multigrid.polish_smoothness_decay = 0.1;
-  const DihedralChange fading = solve(o);
+  const DihedralChange fading = b.solve(o);
+  const ReconstructStats& st = b.stats;
   EXPECT_LT(fading.p90_degrees, 0.85 * plain.p90_degrees);
   EXPECT_LT(fading.p99_degrees, 0.8 * plain.p99_degrees);
   EXPECT_LT(st.final_sweeps, constant.final_sweeps);
@@ -557,27 +573,13 @@ TEST(MultigridPreset, ItsPolishSmoothnessLeavesTheBendsSmoother) {
   for (const cases::DetailKind kind :
        {cases::DetailKind::Bumps, cases::DetailKind::Rings, cases::DetailKind::Cuboid}) {
     SCOPED_TRACE(static_cast<int>(kind));
-    cases::CylinderCaseOptions co;
-    co.detail = kind;
-    co.target_detail_triangles = 20000;
-    co.jitter = 0.4;
-    const cases::CylinderCase c = cases::make_cylinder_case(co);
-    const DetailEncoding e = encode_detail(c.detail, c.base);
-    const IntersectionResult rest = find_self_intersections(c.detail.vertices, c.detail.faces, collecting());
-    auto solve = [&](const ReconstructOptions& o) {
-      const ReconstructResult r = VolumeReconstructor(e, o).reconstruct(c.edited_base.vertices);
-      EXPECT_TRUE(r.stats.converged);
-      EXPECT_EQ(
-          count_new_intersections(rest, find_self_intersections(r.positions, c.detail.faces, collecting())),
-          0u);
-      return dihedral_change(c.detail.faces, c.detail.vertices, r.positions);
-    };
+    SmoothnessBend b(kind, 20000);
     ReconstructOptions o = multigrid_reconstruct_options();
     o.threads = 1;
     ASSERT_GT(o.multigrid.polish_smoothness, 0.0);
     ASSERT_LT(o.multigrid.polish_smoothness_decay, 1.0);
-    const DihedralChange smooth = solve(o);
-    const DihedralChange before = solve(test::without_polish_smoothness(o));
+    const DihedralChange smooth = b.solve(o);
+    const DihedralChange before = b.solve(test::without_polish_smoothness(o));
     EXPECT_LT(smooth.p90_degrees, 0.7 * before.p90_degrees);
     EXPECT_LT(smooth.p99_degrees, 0.8 * before.p99_degrees);
   }
